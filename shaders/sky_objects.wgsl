@@ -1,0 +1,133 @@
+// Sky objects: procedural shapes with a NeL-style material of up to 4 texture stages.
+// The material is a sum of terms: an `add` stage starts a term (texture x constant), a
+// `modulate` stage multiplies the current term; the result times the diffuse colour.
+//
+// (globals.wgsl is prepended by the loader.)
+
+// Keep in sync with `StageUniform` in src/render/sky_objects.rs.
+struct Stage {
+    scale_offset: vec4<f32>, // uv scale (xy) and offset (zw), repeats
+    params: vec4<f32>,       // sun: size_rad; quake: z_scale, z_offset, t_scale, time_scale
+    cfg: vec4<u32>,          // op (0 add, 1 modulate), uv mode, constant index (4 = none), enabled
+};
+
+// Keep in sync with `DrawUniform` in src/render/sky_objects.rs.
+struct Draw {
+    // Columns: right * half size, up * half size, centre direction (quads); identity for domes.
+    object_from_local: mat4x4<f32>,
+    diffuse: vec4<f32>,
+    constants: array<vec4<f32>, 4>,
+    stages: array<Stage, 4>,
+    misc: vec4<u32>,         // stage count, lighting (0 flat, 1 moon)
+};
+
+@group(1) @binding(0) var<uniform> draw: Draw;
+@group(1) @binding(1) var tex0: texture_2d<f32>;
+@group(1) @binding(2) var tex1: texture_2d<f32>;
+@group(1) @binding(3) var tex2: texture_2d<f32>;
+@group(1) @binding(4) var tex3: texture_2d<f32>;
+@group(1) @binding(5) var samp0: sampler;
+@group(1) @binding(6) var samp1: sampler;
+@group(1) @binding(7) var samp2: sampler;
+@group(1) @binding(8) var samp3: sampler;
+
+const UV_MESH: u32 = 0u;
+const UV_SUN: u32 = 1u;
+const UV_CELESTIAL: u32 = 2u;
+const UV_QUAKE: u32 = 3u;
+const PI: f32 = 3.14159265;
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) world_dir: vec3<f32>,
+};
+
+@vertex
+fn vs_main(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> VertexOut {
+    let dir = (draw.object_from_local * vec4<f32>(position, 0.0)).xyz;
+    var clip = globals.clip_from_sky * vec4<f32>(dir, 1.0);
+    // Any depth inside the sky's viewport range works: the sky neither writes nor sorts by depth,
+    // it only has to lose against the main scene drawn in [0, 0.95].
+    clip.z = clip.w * 0.5;
+    var out: VertexOut;
+    out.clip = clip;
+    out.uv = uv;
+    out.world_dir = dir;
+    return out;
+}
+
+fn stage_uv(s: Stage, mesh_uv: vec2<f32>, dir_in: vec3<f32>) -> vec2<f32> {
+    let dir = normalize(dir_in);
+    var uv = mesh_uv;
+    let mode = s.cfg.y;
+    if mode == UV_SUN {
+        let sun = globals.towards_sun.xyz;
+        var right = cross(sun, vec3<f32>(0.0, 1.0, 0.0));
+        if length(right) < 1e-4 { right = vec3<f32>(1.0, 0.0, 0.0); }
+        right = normalize(right);
+        let up = cross(right, sun);
+        let t = dir - sun * dot(dir, sun);
+        let angle = acos(clamp(dot(dir, sun), -1.0, 1.0));
+        let along = vec2<f32>(dot(t, right), dot(t, up));
+        let l = max(length(along), 1e-6);
+        uv = vec2<f32>(0.5) + along / l * angle / s.params.x;
+        return uv;
+    } else if mode == UV_CELESTIAL {
+        let c = (globals.celestial_from_world * vec4<f32>(dir, 0.0)).xyz;
+        uv = vec2<f32>(atan2(c.x, -c.z) / (2.0 * PI) + 0.5, 0.5 - asin(clamp(c.y, -1.0, 1.0)) / PI);
+    } else if mode == UV_QUAKE {
+        var d = dir;
+        d.y = d.y * s.params.x + s.params.y;
+        let scroll = globals.time.w * s.params.w;
+        uv = vec2<f32>(scroll) + d.xz * (s.params.z / max(length(d), 1e-4));
+    }
+    return uv * s.scale_offset.xy + s.scale_offset.zw;
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    let uv0 = stage_uv(draw.stages[0], in.uv, in.world_dir);
+    let uv1 = stage_uv(draw.stages[1], in.uv, in.world_dir);
+    let uv2 = stage_uv(draw.stages[2], in.uv, in.world_dir);
+    let uv3 = stage_uv(draw.stages[3], in.uv, in.world_dir);
+    var samples = array<vec4<f32>, 4>(
+        textureSample(tex0, samp0, uv0),
+        textureSample(tex1, samp1, uv1),
+        textureSample(tex2, samp2, uv2),
+        textureSample(tex3, samp3, uv3),
+    );
+
+    var sum = vec4<f32>(0.0);
+    var term = vec4<f32>(0.0);
+    var has_term = false;
+    for (var i = 0u; i < draw.misc.x; i = i + 1u) {
+        let s = draw.stages[i];
+        var c = samples[i];
+        if s.cfg.z < 4u { c = c * draw.constants[s.cfg.z]; }
+        if s.cfg.x == 1u {
+            term = term * c;
+        } else {
+            if has_term { sum = sum + vec4<f32>(term.rgb, 0.0); sum.a = max(sum.a, term.a); }
+            term = c;
+            has_term = true;
+        }
+    }
+    if has_term { sum = sum + vec4<f32>(term.rgb, 0.0); sum.a = max(sum.a, term.a); }
+    var color = sum * draw.diffuse;
+
+    if draw.misc.y == 1u {
+        // Moon: a lit sphere seen from the dome centre; the sun side is bright, so phases show.
+        let p = in.uv * 2.0 - vec2<f32>(1.0);
+        let r2 = dot(p, p);
+        let right = normalize(draw.object_from_local[0].xyz);
+        let up = normalize(draw.object_from_local[1].xyz);
+        let towards_viewer = -normalize(draw.object_from_local[2].xyz);
+        let n = normalize(p.x * right - p.y * up + sqrt(max(1.0 - r2, 0.0)) * towards_viewer);
+        let lit = max(dot(n, globals.towards_sun.xyz), 0.0);
+        // The unlit side is dark but also transparent: in daylight the sky shows through it.
+        let coverage = mix(0.35, 1.0, smoothstep(0.0, 0.25, lit));
+        color = vec4<f32>(color.rgb * (0.04 + 0.96 * lit), color.a * coverage * step(r2, 1.0));
+    }
+    return color;
+}

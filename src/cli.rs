@@ -1,0 +1,158 @@
+//! Command-line interface of the `skytune` binary.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+/// Author and debug real-time skies: live preview, headless renders, validation and benchmarks.
+#[derive(Debug, Parser)]
+#[command(name = "skytune", version, about)]
+pub struct Cli {
+    /// Sky or continent file to open in the window (default: the built-in sky).
+    pub sky: Option<PathBuf>,
+    /// Window options (used when no subcommand is given).
+    #[command(flatten)]
+    pub app: AppArgs,
+    /// Subcommand; none opens the window.
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render one frame headless and write a PNG.
+    Render(RenderArgs),
+    /// Validate a sky or continent file and print its errors or a summary.
+    Check {
+        /// Sky or continent file.
+        sky: PathBuf,
+    },
+    /// Re-render a PNG every time the sky file or one of its bitmaps changes (Ctrl-C to stop).
+    Watch {
+        /// Frame and output settings.
+        #[command(flatten)]
+        render: RenderArgs,
+        /// Stop after this many reloads (for scripts and tests).
+        #[arg(long)]
+        max_reloads: Option<u32>,
+    },
+    /// Write a new sky folder (sky.toml + bitmaps) from a palette preset.
+    NewSky {
+        /// Folder to create.
+        dir: PathBuf,
+        /// Palette: default, desert, forest, lakes, jungle.
+        #[arg(long, default_value = "default")]
+        preset: String,
+        /// Seed of the procedural textures.
+        #[arg(long, default_value_t = 7)]
+        seed: u64,
+    },
+    /// Measure the sky passes (depth split and tiers) and write a Markdown report.
+    Bench(BenchArgs),
+}
+
+/// Which frame to render.
+#[derive(Debug, Args, Clone)]
+pub struct FrameArgs {
+    /// Time of day, game hours.
+    #[arg(long, default_value_t = 12.0)]
+    pub hour: f32,
+    /// Weather, 0 (clear) .. 1 (storm).
+    #[arg(long, default_value_t = 0.0)]
+    pub weather: f32,
+    /// Season, for continent files: spring, summer, autumn, winter.
+    #[arg(long)]
+    pub season: Option<String>,
+    /// GPU tier to emulate: texture stages available (4, 2 or 1).
+    #[arg(long, default_value_t = 4)]
+    pub tier: u8,
+    /// Preset view: south, east, west, north, zenith.
+    #[arg(long, default_value = "south")]
+    pub view: String,
+    /// Override the view's compass direction, degrees.
+    #[arg(long)]
+    pub yaw: Option<f32>,
+    /// Override the view's elevation, degrees.
+    #[arg(long)]
+    pub pitch: Option<f32>,
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = 70.0)]
+    pub fov: f32,
+    /// Hide the main-scene stand-in (sky only).
+    #[arg(long)]
+    pub no_scene: bool,
+    /// Render what the environment map sees (objects with visible_in_env_map).
+    #[arg(long)]
+    pub env_map: bool,
+    /// Force the software adapter (lavapipe).
+    #[arg(long)]
+    pub cpu: bool,
+}
+
+/// `render` and `watch` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct RenderArgs {
+    /// Sky or continent file (default: the built-in sky).
+    pub sky: Option<PathBuf>,
+    /// Frame settings.
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Output PNG.
+    #[arg(long, short, default_value = "shot.png")]
+    pub out: PathBuf,
+}
+
+/// Window options.
+#[derive(Debug, Args, Clone, Default)]
+pub struct AppArgs {
+    /// Exit after rendering this many frames.
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// Take a screenshot after the first frames, then exit.
+    #[arg(long)]
+    pub screenshot_and_exit: bool,
+    /// Folder for screenshots (default: ./shots).
+    #[arg(long)]
+    pub shots: Option<PathBuf>,
+    /// Season, for continent files.
+    #[arg(long)]
+    pub season: Option<String>,
+    /// GPU tier to start with (4, 2 or 1).
+    #[arg(long)]
+    pub tier: Option<u8>,
+    /// Force the software adapter (lavapipe).
+    #[arg(long)]
+    pub cpu: bool,
+    /// Read shaders from this folder and hot-reload them (default: the checkout's shaders/, if any).
+    #[arg(long)]
+    pub shader_dir: Option<PathBuf>,
+}
+
+/// `bench` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct BenchArgs {
+    /// Frames per measured configuration.
+    #[arg(long, default_value_t = 15)]
+    pub frames: u32,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "960x540")]
+    pub size: String,
+    /// Markdown report to write.
+    #[arg(long, default_value = "docs/benchmarks.md")]
+    pub out: PathBuf,
+    /// Force the software adapter (lavapipe).
+    #[arg(long)]
+    pub cpu: bool,
+}
+
+/// Parses `WIDTHxHEIGHT`.
+pub fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
+    let (w, h) = s.split_once('x').ok_or_else(|| anyhow::anyhow!("--size: expected WIDTHxHEIGHT, found \"{s}\""))?;
+    let (w, h): (u32, u32) = (w.trim().parse()?, h.trim().parse()?);
+    anyhow::ensure!((1..=8192).contains(&w) && (1..=8192).contains(&h), "--size: sides must be in 1..=8192, found {w}x{h}");
+    Ok((w, h))
+}

@@ -1,0 +1,10 @@
+//! skytune: author and debug real-time skies in the style of the NeL engine's sky system.
+//!
+//! - [`sky`]: the sky description file, validation, bitmap sampling and per-frame evaluation
+//!   (no GPU types).
+//! - [`render`]: the wgpu renderer (no UI types).
+//! - [`live`]: hot reload of sky files.
+
+pub mod live;
+pub mod render;
+pub mod sky;

@@ -1,0 +1,188 @@
+//! The `skytune` binary: window (default), `render`, `check`, `watch`, `new-sky`, `bench`.
+
+mod app;
+mod bench;
+mod cli;
+
+use std::path::Path;
+use std::time::Duration;
+
+use anyhow::{anyhow, bail, Context as _};
+use clap::Parser;
+
+use cli::{Cli, Command, FrameArgs, RenderArgs};
+use skytune::live::{LiveSky, ReloadEvent, SkySpec};
+use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions};
+use skytune::sky::{procedural, FrameInput, Sky, Tier};
+
+fn main() {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("info,wgpu_core=warn,wgpu_hal=warn,naga=warn")).init();
+    let cli = Cli::parse();
+    if let Err(e) = run(cli) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        None => app::run(cli.sky, cli.app),
+        Some(Command::Render(args)) => render(&args),
+        Some(Command::Check { sky }) => check(&sky),
+        Some(Command::Watch { render, max_reloads }) => watch(&render, max_reloads),
+        Some(Command::NewSky { dir, preset, seed }) => {
+            let palette = procedural::preset(&preset)
+                .ok_or_else(|| anyhow!("unknown preset \"{preset}\"; expected one of {}", procedural::PRESETS.map(|p| p.name).join(", ")))?;
+            let sky = skytune::sky::builtin::write_sky_folder(&dir, palette, seed).with_context(|| format!("writing {}", dir.display()))?;
+            println!("wrote {} and its bitmaps; open it with `skytune {}`", sky.display(), sky.display());
+            Ok(())
+        }
+        Some(Command::Bench(args)) => bench::run(&args),
+    }
+}
+
+/// The sky a command names (or the built-in one).
+pub fn spec_for(path: Option<&Path>, season: Option<&str>) -> anyhow::Result<SkySpec> {
+    match path {
+        None => Ok(SkySpec::Builtin),
+        Some(p) => SkySpec::from_path(p, season).map_err(|e| anyhow!("{e}")),
+    }
+}
+
+/// Frame input and camera from CLI arguments.
+pub fn frame_from_args(f: &FrameArgs) -> anyhow::Result<(FrameInput, Camera)> {
+    let tier = Tier::new(f.tier).ok_or_else(|| anyhow!("--tier: expected 4, 2 or 1, found {}", f.tier))?;
+    anyhow::ensure!(f.hour.is_finite() && f.weather.is_finite(), "--hour and --weather must be finite numbers");
+    let mut camera = Camera::preset(&f.view).ok_or_else(|| anyhow!("--view: unknown view \"{}\"; expected south, east, west, north or zenith", f.view))?;
+    if let Some(y) = f.yaw {
+        camera.yaw_deg = y;
+    }
+    if let Some(p) = f.pitch {
+        camera.pitch_deg = p;
+    }
+    anyhow::ensure!((1.0..=170.0).contains(&f.fov), "--fov: expected 1..170 degrees, found {}", f.fov);
+    camera.fov_y_deg = f.fov;
+    let mut input = FrameInput::new(f.hour, f.weather);
+    input.tier = tier;
+    input.env_map = f.env_map;
+    Ok((input, camera))
+}
+
+fn adapter(cpu: bool) -> AdapterChoice {
+    if cpu {
+        AdapterChoice::Cpu
+    } else {
+        AdapterChoice::from_env()
+    }
+}
+
+/// Renders `sky` as `args` says into `args.out`.
+fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyhow::Result<()> {
+    let (input, camera) = frame_from_args(&args.frame)?;
+    let options = RenderOptions { scene: !args.frame.no_scene, ..Default::default() };
+    let frame = sky.evaluate(&input);
+    for o in &frame.objects {
+        if let Err(why) = &o.passes {
+            log::info!("hidden: {} ({why})", sky.objects[o.index].name);
+        }
+    }
+    let image = headless.render(sky, &input, &camera, &options)?;
+    image.save(&args.out).with_context(|| format!("writing {}", args.out.display()))?;
+    println!("wrote {} ({}x{}, sky \"{}\", hour {}, weather {}, tier {})", args.out.display(), image.width(), image.height(), sky.name, input.hour, input.weather, input.tier.stages());
+    Ok(())
+}
+
+fn render(args: &RenderArgs) -> anyhow::Result<()> {
+    let spec = spec_for(args.sky.as_deref(), args.frame.season.as_deref())?;
+    let sky = spec.load().map_err(|e| anyhow!("{e}"))?;
+    let (w, h) = cli::parse_size(&args.size)?;
+    let ctx = GpuContext::headless(adapter(args.frame.cpu))?;
+    println!("adapter: {}", ctx.adapter_line());
+    let mut headless = Headless::new(ctx, w, h)?;
+    headless.set_sky(&sky)?;
+    render_to_file(&mut headless, &sky, args)
+}
+
+fn check(path: &Path) -> anyhow::Result<()> {
+    if skytune::sky::load::is_continent_file(path) {
+        let c = skytune::sky::load::load_continent(path).map_err(|e| anyhow!("{e}"))?;
+        println!("continent \"{}\"", c.name);
+        let mut failed = false;
+        for (season, sky) in skytune::sky::load::SEASONS.iter().zip(&c.skies) {
+            match skytune::sky::load_sky_file(sky) {
+                Ok(s) => println!("  {season}: {} -> \"{}\" ok", sky.display(), s.name),
+                Err(e) => {
+                    println!("  {season}: {} has errors:\n{e}", sky.display());
+                    failed = true;
+                }
+            }
+        }
+        if failed {
+            bail!("{} has invalid skies", path.display());
+        }
+        return Ok(());
+    }
+    let sky = skytune::sky::load_sky_file(path).map_err(|e| anyhow!("{e}"))?;
+    print!("{}", summary(&sky));
+    Ok(())
+}
+
+/// A human-readable summary of a sky.
+pub fn summary(sky: &Sky) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(s, "sky \"{}\" ({}): ok", sky.name, sky.source_name);
+    let _ = writeln!(s, "  {} hours per day, weather steps: {}", sky.hours_per_day, if sky.weather_names.is_empty() { "-".into() } else { sky.weather_names.join(", ") });
+    let _ = writeln!(s, "  {} paths, {} objects, {} bitmaps/textures", sky.paths.len(), sky.objects.len(), sky.watched_files.len());
+    for o in &sky.objects {
+        let stages = o.standard.stages.len();
+        let fb: Vec<String> = o.fallback.iter().map(|v| v.stages.len().to_string()).collect();
+        let _ = writeln!(
+            s,
+            "  [{:>2}] {:<16} {:?}, {} stage(s){}",
+            o.priority,
+            o.name,
+            o.standard.shape,
+            stages,
+            if fb.is_empty() { String::new() } else { format!(", fallback passes with {} stage(s)", fb.join(" + ")) }
+        );
+    }
+    if let Some(st) = &sky.stars {
+        let _ = writeln!(s, "  stars: {} generated, magnitude cutoff {}", st.count, st.magnitude_cutoff);
+    }
+    if let Some(g) = &sky.glare {
+        let _ = writeln!(s, "  glare: halo {} deg, {} flare sprites, persistence {} s", g.halo_size_deg, g.flares.len(), g.persistence_s);
+    }
+    s
+}
+
+fn watch(args: &RenderArgs, max_reloads: Option<u32>) -> anyhow::Result<()> {
+    let spec = spec_for(args.sky.as_deref(), args.frame.season.as_deref())?;
+    let mut live = LiveSky::new(spec.clone()).map_err(|e| anyhow!("{e}"))?;
+    let (w, h) = cli::parse_size(&args.size)?;
+    let ctx = GpuContext::headless(adapter(args.frame.cpu))?;
+    println!("adapter: {}", ctx.adapter_line());
+    let mut headless = Headless::new(ctx, w, h)?;
+    headless.set_sky(live.sky())?;
+    render_to_file(&mut headless, live.sky(), args)?;
+    println!("watching {} (Ctrl-C to stop)", spec.display());
+    let mut reloads = 0;
+    while max_reloads.is_none_or(|m| reloads < m) {
+        match live.wait(Duration::from_millis(500)) {
+            Some(ReloadEvent::Reloaded) => {
+                reloads += 1;
+                let sky = live.sky().clone();
+                match headless.set_sky(&sky) {
+                    Ok(()) => render_to_file(&mut headless, &sky, args)?,
+                    Err(e) => eprintln!("GPU upload failed, keeping the previous image: {e:#}"),
+                }
+            }
+            Some(ReloadEvent::Failed(e)) => {
+                reloads += 1;
+                eprintln!("reload failed; {} still shows the last good sky:\n{e}", args.out.display());
+            }
+            None => {}
+        }
+    }
+    Ok(())
+}

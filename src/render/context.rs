@@ -1,0 +1,117 @@
+//! GPU device creation: headless (offscreen) or for a window surface. Vulkan only, so CI runs on
+//! Mesa's lavapipe and desktops on their native driver.
+
+use anyhow::{anyhow, Context as _};
+
+/// Which adapter to ask for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AdapterChoice {
+    /// The best adapter available (a real GPU when there is one).
+    #[default]
+    Auto,
+    /// A software adapter (lavapipe): deterministic images for tests and CI.
+    Cpu,
+}
+
+impl AdapterChoice {
+    /// `SKYTUNE_ADAPTER=cpu` forces the software adapter; tests set it.
+    pub fn from_env() -> Self {
+        match std::env::var("SKYTUNE_ADAPTER").as_deref() {
+            Ok("cpu") => AdapterChoice::Cpu,
+            _ => AdapterChoice::Auto,
+        }
+    }
+}
+
+/// Device, queue and what they can do.
+pub struct GpuContext {
+    /// The wgpu instance (kept to create surfaces).
+    pub instance: wgpu::Instance,
+    /// Adapter in use.
+    pub adapter: wgpu::Adapter,
+    /// Logical device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// Whether GPU timestamp queries work (per-pass GPU timings).
+    pub timestamps: bool,
+}
+
+/// Default time to wait for the GPU; lavapipe on 2 cores can take seconds for a big frame.
+pub const POLL_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(120);
+
+impl GpuContext {
+    /// Creates a context; with `surface`, the adapter must be able to present to it.
+    pub fn new(instance: wgpu::Instance, choice: AdapterChoice, surface: Option<&wgpu::Surface<'_>>) -> anyhow::Result<Self> {
+        let adapter = Self::pick_adapter(&instance, choice, surface)?;
+        let info = adapter.get_info();
+        log::info!("adapter: {} ({:?}, {:?}, driver {} {})", info.name, info.device_type, info.backend, info.driver, info.driver_info);
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let mut features = wgpu::Features::empty();
+        if timestamps {
+            features |= wgpu::Features::TIMESTAMP_QUERY;
+        }
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("skytune::device"),
+            required_features: features,
+            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            memory_hints: wgpu::MemoryHints::MemoryUsage,
+            ..Default::default()
+        }))
+        .context("requesting the GPU device")?;
+        // Errors outside an error scope are bugs of ours; log them rather than abort the artist's session.
+        device.on_uncaptured_error(std::sync::Arc::new(|e| log::error!("wgpu: {e}")));
+        Ok(Self { instance, adapter, device, queue, timestamps })
+    }
+
+    /// A headless context (no surface).
+    pub fn headless(choice: AdapterChoice) -> anyhow::Result<Self> {
+        Self::new(new_instance(), choice, None)
+    }
+
+    fn pick_adapter(instance: &wgpu::Instance, choice: AdapterChoice, surface: Option<&wgpu::Surface<'_>>) -> anyhow::Result<wgpu::Adapter> {
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+        let usable = |a: &wgpu::Adapter| surface.is_none_or(|s| a.is_surface_supported(s));
+        let cpu = adapters.iter().find(|a| a.get_info().device_type == wgpu::DeviceType::Cpu && usable(a));
+        let pick = match choice {
+            AdapterChoice::Cpu => cpu,
+            AdapterChoice::Auto => adapters
+                .iter()
+                .filter(|a| usable(a))
+                .max_by_key(|a| match a.get_info().device_type {
+                    wgpu::DeviceType::DiscreteGpu => 3,
+                    wgpu::DeviceType::IntegratedGpu => 2,
+                    wgpu::DeviceType::VirtualGpu => 1,
+                    _ => 0,
+                }),
+        };
+        pick.cloned().ok_or_else(|| {
+            let names: Vec<String> = adapters.iter().map(|a| format!("{} ({:?})", a.get_info().name, a.get_info().device_type)).collect();
+            anyhow!(
+                "no suitable Vulkan adapter ({choice:?}); found: [{}]. On Debian install mesa-vulkan-drivers (scripts/setup.sh does).",
+                names.join(", ")
+            )
+        })
+    }
+
+    /// One line naming the adapter, for logs and the UI.
+    pub fn adapter_line(&self) -> String {
+        let i = self.adapter.get_info();
+        format!("{} ({:?}, {:?})", i.name, i.device_type, i.backend)
+    }
+
+    /// Waits for submitted work, with a generous timeout for software rasterisers.
+    pub fn wait_idle(&self) -> anyhow::Result<()> {
+        self.device
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: Some(POLL_TIMEOUT) })
+            .map(|_| ())
+            .map_err(|e| anyhow!("waiting for the GPU: {e}"))
+    }
+}
+
+/// A Vulkan-only instance.
+pub fn new_instance() -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Backends::VULKAN;
+    wgpu::Instance::new(desc)
+}

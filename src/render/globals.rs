@@ -1,0 +1,93 @@
+//! Bind group 0: per-frame globals shared by every pass.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use super::camera::Camera;
+use crate::sky::FrameSky;
+
+/// Per-frame globals. Keep in sync with `Globals` in shaders/globals.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct Globals {
+    /// Main-scene camera, world -> clip.
+    pub clip_from_world: [[f32; 4]; 4],
+    /// Rotation-only camera for sky objects (camera at the dome centre).
+    pub clip_from_sky: [[f32; 4]; 4],
+    /// World -> rotating celestial frame.
+    pub celestial_from_world: [[f32; 4]; 4],
+    /// Unit vector towards the sun (w unused).
+    pub towards_sun: [f32; 4],
+    /// Main-scene fog colour.
+    pub fog_color: [f32; 4],
+    /// Sun ambient light.
+    pub sun_ambient: [f32; 4],
+    /// Sun diffuse light.
+    pub sun_diffuse: [f32; 4],
+    /// hour, hours_per_day, weather, game_hours.
+    pub time: [f32; 4],
+    /// width, height, 1/width, 1/height, pixels.
+    pub viewport: [f32; 4],
+    /// Main-scene camera position, m.
+    pub camera_position: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<Globals>() == 3 * 64 + 7 * 16);
+
+impl Globals {
+    /// Globals for a frame seen by `camera` on a `width` x `height` target.
+    pub fn new(frame: &FrameSky, camera: &Camera, width: u32, height: u32, hours_per_day: f32, game_hours: f64) -> Self {
+        let aspect = width as f32 / height.max(1) as f32;
+        let (clip_from_world, clip_from_sky) = camera.matrices(aspect);
+        let v = |c: [f32; 4]| c;
+        let s: Vec3 = frame.towards_sun;
+        Globals {
+            clip_from_world: clip_from_world.to_cols_array_2d(),
+            clip_from_sky: clip_from_sky.to_cols_array_2d(),
+            celestial_from_world: Mat4::from_quat(frame.celestial_from_world).to_cols_array_2d(),
+            towards_sun: [s.x, s.y, s.z, 0.0],
+            fog_color: v(frame.fog_color),
+            sun_ambient: v(frame.sun_ambient),
+            sun_diffuse: v(frame.sun_diffuse),
+            time: [frame.hour, hours_per_day, frame.weather, game_hours as f32],
+            viewport: [width as f32, height as f32, 1.0 / width.max(1) as f32, 1.0 / height.max(1) as f32],
+            camera_position: camera.position().extend(1.0).to_array(),
+        }
+    }
+}
+
+/// The globals buffer, its layout and bind group.
+pub struct GlobalsBinding {
+    /// Uniform buffer holding [`Globals`].
+    pub buffer: wgpu::Buffer,
+    /// Layout of bind group 0, used by every pipeline.
+    pub layout: wgpu::BindGroupLayout,
+    /// Bind group 0.
+    pub bind_group: wgpu::BindGroup,
+}
+
+impl GlobalsBinding {
+    /// Creates the buffer and bind group.
+    pub fn new(device: &wgpu::Device) -> Self {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("Globals::buffer"),
+            size: std::mem::size_of::<Globals>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("Globals::layout"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+                count: None,
+            }],
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("Globals::bind_group"),
+            layout: &layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
+        });
+        Self { buffer, layout, bind_group }
+    }
+}

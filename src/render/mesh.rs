@@ -1,0 +1,107 @@
+//! Procedural sky geometry: domes, dome bands and unit quads.
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use crate::sky::eval::direction;
+use crate::sky::resolved::Shape;
+
+/// Vertex of sky shapes. Keep in sync with `vs_main` inputs in shaders/sky_objects.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct SkyVertex {
+    /// Unit direction (domes) or (x, y, 1) quad corner.
+    pub position: [f32; 3],
+    /// Texture coordinates.
+    pub uv: [f32; 2],
+}
+
+impl SkyVertex {
+    /// Vertex buffer layout.
+    pub const LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<SkyVertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2],
+    };
+}
+
+/// CPU-side geometry.
+#[derive(Debug, Clone, Default)]
+pub struct MeshData {
+    /// Vertices.
+    pub vertices: Vec<SkyVertex>,
+    /// Triangle list indices.
+    pub indices: Vec<u32>,
+}
+
+/// A grid over (azimuth, elevation) from `top_deg` down to `bottom_deg`; v runs 0 at the top to 1.
+fn sphere_band(top_deg: f32, bottom_deg: f32, rings: u32, segments: u32) -> MeshData {
+    let mut m = MeshData::default();
+    for r in 0..=rings {
+        let v = r as f32 / rings as f32;
+        let elevation = top_deg + (bottom_deg - top_deg) * v;
+        for s in 0..=segments {
+            let u = s as f32 / segments as f32;
+            m.vertices.push(SkyVertex { position: direction(u * 360.0, elevation).to_array(), uv: [u, v] });
+        }
+    }
+    let row = segments + 1;
+    for r in 0..rings {
+        for s in 0..segments {
+            let (a, b) = (r * row + s, (r + 1) * row + s);
+            m.indices.extend_from_slice(&[a, b, a + 1, a + 1, b, b + 1]);
+        }
+    }
+    m
+}
+
+/// Geometry of a shape.
+pub fn shape_mesh(shape: &Shape) -> MeshData {
+    match *shape {
+        Shape::Dome { bottom_deg } => sphere_band(90.0, bottom_deg.get(), 32, 64),
+        Shape::DomeBand { bottom_deg, top_deg } => sphere_band(top_deg.get(), bottom_deg.get(), 12, 96),
+        Shape::Billboard { .. } | Shape::Quad { .. } => MeshData {
+            vertices: [[-1.0, 1.0, 0.0, 0.0], [1.0, 1.0, 1.0, 0.0], [-1.0, -1.0, 0.0, 1.0], [1.0, -1.0, 1.0, 1.0]]
+                .iter()
+                .map(|&[x, y, u, v]| SkyVertex { position: [x, y, 1.0], uv: [u, v] })
+                .collect(),
+            indices: vec![0, 2, 1, 1, 2, 3],
+        },
+    }
+}
+
+/// Cache key of a shape's geometry (quads share one mesh).
+pub fn shape_key(shape: &Shape) -> String {
+    match *shape {
+        Shape::Dome { bottom_deg } => format!("dome {}", bottom_deg.get()),
+        Shape::DomeBand { bottom_deg, top_deg } => format!("band {} {}", bottom_deg.get(), top_deg.get()),
+        Shape::Billboard { .. } | Shape::Quad { .. } => "quad".into(),
+    }
+}
+
+/// Geometry on the GPU.
+pub struct GpuMesh {
+    /// Vertex buffer.
+    pub vertices: wgpu::Buffer,
+    /// Index buffer (u32).
+    pub indices: wgpu::Buffer,
+    /// Index count.
+    pub index_count: u32,
+}
+
+impl GpuMesh {
+    /// Uploads a mesh.
+    pub fn new(device: &wgpu::Device, label: &str, data: &MeshData) -> Self {
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(&format!("{label}::vertices")),
+            contents: bytemuck::cast_slice(&data.vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(&format!("{label}::indices")),
+            contents: bytemuck::cast_slice(&data.indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        Self { vertices, indices, index_count: data.indices.len() as u32 }
+    }
+}

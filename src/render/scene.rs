@@ -1,0 +1,195 @@
+//! Main-scene stand-in pass: terrain and a few buildings, fogged with the sky's fog colour.
+//! It is drawn first in depth range [0, 0.95] so the sky (in [0.99, 1]) fails the depth test
+//! behind it; it can also draw a clip-space test occluder for the glare tests.
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use super::shaders::{self, ShaderLibrary};
+use super::DEPTH_FORMAT;
+
+/// Vertex of the stand-in scene. Keep in sync with `vs_main` in shaders/scene.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct SceneVertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+    albedo: [f32; 3],
+}
+
+fn terrain_height(x: f32, z: f32) -> f32 {
+    let r = (x * x + z * z).sqrt();
+    // Flat where the viewer stands, rolling hills further out.
+    let flat = ((r - 40.0) / 300.0).clamp(0.0, 1.0);
+    (30.0 * (x / 190.0).sin() * (z / 240.0).cos() + 9.0 * (x / 55.0 + z / 80.0).sin()) * flat * flat - 0.5
+}
+
+fn scene_geometry() -> (Vec<SceneVertex>, Vec<u32>) {
+    let (mut v, mut idx) = (Vec::new(), Vec::new());
+    const N: u32 = 96;
+    const EXTENT: f32 = 2500.0;
+    for j in 0..=N {
+        for i in 0..=N {
+            let x = -EXTENT + 2.0 * EXTENT * i as f32 / N as f32;
+            let z = -EXTENT + 2.0 * EXTENT * j as f32 / N as f32;
+            let e = 1.0;
+            let n = glam::Vec3::new(terrain_height(x - e, z) - terrain_height(x + e, z), 2.0 * e, terrain_height(x, z - e) - terrain_height(x, z + e)).normalize();
+            let shade = 0.8 + 0.2 * ((x * 0.013).sin() * (z * 0.011).cos());
+            v.push(SceneVertex { position: [x, terrain_height(x, z), z], normal: n.to_array(), albedo: [0.25 * shade, 0.32 * shade, 0.16 * shade] });
+        }
+    }
+    for j in 0..N {
+        for i in 0..N {
+            let a = j * (N + 1) + i;
+            let b = a + N + 1;
+            idx.extend_from_slice(&[a, b, a + 1, a + 1, b, b + 1]);
+        }
+    }
+    // Buildings: (azimuth deg, distance m, width m, height m).
+    for &(az, dist, w, h) in &[(150.0f32, 60.0f32, 14.0f32, 18.0f32), (200.0, 90.0, 20.0, 26.0), (95.0, 70.0, 12.0, 12.0), (265.0, 55.0, 16.0, 9.0), (20.0, 80.0, 22.0, 30.0), (320.0, 120.0, 18.0, 22.0)] {
+        let c = crate::sky::eval::direction(az, 0.0) * dist;
+        let (x0, x1, z0, z1, y0, y1) = (c.x - w / 2.0, c.x + w / 2.0, c.z - w / 2.0, c.z + w / 2.0, -1.0, h);
+        let albedo = [0.55, 0.5, 0.45];
+        let faces: [([f32; 3], [[f32; 3]; 4]); 5] = [
+            ([0.0, 0.0, 1.0], [[x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]]),
+            ([0.0, 0.0, -1.0], [[x1, y0, z0], [x0, y0, z0], [x0, y1, z0], [x1, y1, z0]]),
+            ([1.0, 0.0, 0.0], [[x1, y0, z1], [x1, y0, z0], [x1, y1, z0], [x1, y1, z1]]),
+            ([-1.0, 0.0, 0.0], [[x0, y0, z0], [x0, y0, z1], [x0, y1, z1], [x0, y1, z0]]),
+            ([0.0, 1.0, 0.0], [[x0, y1, z1], [x1, y1, z1], [x1, y1, z0], [x0, y1, z0]]),
+        ];
+        for (n, quad) in faces {
+            let base = v.len() as u32;
+            v.extend(quad.iter().map(|&p| SceneVertex { position: p, normal: n, albedo }));
+            idx.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        }
+    }
+    (v, idx)
+}
+
+/// A rectangle in clip space (NDC x, y) drawn into the scene's depth: a known occluder.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Occluder {
+    /// Left, bottom corner (NDC).
+    pub min: [f32; 2],
+    /// Right, top corner (NDC).
+    pub max: [f32; 2],
+}
+
+/// Pipelines and geometry of the stand-in scene.
+pub struct ScenePass {
+    pipeline_layout: wgpu::PipelineLayout,
+    pipeline: wgpu::RenderPipeline,
+    occluder_pipeline: wgpu::RenderPipeline,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    occluder: wgpu::Buffer,
+    color_format: wgpu::TextureFormat,
+}
+
+impl ScenePass {
+    /// Builds pipelines and uploads the geometry.
+    pub fn new(device: &wgpu::Device, globals: &wgpu::BindGroupLayout, library: &ShaderLibrary, color_format: wgpu::TextureFormat) -> Result<Self, String> {
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("Scene::pipeline_layout"),
+            bind_group_layouts: &[Some(globals)],
+            immediate_size: 0,
+        });
+        let (pipeline, occluder_pipeline) = Self::build(device, &pipeline_layout, library, color_format)?;
+        let (v, i) = scene_geometry();
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("Scene::vertices"), contents: bytemuck::cast_slice(&v), usage: wgpu::BufferUsages::VERTEX });
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("Scene::indices"), contents: bytemuck::cast_slice(&i), usage: wgpu::BufferUsages::INDEX });
+        let occluder = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("Scene::occluder"),
+            size: 6 * 8,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(Self { pipeline_layout, pipeline, occluder_pipeline, vertices, indices, index_count: i.len() as u32, occluder, color_format })
+    }
+
+    fn build(device: &wgpu::Device, layout: &wgpu::PipelineLayout, library: &ShaderLibrary, format: wgpu::TextureFormat) -> Result<(wgpu::RenderPipeline, wgpu::RenderPipeline), String> {
+        let module = shaders::module(device, library, "scene")?;
+        let depth = Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        });
+        let make = |label: &'static str, vs: &'static str, fs: &'static str, buffer: wgpu::VertexBufferLayout<'_>| {
+            shaders::validated(device, label, || {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(layout),
+                    vertex: wgpu::VertexState { module: &module, entry_point: Some(vs), buffers: &[Some(buffer)], compilation_options: Default::default() },
+                    primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                    depth_stencil: depth.clone(),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(fs),
+                        targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
+                        compilation_options: Default::default(),
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            })
+        };
+        let scene = make(
+            "Scene::pipeline",
+            "vs_main",
+            "fs_main",
+            wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<SceneVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3],
+            },
+        )?;
+        let occluder = make(
+            "Scene::occluder_pipeline",
+            "vs_occluder",
+            "fs_occluder",
+            wgpu::VertexBufferLayout { array_stride: 8, step_mode: wgpu::VertexStepMode::Vertex, attributes: &wgpu::vertex_attr_array![0 => Float32x2] },
+        )?;
+        Ok((scene, occluder))
+    }
+
+    /// Builds new pipelines from the library with the existing layouts (for hot reload).
+    pub fn rebuilt(&self, device: &wgpu::Device, library: &ShaderLibrary) -> Result<(wgpu::RenderPipeline, wgpu::RenderPipeline), String> {
+        Self::build(device, &self.pipeline_layout, library, self.color_format)
+    }
+
+    /// Swaps in pipelines made by [`Self::rebuilt`].
+    pub fn install(&mut self, pipelines: (wgpu::RenderPipeline, wgpu::RenderPipeline)) {
+        (self.pipeline, self.occluder_pipeline) = pipelines;
+    }
+
+    /// Uploads the test occluder rectangle.
+    pub fn prepare_occluder(&self, queue: &wgpu::Queue, o: &Occluder) {
+        let [x0, y0] = o.min;
+        let [x1, y1] = o.max;
+        let quad: [[f32; 2]; 6] = [[x0, y0], [x1, y0], [x1, y1], [x0, y0], [x1, y1], [x0, y1]];
+        queue.write_buffer(&self.occluder, 0, bytemuck::cast_slice(&quad));
+    }
+
+    /// Records the terrain and buildings (and the test occluder when asked). Returns draw calls.
+    pub fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, terrain: bool, occluder: bool) -> u32 {
+        let mut calls = 0;
+        if terrain {
+            rpass.set_pipeline(&self.pipeline);
+            rpass.set_vertex_buffer(0, self.vertices.slice(..));
+            rpass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+            rpass.draw_indexed(0..self.index_count, 0, 0..1);
+            calls += 1;
+        }
+        if occluder {
+            rpass.set_pipeline(&self.occluder_pipeline);
+            rpass.set_vertex_buffer(0, self.occluder.slice(..));
+            rpass.draw(0..6, 0..1);
+            calls += 1;
+        }
+        calls
+    }
+}

@@ -1,0 +1,327 @@
+//! Sky objects pass: every object of the sky file, drawn by priority with its 4-stage material.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Quat, Vec3, Vec4};
+
+use super::camera::Camera;
+use super::mesh::{shape_key, shape_mesh, GpuMesh, SkyVertex};
+use super::shaders::{self, ShaderLibrary};
+use super::textures::{self, TextureCache};
+use super::DEPTH_FORMAT;
+use crate::sky::eval::{FrameSky, ObjectFrame, PassFrame};
+use crate::sky::resolved::{BlendMode, Lighting, Shape, Sky, StageOp, UvSource, Version, MAX_STAGES};
+
+/// One texture stage. Keep in sync with `Stage` in shaders/sky_objects.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct StageUniform {
+    /// UV scale (xy) and offset (zw), repeats.
+    pub scale_offset: [f32; 4],
+    /// Sun: size in radians; Quake: z_scale, z_offset, t_scale, time_scale.
+    pub params: [f32; 4],
+    /// op (0 add, 1 modulate), uv mode, constant index (4 = none), enabled.
+    pub cfg: [u32; 4],
+}
+
+/// One draw. Keep in sync with `Draw` in shaders/sky_objects.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct DrawUniform {
+    /// Columns: right x half size, up x half size, centre direction (quads); identity for domes.
+    pub object_from_local: [[f32; 4]; 4],
+    /// Diffuse colour.
+    pub diffuse: [f32; 4],
+    /// Constant colours.
+    pub constants: [[f32; 4]; 4],
+    /// Stages.
+    pub stages: [StageUniform; 4],
+    /// Stage count, lighting (0 flat, 1 moon).
+    pub misc: [u32; 4],
+}
+const _: () = assert!(std::mem::size_of::<StageUniform>() == 48);
+const _: () = assert!(std::mem::size_of::<DrawUniform>() == 64 + 16 + 64 + 4 * 48 + 16);
+
+/// UV mode numbers shared with the shader.
+fn uv_mode(uv: &UvSource) -> (u32, [f32; 4]) {
+    match *uv {
+        UvSource::Mesh => (0, [0.0; 4]),
+        UvSource::Sun { size_deg } => (1, [size_deg.get().to_radians(), 0.0, 0.0, 0.0]),
+        UvSource::Celestial => (2, [0.0; 4]),
+        UvSource::Quake { z_scale, z_offset, t_scale, time_scale } => (3, [z_scale.get(), z_offset.get(), t_scale.get(), time_scale.get()]),
+    }
+}
+
+impl From<&Version> for DrawUniform {
+    /// The parts of a draw that do not change from frame to frame.
+    fn from(v: &Version) -> Self {
+        let mut stages = [StageUniform::zeroed(); 4];
+        for (k, s) in v.stages.iter().enumerate() {
+            let (mode, params) = uv_mode(&s.uv);
+            let op = match s.op {
+                StageOp::Add => 0,
+                StageOp::Modulate => 1,
+            };
+            stages[k] = StageUniform {
+                scale_offset: [s.uv_scale[0], s.uv_scale[1], 0.0, 0.0],
+                params,
+                cfg: [op, mode, s.constant.map_or(4, |c| c as u32), 1],
+            };
+        }
+        DrawUniform {
+            object_from_local: Mat4::IDENTITY.to_cols_array_2d(),
+            diffuse: [1.0; 4],
+            constants: [[1.0; 4]; 4],
+            stages,
+            misc: [v.stages.len() as u32, matches!(v.lighting, Lighting::Moon) as u32, 0, 0],
+        }
+    }
+}
+
+impl DrawUniform {
+    /// Applies a frame's colours, UV offsets and placement.
+    pub fn with_frame(mut self, pass: &PassFrame, shape: &Shape, placement: Option<(Vec3, f32)>, camera_up: Vec3) -> Self {
+        self.diffuse = pass.diffuse;
+        self.constants = pass.constants;
+        for (k, off) in pass.uv_offsets.iter().enumerate() {
+            self.stages[k].scale_offset[2] = off[0];
+            self.stages[k].scale_offset[3] = off[1];
+        }
+        if let (Some((dir, roll_deg)), Shape::Billboard { size_deg } | Shape::Quad { size_deg }) = (placement, shape) {
+            // Billboards keep the screen's up; quads keep the world's up turned by the path's roll.
+            let (up_hint, roll) = match shape {
+                Shape::Billboard { .. } => (camera_up, 0.0),
+                _ => (Vec3::Y, roll_deg.to_radians()),
+            };
+            let mut right = dir.cross(up_hint).try_normalize().unwrap_or(Vec3::X);
+            let mut up = right.cross(dir);
+            let q = Quat::from_axis_angle(dir, roll);
+            right = q * right;
+            up = q * up;
+            let half = (size_deg.get().to_radians() * 0.5).tan();
+            self.object_from_local =
+                Mat4::from_cols((right * half).extend(0.0), (up * half).extend(0.0), dir.extend(0.0), Vec4::W).to_cols_array_2d();
+        }
+        self
+    }
+}
+
+/// Pipelines of the pass (one per blend mode), built once and rebuilt on shader edits.
+pub struct SkyObjectsPass {
+    bind_layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    pipelines: [wgpu::RenderPipeline; 3],
+    color_format: wgpu::TextureFormat,
+}
+
+fn blend_index(b: BlendMode) -> usize {
+    match b {
+        BlendMode::Opaque => 0,
+        BlendMode::Alpha => 1,
+        BlendMode::Additive => 2,
+    }
+}
+
+const BLENDS: [Option<wgpu::BlendState>; 3] = [
+    None,
+    Some(wgpu::BlendState::ALPHA_BLENDING),
+    Some(wgpu::BlendState {
+        color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::SrcAlpha, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
+        alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
+    }),
+];
+
+impl SkyObjectsPass {
+    /// Builds the layouts and pipelines.
+    pub fn new(device: &wgpu::Device, globals: &wgpu::BindGroupLayout, library: &ShaderLibrary, color_format: wgpu::TextureFormat) -> Result<Self, String> {
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+            count: None,
+        }];
+        for i in 0..4 {
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: 1 + i,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            });
+        }
+        for i in 0..4 {
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: 5 + i,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            });
+        }
+        let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("SkyObjects::draw_layout"), entries: &entries });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("SkyObjects::pipeline_layout"),
+            bind_group_layouts: &[Some(globals), Some(&bind_layout)],
+            immediate_size: 0,
+        });
+        let pipelines = Self::build(device, &pipeline_layout, library, color_format)?;
+        Ok(Self { bind_layout, pipeline_layout, pipelines, color_format })
+    }
+
+    fn build(device: &wgpu::Device, layout: &wgpu::PipelineLayout, library: &ShaderLibrary, format: wgpu::TextureFormat) -> Result<[wgpu::RenderPipeline; 3], String> {
+        let module = shaders::module(device, library, "sky_objects")?;
+        let names = ["SkyObjects::pipeline_opaque", "SkyObjects::pipeline_alpha", "SkyObjects::pipeline_additive"];
+        let build_one = |i: usize| {
+            shaders::validated(device, names[i], || {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(names[i]),
+                    layout: Some(layout),
+                    vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[Some(SkyVertex::LAYOUT)], compilation_options: Default::default() },
+                    primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(false),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fs_main"),
+                        targets: &[Some(wgpu::ColorTargetState { format, blend: BLENDS[i], write_mask: wgpu::ColorWrites::ALL })],
+                        compilation_options: Default::default(),
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            })
+        };
+        Ok([build_one(0)?, build_one(1)?, build_one(2)?])
+    }
+
+    /// Builds new pipelines from the library with the existing layouts (for hot reload).
+    pub fn rebuilt(&self, device: &wgpu::Device, library: &ShaderLibrary) -> Result<[wgpu::RenderPipeline; 3], String> {
+        Self::build(device, &self.pipeline_layout, library, self.color_format)
+    }
+
+    /// Swaps in pipelines made by [`Self::rebuilt`].
+    pub fn install(&mut self, pipelines: [wgpu::RenderPipeline; 3]) {
+        self.pipelines = pipelines;
+    }
+
+    /// Colour format the pipelines render to.
+    pub fn color_format(&self) -> wgpu::TextureFormat {
+        self.color_format
+    }
+}
+
+/// GPU resources of one version or fallback pass of an object.
+struct PassDraw {
+    uniform: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    mesh: Arc<GpuMesh>,
+    gradient: Option<(wgpu::Texture, u32)>,
+    blend: BlendMode,
+    shape: Shape,
+    base: DrawUniform,
+}
+
+/// Per-sky GPU resources: one [`PassDraw`] per version of every object.
+pub struct SkyObjectDraws {
+    /// objects[i][v]: object i (in draw order), version v (0 standard, 1.. fallback).
+    objects: Vec<Vec<PassDraw>>,
+}
+
+impl SkyObjectDraws {
+    /// Uploads every object of a sky.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, pass: &SkyObjectsPass, cache: &mut TextureCache, sky: &Sky) -> Self {
+        let mut meshes: HashMap<String, Arc<GpuMesh>> = HashMap::new();
+        let objects = sky
+            .objects
+            .iter()
+            .map(|o| {
+                std::iter::once(&o.standard)
+                    .chain(&o.fallback)
+                    .enumerate()
+                    .map(|(vi, v)| {
+                        let label = format!("SkyObjects::{}[{vi}]", o.name);
+                        let key = shape_key(&v.shape);
+                        let mesh = meshes.entry(key.clone()).or_insert_with(|| Arc::new(GpuMesh::new(device, &format!("SkyObjects::mesh {key}"), &shape_mesh(&v.shape)))).clone();
+                        let gradient = v.gradients.as_ref().map(|g| {
+                            let h = g.bitmaps[0].height;
+                            (textures::upload(device, queue, &format!("{label}::gradient"), 1, h, &vec![255; (h * 4) as usize]), h)
+                        });
+                        let gradient_view = gradient.as_ref().map(|(t, _)| t.create_view(&Default::default()));
+                        let mut views = Vec::new();
+                        let mut samplers = Vec::new();
+                        for k in 0..MAX_STAGES {
+                            let stage = v.stages.get(k);
+                            let view = match (stage.and_then(|s| s.texture.as_ref()), &gradient_view) {
+                                (Some(img), _) => cache.get(device, queue, img),
+                                (None, Some(gv)) if v.gradients.as_ref().is_some_and(|g| g.stage == k) => gv.clone(),
+                                _ => cache.white.clone(),
+                            };
+                            views.push(view);
+                            samplers.push(if stage.is_some_and(|s| s.clamp) { cache.clamp.clone() } else { cache.repeat.clone() });
+                        }
+                        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some(&format!("{label}::uniform")),
+                            size: std::mem::size_of::<DrawUniform>() as u64,
+                            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                            mapped_at_creation: false,
+                        });
+                        let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }];
+                        for (k, view) in views.iter().enumerate() {
+                            entries.push(wgpu::BindGroupEntry { binding: 1 + k as u32, resource: wgpu::BindingResource::TextureView(view) });
+                        }
+                        for (k, s) in samplers.iter().enumerate() {
+                            entries.push(wgpu::BindGroupEntry { binding: 5 + k as u32, resource: wgpu::BindingResource::Sampler(s) });
+                        }
+                        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&format!("{label}::bind_group")), layout: &pass.bind_layout, entries: &entries });
+                        PassDraw { uniform, bind_group, mesh, gradient, blend: v.blend, shape: v.shape, base: DrawUniform::from(v) }
+                    })
+                    .collect()
+            })
+            .collect();
+        Self { objects }
+    }
+
+    /// Writes this frame's uniforms and gradients.
+    pub fn prepare(&self, queue: &wgpu::Queue, frame: &FrameSky, camera: &Camera) {
+        for of in &frame.objects {
+            let Ok(passes) = &of.passes else { continue };
+            for p in passes {
+                let d = &self.objects[of.index][p.version];
+                let u = d.base.with_frame(p, &d.shape, of.placement, camera.screen_up());
+                queue.write_buffer(&d.uniform, 0, bytemuck::bytes_of(&u));
+                if let (Some((tex, h)), Some(g)) = (&d.gradient, &p.gradient) {
+                    let bytes: Vec<u8> = g.iter().flat_map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)).collect();
+                    textures::write(queue, tex, 1, *h, &bytes);
+                }
+            }
+        }
+    }
+
+    /// Records the draws of every visible object, in priority order; returns the draw-call count.
+    pub fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, pass: &SkyObjectsPass, frame: &FrameSky, filter: impl Fn(&ObjectFrame) -> bool) -> u32 {
+        let mut calls = 0;
+        for of in frame.objects.iter().filter(|o| filter(o)) {
+            let Ok(passes) = &of.passes else { continue };
+            for p in passes {
+                let d = &self.objects[of.index][p.version];
+                rpass.set_pipeline(&pass.pipelines[blend_index(d.blend)]);
+                rpass.set_bind_group(1, &d.bind_group, &[]);
+                rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
+                rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+                rpass.draw_indexed(0..d.mesh.index_count, 0, 0..1);
+                calls += 1;
+            }
+        }
+        calls
+    }
+}

@@ -1,0 +1,168 @@
+//! Stars pass: the point-star field of the sky file, additive, rotating with the celestial frame.
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use super::shaders::{self, ShaderLibrary};
+use super::DEPTH_FORMAT;
+use crate::sky::starfield;
+use crate::sky::{resolved::Stars, Rgba};
+
+/// Per-frame star parameters. Keep in sync with `StarsParams` in shaders/stars.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct StarsUniform {
+    /// Tint (rgb) and visibility (a).
+    pub color: [f32; 4],
+    /// x: size of a magnitude-0 star in pixels.
+    pub size: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<StarsUniform>() == 32);
+
+/// Instance data of one star. Keep in sync with `vs_main` in shaders/stars.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct StarInstance {
+    direction: [f32; 3],
+    brightness: f32,
+}
+
+/// Pipeline of the stars pass.
+pub struct StarsPass {
+    bind_layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    pipeline: wgpu::RenderPipeline,
+    color_format: wgpu::TextureFormat,
+}
+
+impl StarsPass {
+    /// Builds the pipeline.
+    pub fn new(device: &wgpu::Device, globals: &wgpu::BindGroupLayout, library: &ShaderLibrary, color_format: wgpu::TextureFormat) -> Result<Self, String> {
+        let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("Stars::layout"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+                count: None,
+            }],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("Stars::pipeline_layout"),
+            bind_group_layouts: &[Some(globals), Some(&bind_layout)],
+            immediate_size: 0,
+        });
+        let pipeline = Self::build(device, &pipeline_layout, library, color_format)?;
+        Ok(Self { bind_layout, pipeline_layout, pipeline, color_format })
+    }
+
+    fn build(device: &wgpu::Device, layout: &wgpu::PipelineLayout, library: &ShaderLibrary, format: wgpu::TextureFormat) -> Result<wgpu::RenderPipeline, String> {
+        let module = shaders::module(device, library, "stars")?;
+        shaders::validated(device, "Stars::pipeline", || {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("Stars::pipeline"),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: std::mem::size_of::<StarInstance>() as u64,
+                        step_mode: wgpu::VertexStepMode::Instance,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32],
+                    })],
+                    compilation_options: Default::default(),
+                },
+                primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format,
+                        blend: Some(wgpu::BlendState {
+                            color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::SrcAlpha, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
+                            alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
+                        }),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                    compilation_options: Default::default(),
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
+    }
+
+    /// Builds a new pipeline from the library with the existing layouts (for hot reload).
+    pub fn rebuilt(&self, device: &wgpu::Device, library: &ShaderLibrary) -> Result<wgpu::RenderPipeline, String> {
+        Self::build(device, &self.pipeline_layout, library, self.color_format)
+    }
+
+    /// Swaps in a pipeline made by [`Self::rebuilt`].
+    pub fn install(&mut self, pipeline: wgpu::RenderPipeline) {
+        self.pipeline = pipeline;
+    }
+}
+
+/// GPU resources of a sky's star field.
+pub struct StarField {
+    instances: wgpu::Buffer,
+    count: u32,
+    uniform: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    size_px: f32,
+}
+
+impl StarField {
+    /// Generates and uploads the stars of a sky.
+    pub fn new(device: &wgpu::Device, pass: &StarsPass, stars: &Stars) -> Self {
+        let generated = starfield::generate(stars);
+        let data: Vec<StarInstance> =
+            generated.iter().map(|s| StarInstance { direction: s.direction.to_array(), brightness: s.brightness() }).collect();
+        let placeholder = [StarInstance::zeroed()];
+        let instances = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("Stars::instances"),
+            // A zero-sized vertex buffer is invalid; one invisible star keeps the path uniform.
+            contents: bytemuck::cast_slice(if data.is_empty() { &placeholder[..] } else { &data[..] }),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("Stars::uniform"),
+            size: std::mem::size_of::<StarsUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("Stars::bind_group"),
+            layout: &pass.bind_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
+        });
+        Self { instances, count: data.len() as u32, uniform, bind_group, size_px: stars.size_px }
+    }
+
+    /// Number of stars kept after the magnitude cutoff.
+    pub fn count(&self) -> u32 {
+        self.count
+    }
+
+    /// Writes this frame's colour. Returns whether the stars are visible at all.
+    pub fn prepare(&self, queue: &wgpu::Queue, color: Rgba) -> bool {
+        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&StarsUniform { color, size: [self.size_px, 0.0, 0.0, 0.0] }));
+        color[3] > 0.5 / 255.0 && self.count > 0
+    }
+
+    /// Records the draw.
+    pub fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, pass: &StarsPass) {
+        rpass.set_pipeline(&pass.pipeline);
+        rpass.set_bind_group(1, &self.bind_group, &[]);
+        rpass.set_vertex_buffer(0, self.instances.slice(..));
+        rpass.draw(0..4, 0..self.count);
+    }
+}

@@ -1,0 +1,607 @@
+//! Loading a sky file: parse, resolve references, decode bitmaps, validate.
+//!
+//! Every error names the file, line:column and field. Validation collects all the errors it can
+//! find in one go, so an artist fixes a broken file in one round trip.
+
+use std::collections::{HashMap, HashSet};
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use toml::Spanned;
+
+use super::bitmap::ColorBitmap;
+use super::model::{self, FileRef, SkyFile};
+use super::resolved::*;
+
+/// One problem in a sky file, located precisely.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{file}:{line}:{column}: {field}: {message}")]
+pub struct SkyError {
+    /// File the problem is in (the sky file, or the bitmap that failed).
+    pub file: String,
+    /// 1-based line in `file` (1 for whole-file problems).
+    pub line: usize,
+    /// 1-based column.
+    pub column: usize,
+    /// Dotted path of the field, e.g. `object[1].standard.stage[0].texture`.
+    pub field: String,
+    /// What was wrong and what was expected.
+    pub message: String,
+}
+
+/// All the problems found in one load.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub struct SkyErrors(pub Vec<SkyError>);
+
+impl fmt::Display for SkyErrors {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, e) in self.0.iter().enumerate() {
+            if i > 0 {
+                writeln!(f)?;
+            }
+            write!(f, "{e}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Where a sky's text and images come from: files next to the sky file, or the built-in sky.
+pub trait AssetSource: Send + Sync {
+    /// Name of the sky file, for error messages.
+    fn sky_name(&self) -> String;
+    /// The sky file's text.
+    fn sky_text(&self) -> Result<String, String>;
+    /// Decodes an image referenced from the sky file (path relative to the sky file).
+    fn image(&self, rel: &str) -> Result<image::RgbaImage, String>;
+    /// Display name of a referenced file.
+    fn display(&self, rel: &str) -> String;
+    /// Files on disk whose change should trigger a reload (none for built-in data).
+    fn file_on_disk(&self, rel: &str) -> Option<PathBuf>;
+}
+
+/// Sky file on disk; referenced paths resolve relative to its folder.
+#[derive(Debug, Clone)]
+pub struct FsSource {
+    /// The sky file.
+    pub path: PathBuf,
+}
+
+impl FsSource {
+    fn resolve(&self, rel: &str) -> PathBuf {
+        self.path.parent().unwrap_or(Path::new(".")).join(rel)
+    }
+}
+
+impl AssetSource for FsSource {
+    fn sky_name(&self) -> String {
+        self.path.display().to_string()
+    }
+    fn sky_text(&self) -> Result<String, String> {
+        std::fs::read_to_string(&self.path).map_err(|e| format!("cannot read the sky file: {e}"))
+    }
+    fn image(&self, rel: &str) -> Result<image::RgbaImage, String> {
+        let path = self.resolve(rel);
+        let img = image::ImageReader::open(&path)
+            .map_err(|e| format!("cannot open {}: {e}", path.display()))?
+            .with_guessed_format()
+            .map_err(|e| format!("cannot read {}: {e}", path.display()))?
+            .decode()
+            .map_err(|e| format!("cannot decode {}: {e}", path.display()))?;
+        Ok(img.to_rgba8())
+    }
+    fn display(&self, rel: &str) -> String {
+        self.resolve(rel).display().to_string()
+    }
+    fn file_on_disk(&self, rel: &str) -> Option<PathBuf> {
+        Some(self.resolve(rel))
+    }
+}
+
+/// Largest accepted texture or bitmap side, texels.
+pub const MAX_IMAGE_SIDE: u32 = 4096;
+/// Most stars a field may generate.
+pub const MAX_STARS: u32 = 200_000;
+
+/// Loads and validates a sky file from disk.
+pub fn load_sky_file(path: &Path) -> Result<Sky, SkyErrors> {
+    load_sky(&FsSource { path: path.to_path_buf() })
+}
+
+/// Loads and validates a sky from any source.
+pub fn load_sky(source: &dyn AssetSource) -> Result<Sky, SkyErrors> {
+    let file = source.sky_name();
+    let text = source.sky_text().map_err(|message| one(&file, 1, 1, "<file>", message))?;
+    let parsed: SkyFile = parse_toml(&file, &text)?;
+    let mut v = Validator { source, file, text: &text, errors: Vec::new(), images: HashMap::new(), bitmaps: HashMap::new(), watched: HashSet::new() };
+    let sky = v.sky(parsed);
+    match sky {
+        Some(sky) if v.errors.is_empty() => Ok(sky),
+        _ => Err(SkyErrors(v.errors)),
+    }
+}
+
+/// Parses TOML into `T`, turning serde errors into located `SkyError`s with the field path.
+pub fn parse_toml<T: serde::de::DeserializeOwned>(file: &str, text: &str) -> Result<T, SkyErrors> {
+    let de = toml::Deserializer::parse(text).map_err(|e| {
+        let (line, column) = e.span().map(|s| line_col(text, s.start)).unwrap_or((1, 1));
+        one(file, line, column, "<syntax>", e.message().trim().to_string())
+    })?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let field = e.path().to_string();
+        let inner = e.into_inner();
+        let (line, column) = inner.span().map(|s| line_col(text, s.start)).unwrap_or((1, 1));
+        one(file, line, column, if field == "." { "<root>" } else { &field }, inner.message().trim().to_string())
+    })
+}
+
+fn one(file: &str, line: usize, column: usize, field: &str, message: impl Into<String>) -> SkyErrors {
+    SkyErrors(vec![SkyError { file: file.to_string(), line, column, field: field.to_string(), message: message.into() }])
+}
+
+/// 1-based line and column of a byte offset.
+pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+
+struct Validator<'a> {
+    source: &'a dyn AssetSource,
+    file: String,
+    text: &'a str,
+    errors: Vec<SkyError>,
+    images: HashMap<String, Arc<TextureImage>>,
+    bitmaps: HashMap<String, Arc<ColorBitmap>>,
+    watched: HashSet<PathBuf>,
+}
+
+impl Validator<'_> {
+    fn err_at(&mut self, span: std::ops::Range<usize>, field: &str, message: impl Into<String>) {
+        let (line, column) = line_col(self.text, span.start);
+        self.errors.push(SkyError { file: self.file.clone(), line, column, field: field.to_string(), message: message.into() });
+    }
+
+    /// Errors without a span of their own point at the first `key` after `anchor` (usually the
+    /// object's quoted name), or at the anchor itself when the key is absent.
+    fn err_in(&mut self, anchor: &str, key: &str, field: &str, message: impl Into<String>) {
+        let start = self.text.find(anchor).unwrap_or(0);
+        let offset = self.text[start..].find(key).map_or(start, |k| start + k);
+        self.err_at(offset..offset, field, message);
+    }
+
+    fn err_near(&mut self, needle: &str, field: &str, message: impl Into<String>) {
+        self.err_in(needle, needle, field, message);
+    }
+
+    fn image(&mut self, r: &FileRef, field: &str) -> Option<Arc<TextureImage>> {
+        let key = r.get_ref().clone();
+        if let Some(img) = self.images.get(&key) {
+            return Some(img.clone());
+        }
+        if let Some(p) = self.source.file_on_disk(&key) {
+            self.watched.insert(p);
+        }
+        match self.source.image(&key) {
+            Ok(img) => {
+                let (w, h) = img.dimensions();
+                if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
+                    self.err_at(r.span(), field, format!("{} is {w}x{h}; expected sides in 1..={MAX_IMAGE_SIDE}", self.source.display(&key)));
+                    return None;
+                }
+                let tex = Arc::new(TextureImage { key: self.source.display(&key), width: w, height: h, rgba8: img.into_raw() });
+                self.images.insert(key, tex.clone());
+                Some(tex)
+            }
+            Err(message) => {
+                self.err_at(r.span(), field, message);
+                None
+            }
+        }
+    }
+
+    fn bitmap(&mut self, r: &FileRef, field: &str) -> Option<Arc<ColorBitmap>> {
+        if let Some(b) = self.bitmaps.get(r.get_ref()) {
+            return Some(b.clone());
+        }
+        let tex = self.image(r, field)?;
+        let b = Arc::new(ColorBitmap::from_rgba8(tex.width, tex.height, &tex.rgba8));
+        self.bitmaps.insert(r.get_ref().clone(), b.clone());
+        Some(b)
+    }
+
+    fn sky(&mut self, f: SkyFile) -> Option<Sky> {
+        let fog = self.bitmap(&f.fog_color, "fog_color");
+        let ambient = self.bitmap(&f.sun_ambient, "sun_ambient");
+        let diffuse = self.bitmap(&f.sun_diffuse, "sun_diffuse");
+        let hours = f.hours_per_day.get();
+        let paths = self.paths(&f.paths, hours);
+        let path_index: HashMap<&str, usize> = f.paths.iter().enumerate().map(|(i, p)| (p.name.as_str(), i)).collect();
+        let sun_path = self.path_ref(&path_index, &f.sun_path, "sun_path");
+
+        let mut names = HashSet::new();
+        let mut objects = Vec::new();
+        for (i, o) in f.objects.iter().enumerate() {
+            let field = format!("object[{i}]");
+            if !names.insert(o.name.as_str()) {
+                self.err_near(&format!("\"{}\"", o.name), &format!("{field}.name"), format!("duplicate object name \"{}\"", o.name));
+            }
+            if let Some(obj) = self.object(o, &field, &path_index) {
+                objects.push(obj);
+            }
+        }
+        // Stable: equal priorities keep file order, as NeL's sorted insertion did.
+        objects.sort_by_key(|o: &SkyObject| o.priority);
+
+        let stars = f.stars.as_ref().and_then(|s| {
+            if s.count > MAX_STARS {
+                self.err_near("[stars]", "stars.count", format!("expected at most {MAX_STARS} stars, found {}", s.count));
+            }
+            let color = self.color(&s.color, "stars.color")?;
+            Some(Stars {
+                count: s.count.min(MAX_STARS),
+                magnitude_cutoff: s.magnitude_cutoff.get(),
+                seed: s.seed,
+                pole_elevation_deg: s.pole_elevation_deg.get(),
+                color,
+                size_px: s.size_px.get(),
+                priority: s.priority.0,
+            })
+        });
+        let glare = f.glare.as_ref().and_then(|g| self.glare(g));
+
+        let paths = paths?;
+        let watched = {
+            let mut w: Vec<PathBuf> = self.watched.iter().cloned().collect();
+            w.sort();
+            w
+        };
+        Some(Sky {
+            name: f.name,
+            hours_per_day: hours,
+            weather_names: f.weather_names,
+            source_name: self.file.clone(),
+            fog_color: fog?,
+            sun_ambient: ambient?,
+            sun_diffuse: diffuse?,
+            sun_path: sun_path?,
+            paths,
+            objects,
+            stars,
+            glare,
+            watched_files: watched,
+        })
+    }
+
+    fn path_ref(&mut self, index: &HashMap<&str, usize>, name: &Spanned<String>, field: &str) -> Option<usize> {
+        match index.get(name.get_ref().as_str()) {
+            Some(&i) => Some(i),
+            None => {
+                let known: Vec<&str> = index.keys().copied().collect();
+                self.err_at(name.span(), field, format!("no path named \"{}\" (paths: {})", name.get_ref(), list(&known)));
+                None
+            }
+        }
+    }
+
+    fn paths(&mut self, defs: &[model::PathDef], hours: f32) -> Option<Vec<SkyPath>> {
+        let index: HashMap<&str, usize> = defs.iter().enumerate().map(|(i, p)| (p.name.as_str(), i)).collect();
+        let mut out = Vec::new();
+        let mut ok = true;
+        let mut seen = HashSet::new();
+        for (i, p) in defs.iter().enumerate() {
+            let field = format!("path[{i}]");
+            if !seen.insert(p.name.as_str()) {
+                self.err_near(&format!("\"{}\"", p.name), &format!("{field}.name"), format!("duplicate path name \"{}\"", p.name));
+                ok = false;
+            }
+            let kind = match (&p.follow, p.keys.is_empty()) {
+                (Some(_), false) => {
+                    self.err_near(&format!("\"{}\"", p.name), &field, "a path has either `keys` or `follow`, not both");
+                    ok = false;
+                    continue;
+                }
+                (None, true) => {
+                    self.err_near(&format!("\"{}\"", p.name), &format!("{field}.keys"), "a path needs at least one key (or `follow = \"other path\"`)");
+                    ok = false;
+                    continue;
+                }
+                (Some(target), true) => match self.path_ref(&index, target, &format!("{field}.follow")) {
+                    Some(t) => PathKind::Follow {
+                        target: t,
+                        lag_hours: p.lag_hours.get(),
+                        azimuth_offset_deg: p.azimuth_offset_deg.get(),
+                        elevation_offset_deg: p.elevation_offset_deg.get(),
+                    },
+                    None => {
+                        ok = false;
+                        continue;
+                    }
+                },
+                (None, false) => {
+                    let mut keys = Vec::new();
+                    for (k, key) in p.keys.iter().enumerate() {
+                        if !(0.0..hours).contains(&key.hour.get()) {
+                            self.err_near(&format!("\"{}\"", p.name), &format!("{field}.keys[{k}].hour"), format!("expected an hour in [0, {hours}), found {}", key.hour.get()));
+                            ok = false;
+                        }
+                        keys.push(PathKeyframe { hour: key.hour.get(), azimuth_deg: key.azimuth_deg.get(), elevation_deg: key.elevation_deg.get(), roll_deg: key.roll_deg.get() });
+                    }
+                    keys.sort_by(|a, b| a.hour.total_cmp(&b.hour));
+                    PathKind::Keys(keys)
+                }
+            };
+            out.push(SkyPath { name: p.name.clone(), kind });
+        }
+        if !ok {
+            return None;
+        }
+        // A follow chain must end on keyed paths.
+        for start in 0..out.len() {
+            let mut visited = vec![start];
+            let mut cur = start;
+            while let PathKind::Follow { target, .. } = out[cur].kind {
+                if visited.contains(&target) {
+                    let chain: Vec<&str> = visited.iter().chain([&target]).map(|&i| out[i].name.as_str()).collect();
+                    let span = defs[start].follow.as_ref().map(|s| s.span()).unwrap_or(0..0);
+                    self.err_at(span, &format!("path[{start}].follow"), format!("cyclic follow: {}", chain.join(" -> ")));
+                    return None;
+                }
+                visited.push(target);
+                cur = target;
+            }
+        }
+        Some(out)
+    }
+
+    fn object(&mut self, o: &model::ObjectDef, field: &str, paths: &HashMap<&str, usize>) -> Option<SkyObject> {
+        let path = match &o.path {
+            Some(p) => Some(self.path_ref(paths, p, &format!("{field}.path"))?),
+            None => None,
+        };
+        let standard = self.version(&o.standard, &format!("{field}.standard"), &o.name, path.is_some());
+        if o.fallback.len() > 2 {
+            self.err_in(&format!("\"{}\"", o.name), "[[object.fallback]]", &format!("{field}.fallback"), format!("at most 2 fallback passes, found {}", o.fallback.len()));
+        }
+        let fallback: Vec<Option<Version>> =
+            o.fallback.iter().enumerate().map(|(k, v)| self.version(v, &format!("{field}.fallback[{k}]"), &o.name, path.is_some())).collect();
+        let fallback: Option<Vec<Version>> = fallback.into_iter().collect();
+        Some(SkyObject {
+            name: o.name.clone(),
+            priority: o.priority.0,
+            visible_in_main_scene: o.visible_in_main_scene,
+            visible_in_env_map: o.visible_in_env_map,
+            path,
+            standard: standard?,
+            fallback: fallback?,
+        })
+    }
+
+    fn version(&mut self, v: &model::VersionDef, field: &str, name: &str, has_path: bool) -> Option<Version> {
+        let mut ok = true;
+        let anchor = format!("\"{name}\"");
+        if v.stages.len() > MAX_STAGES {
+            self.err_in(&anchor, "[[object", &format!("{field}.stage"), format!("at most {MAX_STAGES} texture stages, found {}", v.stages.len()));
+            ok = false;
+        }
+        if v.constants.len() > 4 {
+            self.err_in(&anchor, "constants", &format!("{field}.constants"), format!("at most 4 constant colours, found {}", v.constants.len()));
+            ok = false;
+        }
+        match v.shape {
+            model::Shape::DomeBand { bottom_deg, top_deg } if bottom_deg.get() >= top_deg.get() => {
+                self.err_in(&anchor, "shape", &format!("{field}.shape"), format!("dome band needs bottom_deg < top_deg, found {} >= {}", bottom_deg.get(), top_deg.get()));
+                ok = false;
+            }
+            model::Shape::Billboard { .. } | model::Shape::Quad { .. } if !has_path => {
+                self.err_in(&anchor, "shape", &format!("{field}.shape"), "billboards and quads need the object to have a `path`");
+                ok = false;
+            }
+            _ => {}
+        }
+        let gradient_stage = v.weather_gradients.as_ref().map(|g| *g.stage.get_ref() as usize);
+        let gradients = match &v.weather_gradients {
+            None => None,
+            Some(g) => {
+                let s = *g.stage.get_ref() as usize;
+                if s >= v.stages.len() {
+                    self.err_at(g.stage.span(), &format!("{field}.weather_gradients.stage"), format!("stage {s} does not exist ({} stages)", v.stages.len()));
+                    ok = false;
+                }
+                if g.bitmaps.is_empty() {
+                    self.err_at(g.stage.span(), &format!("{field}.weather_gradients.bitmaps"), "expected at least one gradient bitmap");
+                    ok = false;
+                }
+                let mut bitmaps = Vec::new();
+                for (k, b) in g.bitmaps.iter().enumerate() {
+                    let f = format!("{field}.weather_gradients.bitmaps[{k}]");
+                    if let Some(bm) = self.bitmap(b, &f) {
+                        if let Some(first) = bitmaps.first() {
+                            let first: &Arc<ColorBitmap> = first;
+                            if bm.height != first.height {
+                                self.err_at(b.span(), &f, format!("gradient is {} texels high but the first one is {}; all weather steps must share a height", bm.height, first.height));
+                                ok = false;
+                            }
+                        }
+                        if bm.height < 2 {
+                            self.err_at(b.span(), &f, "a gradient needs at least 2 texels along the dome");
+                            ok = false;
+                        }
+                        bitmaps.push(bm);
+                    } else {
+                        ok = false;
+                    }
+                }
+                Some(Gradients { stage: s, bitmaps })
+            }
+        };
+        let mut stages = Vec::new();
+        for (k, s) in v.stages.iter().enumerate().take(MAX_STAGES) {
+            let sf = format!("{field}.stage[{k}]");
+            let texture = match &s.texture {
+                Some(t) => self.image(t, &format!("{sf}.texture")),
+                None if gradient_stage == Some(k) => None,
+                None => {
+                    self.err_in(&anchor, "[[object", &format!("{sf}.texture"), "missing texture (only the stage fed by weather_gradients may omit it)");
+                    ok = false;
+                    None
+                }
+            };
+            if s.texture.is_some() && texture.is_none() {
+                ok = false;
+            }
+            if let Some(c) = &s.constant {
+                let c_idx = *c.get_ref() as usize;
+                if c_idx >= v.constants.len() {
+                    self.err_at(c.span(), &format!("{sf}.constant"), format!("constant {c_idx} is not defined ({} constants)", v.constants.len()));
+                    ok = false;
+                }
+            }
+            if k == 0 && s.op == model::StageOp::Modulate {
+                self.err_in(&anchor, "op = \"modulate\"", &format!("{sf}.op"), "the first stage cannot modulate: there is nothing before it");
+                ok = false;
+            }
+            let uv_offset = match &s.uv_offset_bitmap {
+                Some(b) => match self.bitmap(b, &format!("{sf}.uv_offset_bitmap")) {
+                    Some(bm) => Some((bm, s.uv_offset_factor.get())),
+                    None => {
+                        ok = false;
+                        None
+                    }
+                },
+                None => None,
+            };
+            stages.push(Stage {
+                texture,
+                op: s.op,
+                constant: s.constant.as_ref().map(|c| *c.get_ref() as usize),
+                uv: s.uv,
+                uv_scale: s.uv_scale.map(|x| x.get()),
+                panner: s.panner.map(|x| x.get()),
+                uv_offset,
+                clamp: s.clamp,
+            });
+        }
+        let diffuse = self.color(&v.diffuse, &format!("{field}.diffuse"));
+        let mut constants = Vec::new();
+        for (k, c) in v.constants.iter().enumerate().take(4) {
+            constants.push(self.color(c, &format!("{field}.constants[{k}]")));
+        }
+        let ref_index = match v.ref_color {
+            model::RefColor::Constant0 => Some(0),
+            model::RefColor::Constant1 => Some(1),
+            model::RefColor::Constant2 => Some(2),
+            model::RefColor::Constant3 => Some(3),
+            _ => None,
+        };
+        if let Some(r) = ref_index {
+            if r >= v.constants.len() {
+                self.err_in(&anchor, "ref_color", &format!("{field}.ref_color"), format!("ref_color names constant {r}, which is not defined ({} constants)", v.constants.len()));
+                ok = false;
+            }
+        }
+        let diffuse = diffuse?;
+        let constants: Option<Vec<Color>> = constants.into_iter().collect();
+        if !ok {
+            return None;
+        }
+        Some(Version { shape: v.shape, blend: v.blend, stages, diffuse, constants: constants?, ref_color: v.ref_color, gradients, lighting: v.lighting })
+    }
+
+    fn color(&mut self, c: &model::ColorDef, field: &str) -> Option<Color> {
+        use model::ColorMode::*;
+        let needs_bitmap = matches!(c.mode, Bitmap | BitmapTimesFog);
+        let bitmap = match (&c.bitmap, needs_bitmap) {
+            (Some(b), true) => Some(self.bitmap(b, &format!("{field}.bitmap"))?),
+            (None, true) => {
+                self.err_near(field.rsplit('.').next().unwrap_or(field), field, format!("mode {:?} needs a `bitmap`", c.mode));
+                return None;
+            }
+            (Some(b), false) => {
+                self.err_at(b.span(), &format!("{field}.bitmap"), format!("a bitmap is set but mode is {:?}; use mode = \"bitmap\" or remove it", c.mode));
+                return None;
+            }
+            (None, false) => None,
+        };
+        Some(Color { mode: c.mode, bitmap, value: c.value.map(|x| x.get()) })
+    }
+
+    fn glare(&mut self, g: &model::GlareDef) -> Option<Glare> {
+        let halo = self.image(&g.halo, "glare.halo");
+        let color = self.color(&g.color, "glare.color");
+        if g.flares.len() > MAX_FLARES {
+            self.err_near("[glare]", "glare.flare", format!("at most {MAX_FLARES} flare sprites, found {}", g.flares.len()));
+            return None;
+        }
+        let mut flares = Vec::new();
+        for (k, f) in g.flares.iter().enumerate() {
+            let texture = self.image(&f.texture, &format!("glare.flare[{k}].texture"))?;
+            flares.push(Flare { texture, position: f.position.get(), size: f.size.get(), tint: f.tint.map(|x| x.get()) });
+        }
+        Some(Glare {
+            halo: halo?,
+            halo_size_deg: g.halo_size_deg.get(),
+            disc_size_deg: g.disc_size_deg.get(),
+            persistence_s: g.persistence_s.get(),
+            shrink: g.shrink,
+            rotate: g.rotate.get(),
+            color: color?,
+            flares,
+        })
+    }
+}
+
+fn list(names: &[&str]) -> String {
+    if names.is_empty() {
+        "none".into()
+    } else {
+        let mut n = names.to_vec();
+        n.sort();
+        n.join(", ")
+    }
+}
+
+/// A continent: which sky file each season uses.
+#[derive(Debug, Clone)]
+pub struct Continent {
+    /// Continent name.
+    pub name: String,
+    /// Sky files for spring, summer, autumn, winter.
+    pub skies: [PathBuf; 4],
+}
+
+/// The four seasons, in file order.
+pub const SEASONS: [&str; 4] = ["spring", "summer", "autumn", "winter"];
+
+/// Loads a continent file; sky paths resolve relative to it and must exist.
+pub fn load_continent(path: &Path) -> Result<Continent, SkyErrors> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| one(&file, 1, 1, "<file>", format!("cannot read: {e}")))?;
+    let c: model::ContinentFile = parse_toml(&file, &text)?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let s = &c.seasons;
+    let refs = [&s.spring, &s.summer, &s.autumn, &s.winter];
+    let mut errors = Vec::new();
+    let skies = refs.map(|r| {
+        let p = dir.join(r.get_ref());
+        if !p.is_file() {
+            let (line, column) = line_col(&text, r.span().start);
+            errors.push(SkyError { file: file.clone(), line, column, field: "seasons".into(), message: format!("sky file {} does not exist", p.display()) });
+        }
+        p
+    });
+    if errors.is_empty() {
+        Ok(Continent { name: c.name, skies })
+    } else {
+        Err(SkyErrors(errors))
+    }
+}
+
+/// Whether a TOML file is a continent file (has a `[seasons]` table) rather than a sky file.
+pub fn is_continent_file(path: &Path) -> bool {
+    std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| t.parse::<toml::Table>().ok())
+        .is_some_and(|t| t.contains_key("seasons"))
+}

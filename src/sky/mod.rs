@@ -1,0 +1,16 @@
+//! Sky descriptions: file format, loading and validation, bitmap sampling and per-frame evaluation.
+//! Nothing here knows about wgpu, egui or winit.
+
+pub mod bitmap;
+pub mod builtin;
+pub mod eval;
+pub mod load;
+pub mod model;
+pub mod procedural;
+pub mod resolved;
+pub mod starfield;
+
+pub use bitmap::{ColorBitmap, Rgba};
+pub use eval::{FrameInput, FrameSky, Hidden, ObjectFrame, PassFrame, Tier};
+pub use load::{load_sky, load_sky_file, AssetSource, FsSource, SkyError, SkyErrors};
+pub use resolved::Sky;

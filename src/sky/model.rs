@@ -1,0 +1,544 @@
+//! The sky description file, as written by artists (TOML, serde).
+//!
+//! These types know nothing of wgpu: the renderer converts them to GPU structs with `From`.
+//! Range checks live in the field types themselves (`Priority`, `Finite`, ...) so that a bad
+//! value is rejected by the deserializer with the exact TOML span of the offending field.
+
+use serde::{Deserialize, Deserializer};
+use toml::Spanned;
+
+/// A path to a file, relative to the sky file, with its location in the sky file for errors.
+pub type FileRef = Spanned<String>;
+
+/// Top level of a sky file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SkyFile {
+    /// Human-readable name shown in the app and in screenshot names.
+    pub name: String,
+    /// Number of game hours in one day; colour bitmaps span this many hours (default 24).
+    #[serde(default = "default_hours")]
+    pub hours_per_day: Positive,
+    /// Labels of the weather steps, from weather 0 to weather 1 (UI only).
+    #[serde(default)]
+    pub weather_names: Vec<String>,
+    /// Colour bitmap (x: time of day, y: weather) giving the main scene's fog colour.
+    pub fog_color: FileRef,
+    /// Colour bitmap giving the sun's ambient light on the main scene.
+    pub sun_ambient: FileRef,
+    /// Colour bitmap giving the sun's diffuse light on the main scene.
+    pub sun_diffuse: FileRef,
+    /// Name of the path (in `path`) that the sun follows; drives `towards_sun` for every pass.
+    pub sun_path: Spanned<String>,
+    /// Keyframed directions over the day, referenced by objects and by `sun_path`.
+    #[serde(default, rename = "path")]
+    pub paths: Vec<PathDef>,
+    /// Sky objects, drawn by ascending transparency priority.
+    #[serde(default, rename = "object")]
+    pub objects: Vec<ObjectDef>,
+    /// Optional point-star field (celestial pass).
+    #[serde(default)]
+    pub stars: Option<StarsDef>,
+    /// Optional sun glare (occlusion-query driven halo and lens flare).
+    #[serde(default)]
+    pub glare: Option<GlareDef>,
+}
+
+fn default_hours() -> Positive {
+    Positive(24.0)
+}
+
+/// A keyframed direction on the sky sphere over the day.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PathDef {
+    /// Name referenced by objects (`path = "..."`) and by `sun_path`.
+    pub name: String,
+    /// Keys, in any order; interpolated along the great circle, wrapping over midnight.
+    #[serde(default)]
+    pub keys: Vec<PathKey>,
+    /// Follow another path instead of having keys (e.g. a moon trailing the sun).
+    #[serde(default)]
+    pub follow: Option<Spanned<String>>,
+    /// With `follow`: how many hours behind the followed path this one runs.
+    #[serde(default)]
+    pub lag_hours: Finite,
+    /// With `follow`: extra azimuth added to the followed path's, in degrees.
+    #[serde(default)]
+    pub azimuth_offset_deg: Finite,
+    /// With `follow`: extra elevation added to the followed path's, in degrees.
+    #[serde(default)]
+    pub elevation_offset_deg: Finite,
+}
+
+/// One key of a path: where the object is at `hour`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PathKey {
+    /// Game hour of this key, in [0, hours_per_day).
+    pub hour: Finite,
+    /// Compass direction in degrees: 0 north, 90 east.
+    pub azimuth_deg: Finite,
+    /// Angle above the horizon in degrees, -90..90.
+    pub elevation_deg: Elevation,
+    /// Rotation of the object around its direction, in degrees (quads only).
+    #[serde(default)]
+    pub roll_deg: Finite,
+}
+
+/// A sky object: a standard version plus optional fallback passes for weaker GPUs.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDef {
+    /// Unique name (UI, errors, hidden-object reports).
+    pub name: String,
+    /// Transparency priority 0..63: draw order, ascending.
+    #[serde(default)]
+    pub priority: Priority,
+    /// Drawn in the main view.
+    #[serde(default = "yes")]
+    pub visible_in_main_scene: bool,
+    /// Drawn when rendering the environment map.
+    #[serde(default = "yes")]
+    pub visible_in_env_map: bool,
+    /// Name of the path that places this object (billboards and quads); domes ignore it.
+    #[serde(default)]
+    pub path: Option<Spanned<String>>,
+    /// The full-quality version.
+    pub standard: VersionDef,
+    /// Up to two passes drawn one after the other when the GPU tier lacks the standard's stages.
+    #[serde(default)]
+    pub fallback: Vec<VersionDef>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// One version (or fallback pass) of a sky object: shape, material stages and colours.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VersionDef {
+    /// Procedural geometry.
+    pub shape: Shape,
+    /// How the result is blended over what is already drawn.
+    #[serde(default)]
+    pub blend: BlendMode,
+    /// Texture stages, at most 4.
+    #[serde(default, rename = "stage")]
+    pub stages: Vec<StageDef>,
+    /// Colour multiplied into the final result.
+    #[serde(default)]
+    pub diffuse: ColorDef,
+    /// Constant colours 0..3, referenced by stages (`constant = N`).
+    #[serde(default)]
+    pub constants: Vec<ColorDef>,
+    /// Which colour's alpha hides the object: alpha 0 means "not drawn" (saves fill rate).
+    #[serde(default)]
+    pub ref_color: RefColor,
+    /// Per-weather gradient bitmaps feeding one stage with a 1xH texture each frame.
+    #[serde(default)]
+    pub weather_gradients: Option<WeatherGradients>,
+    /// Shading of billboards: `flat`, or `moon` (a lit sphere showing its phase).
+    #[serde(default)]
+    pub lighting: Lighting,
+}
+
+/// Procedural sky geometry. Directions: x east, y up, -z north.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Shape {
+    /// Hemisphere plus a skirt down to `bottom_deg`; v runs 0 at the zenith to 1 at the bottom.
+    Dome {
+        /// Lowest elevation of the skirt, degrees (negative hides the horizon line).
+        #[serde(default = "default_dome_bottom")]
+        bottom_deg: Elevation,
+    },
+    /// A band between two elevations, anchored at the horizon; v runs 0 at the top to 1 at the bottom.
+    DomeBand {
+        /// Lower edge, degrees.
+        bottom_deg: Elevation,
+        /// Upper edge, degrees.
+        top_deg: Elevation,
+    },
+    /// A camera-facing square centred on the object's path direction.
+    Billboard {
+        /// Angular size (full width), degrees.
+        size_deg: Positive,
+    },
+    /// A square tangent to the sky sphere at the path direction, rotated by the path's roll.
+    Quad {
+        /// Angular size (full width), degrees.
+        size_deg: Positive,
+    },
+}
+
+fn default_dome_bottom() -> Elevation {
+    Elevation(-20.0)
+}
+
+/// Blending of a version over the framebuffer.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BlendMode {
+    /// Replace (alpha ignored).
+    #[default]
+    Opaque,
+    /// src * alpha + dst * (1 - alpha).
+    Alpha,
+    /// src * alpha + dst.
+    Additive,
+}
+
+/// Billboard shading.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Lighting {
+    /// Plain texture.
+    #[default]
+    Flat,
+    /// Lit sphere: the disc is shaded by the sun direction, so it shows phases.
+    Moon,
+}
+
+/// One texture stage of a material. Stages combine as a sum of terms: `add` starts a new term
+/// (texture x constant), `modulate` multiplies the current term; the result is the sum.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StageDef {
+    /// Texture image; may be omitted on the stage fed by `weather_gradients`.
+    #[serde(default)]
+    pub texture: Option<FileRef>,
+    /// How this stage joins the previous ones.
+    #[serde(default)]
+    pub op: StageOp,
+    /// Which constant colour multiplies this stage (index into `constants`), if any.
+    #[serde(default)]
+    pub constant: Option<Spanned<u32>>,
+    /// Texture coordinates source.
+    #[serde(default)]
+    pub uv: UvSource,
+    /// Repeats of the texture over the shape, (u, v).
+    #[serde(default = "unit_scale")]
+    pub uv_scale: [Finite; 2],
+    /// UV panner, in repeats per game hour (offset = frac(panner x game hours)).
+    #[serde(default)]
+    pub panner: [Finite; 2],
+    /// Colour bitmap whose red/green (0.5 = none) offset the UVs, times `uv_offset_factor`.
+    #[serde(default)]
+    pub uv_offset_bitmap: Option<FileRef>,
+    /// Scale of the offset read from `uv_offset_bitmap`, in repeats.
+    #[serde(default = "unit")]
+    pub uv_offset_factor: Finite,
+    /// Clamp the texture instead of repeating it.
+    #[serde(default)]
+    pub clamp: bool,
+}
+
+fn unit() -> Finite {
+    Finite(1.0)
+}
+fn unit_scale() -> [Finite; 2] {
+    [Finite(1.0), Finite(1.0)]
+}
+
+/// How a stage joins the material.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StageOp {
+    /// Start a new term: texture x constant.
+    #[default]
+    Add,
+    /// Multiply the current term by texture x constant.
+    Modulate,
+}
+
+/// Where a stage's texture coordinates come from.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum UvSource {
+    /// The shape's own UVs.
+    #[default]
+    Mesh,
+    /// Around the sun: (0.5, 0.5) at the sun, `size_deg` across (sun halos).
+    Sun {
+        /// Angular width covered by the texture, degrees.
+        size_deg: Positive,
+    },
+    /// Plate-carree (equirectangular) in the slowly rotating celestial frame (galactic background).
+    Celestial,
+    /// Quake's curved-sky mapping of the view direction (flattened dome).
+    Quake {
+        /// Vertical squash of the direction before normalising (Quake: 3).
+        #[serde(default = "quake_z_scale")]
+        z_scale: Finite,
+        /// Added to the squashed vertical component.
+        #[serde(default)]
+        z_offset: Finite,
+        /// Texture repeats per unit of flattened distance (Quake: 6 * 63 / 128).
+        #[serde(default = "quake_t_scale")]
+        t_scale: Finite,
+        /// Scroll speed, repeats per game hour.
+        #[serde(default)]
+        time_scale: Finite,
+    },
+}
+
+fn quake_z_scale() -> Finite {
+    Finite(3.0)
+}
+fn quake_t_scale() -> Finite {
+    Finite(6.0 * 63.0 / 128.0)
+}
+
+/// A colour slot of a material and where its value comes from.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ColorDef {
+    /// Source of the colour.
+    #[serde(default)]
+    pub mode: ColorMode,
+    /// Colour bitmap (time x weather) for `bitmap` and `bitmap_times_fog`.
+    #[serde(default)]
+    pub bitmap: Option<FileRef>,
+    /// Value used when `mode = "unused"`, RGBA 0..1 (default opaque white).
+    #[serde(default = "white")]
+    pub value: [Unit; 4],
+}
+
+impl Default for ColorDef {
+    fn default() -> Self {
+        Self { mode: ColorMode::Unused, bitmap: None, value: white() }
+    }
+}
+
+fn white() -> [Unit; 4] {
+    [Unit(1.0); 4]
+}
+
+/// The four NeL colour modes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ColorMode {
+    /// Constant `value`.
+    #[default]
+    Unused,
+    /// Sampled from `bitmap` at (time of day, weather).
+    Bitmap,
+    /// The current fog colour of the main scene.
+    Fog,
+    /// Bitmap colour x fog colour.
+    BitmapTimesFog,
+}
+
+/// Which colour's alpha decides visibility.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RefColor {
+    /// Always drawn.
+    #[default]
+    None,
+    /// The diffuse colour.
+    Diffuse,
+    /// Constant colour 0.
+    Constant0,
+    /// Constant colour 1.
+    Constant1,
+    /// Constant colour 2.
+    Constant2,
+    /// Constant colour 3.
+    Constant3,
+}
+
+/// Per-weather gradient bitmaps: x = time of day, y = position along the dome.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WeatherGradients {
+    /// Texture stage (0..3) that receives the 1xH gradient.
+    pub stage: Spanned<u32>,
+    /// One bitmap per weather step, from weather 0 to weather 1.
+    pub bitmaps: Vec<FileRef>,
+}
+
+/// Procedural point-star field with a magnitude cutoff.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StarsDef {
+    /// Stars generated before the cutoff.
+    #[serde(default = "default_star_count")]
+    pub count: u32,
+    /// Stars fainter than this visual magnitude are dropped.
+    #[serde(default = "default_cutoff")]
+    pub magnitude_cutoff: Finite,
+    /// Seed of the generator, so a sky always has the same stars.
+    #[serde(default)]
+    pub seed: u64,
+    /// Elevation of the celestial pole above the northern horizon, degrees (latitude).
+    #[serde(default = "default_pole")]
+    pub pole_elevation_deg: Elevation,
+    /// Brightness/visibility over the day (alpha scales every star).
+    #[serde(default)]
+    pub color: ColorDef,
+    /// Apparent size of a magnitude-0 star, pixels.
+    #[serde(default = "default_star_px")]
+    pub size_px: Positive,
+    /// Drawn after the objects of this priority or lower, before the others.
+    #[serde(default = "default_star_priority")]
+    pub priority: Priority,
+}
+
+fn default_star_priority() -> Priority {
+    Priority(2)
+}
+
+fn default_star_count() -> u32 {
+    3000
+}
+fn default_cutoff() -> Finite {
+    Finite(5.5)
+}
+fn default_pole() -> Elevation {
+    Elevation(45.0)
+}
+fn default_star_px() -> Positive {
+    Positive(3.0)
+}
+
+/// Sun glare: halo billboard plus flare sprites, driven by occlusion queries.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GlareDef {
+    /// Halo texture drawn at the sun.
+    pub halo: FileRef,
+    /// Angular size of the halo, degrees.
+    #[serde(default = "default_halo_size")]
+    pub halo_size_deg: Positive,
+    /// Angular size of the occlusion-tested solar disc, degrees.
+    #[serde(default = "default_disc")]
+    pub disc_size_deg: Positive,
+    /// Seconds for the glare to follow the measured visibility (0 = instant).
+    #[serde(default = "unit_nonneg")]
+    pub persistence_s: NonNegative,
+    /// Shrink sprites as the sun disappears.
+    #[serde(default)]
+    pub shrink: bool,
+    /// Rotate sprites as the sun disappears (radians per unit of lost visibility).
+    #[serde(default)]
+    pub rotate: Finite,
+    /// Colour of the glare over the day (alpha scales it).
+    #[serde(default)]
+    pub color: ColorDef,
+    /// Flare sprites along the line from the sun to the screen centre, at most 10.
+    #[serde(default, rename = "flare")]
+    pub flares: Vec<FlareDef>,
+}
+
+fn default_halo_size() -> Positive {
+    Positive(30.0)
+}
+fn default_disc() -> Positive {
+    Positive(1.0)
+}
+fn unit_nonneg() -> NonNegative {
+    NonNegative(1.0)
+}
+
+/// One lens-flare sprite.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlareDef {
+    /// Sprite texture.
+    pub texture: FileRef,
+    /// Position along sun -> screen centre: 0 at the sun, 1 at the centre, 2 mirrored.
+    pub position: Finite,
+    /// Size as a fraction of the screen height.
+    #[serde(default = "default_flare_size")]
+    pub size: Positive,
+    /// Tint multiplied into the sprite.
+    #[serde(default = "white")]
+    pub tint: [Unit; 4],
+}
+
+fn default_flare_size() -> Positive {
+    Positive(0.1)
+}
+
+/// A continent file: which sky each season uses.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContinentFile {
+    /// Continent name.
+    pub name: String,
+    /// Sky file per season, relative to the continent file.
+    pub seasons: SeasonSkies,
+}
+
+/// One sky per season.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeasonSkies {
+    /// Spring sky file.
+    pub spring: FileRef,
+    /// Summer sky file.
+    pub summer: FileRef,
+    /// Autumn sky file.
+    pub autumn: FileRef,
+    /// Winter sky file.
+    pub winter: FileRef,
+}
+
+macro_rules! checked_f32 {
+    ($(#[$doc:meta])* $name:ident, $check:expr, $expect:literal) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, Default, PartialEq, PartialOrd)]
+        pub struct $name(pub f32);
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let v = f64::deserialize(d)?;
+                let ok: fn(f64) -> bool = $check;
+                if v.is_finite() && ok(v) {
+                    Ok($name(v as f32))
+                } else {
+                    Err(serde::de::Error::custom(format!("expected {}, found {v}", $expect)))
+                }
+            }
+        }
+        impl $name {
+            /// The checked value.
+            pub fn get(self) -> f32 {
+                self.0
+            }
+        }
+    };
+}
+
+checked_f32!(
+    /// Any finite number (NaN and infinities are rejected).
+    Finite, |_| true, "a finite number");
+checked_f32!(
+    /// A finite number > 0.
+    Positive, |v| v > 0.0, "a finite number > 0");
+checked_f32!(
+    /// A finite number >= 0.
+    NonNegative, |v| v >= 0.0, "a finite number >= 0");
+checked_f32!(
+    /// A number in [0, 1].
+    Unit, |v| (0.0..=1.0).contains(&v), "a number in [0, 1]");
+checked_f32!(
+    /// An elevation in degrees, [-90, 90].
+    Elevation, |v| (-90.0..=90.0).contains(&v), "an elevation in degrees within [-90, 90]");
+
+/// Transparency priority, 0..=63.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Priority(pub u8);
+
+impl<'de> Deserialize<'de> for Priority {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = i64::deserialize(d)?;
+        if (0..=63).contains(&v) {
+            Ok(Priority(v as u8))
+        } else {
+            Err(serde::de::Error::custom(format!("expected a priority in 0..=63, found {v}")))
+        }
+    }
+}

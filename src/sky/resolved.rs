@@ -1,0 +1,230 @@
+//! A validated sky: references resolved to indices, bitmaps decoded. Still no wgpu here.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use super::bitmap::{ColorBitmap, Rgba};
+pub use super::model::{BlendMode, ColorMode, Lighting, RefColor, Shape, StageOp, UvSource};
+
+/// Most texture stages a material may use (the best GPU tier).
+pub const MAX_STAGES: usize = 4;
+/// Most lens-flare sprites.
+pub const MAX_FLARES: usize = 10;
+
+/// A decoded texture image, RGBA8.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextureImage {
+    /// Where it came from; also the GPU cache key.
+    pub key: String,
+    /// Width, texels.
+    pub width: u32,
+    /// Height, texels.
+    pub height: u32,
+    /// Row-major RGBA8.
+    pub rgba8: Vec<u8>,
+}
+
+/// A validated sky scene.
+#[derive(Debug, Clone)]
+pub struct Sky {
+    /// Display name.
+    pub name: String,
+    /// Game hours in a day.
+    pub hours_per_day: f32,
+    /// Labels of the weather steps.
+    pub weather_names: Vec<String>,
+    /// The sky file it was loaded from (or `<built-in>`).
+    pub source_name: String,
+    /// Main-scene fog colour over (time, weather).
+    pub fog_color: Arc<ColorBitmap>,
+    /// Sun ambient light over (time, weather).
+    pub sun_ambient: Arc<ColorBitmap>,
+    /// Sun diffuse light over (time, weather).
+    pub sun_diffuse: Arc<ColorBitmap>,
+    /// Index in `paths` of the sun's path.
+    pub sun_path: usize,
+    /// Keyframed directions.
+    pub paths: Vec<SkyPath>,
+    /// Objects sorted by ascending priority (file order among equals).
+    pub objects: Vec<SkyObject>,
+    /// Point-star field.
+    pub stars: Option<Stars>,
+    /// Sun glare.
+    pub glare: Option<Glare>,
+    /// Every file on disk the sky was built from, except the sky file itself.
+    pub watched_files: Vec<PathBuf>,
+}
+
+/// A named path over the day.
+#[derive(Debug, Clone)]
+pub struct SkyPath {
+    /// Name.
+    pub name: String,
+    /// Keys, or a reference to another path.
+    pub kind: PathKind,
+}
+
+/// How a path is defined.
+#[derive(Debug, Clone)]
+pub enum PathKind {
+    /// Keyframes sorted by hour.
+    Keys(Vec<PathKeyframe>),
+    /// Another path, delayed and offset.
+    Follow {
+        /// Index of the followed path.
+        target: usize,
+        /// Hours behind the target.
+        lag_hours: f32,
+        /// Added azimuth, degrees.
+        azimuth_offset_deg: f32,
+        /// Added elevation, degrees.
+        elevation_offset_deg: f32,
+    },
+}
+
+/// One keyframe.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathKeyframe {
+    /// Game hour.
+    pub hour: f32,
+    /// Compass direction, degrees (0 north, 90 east).
+    pub azimuth_deg: f32,
+    /// Elevation, degrees.
+    pub elevation_deg: f32,
+    /// Roll around the direction, degrees.
+    pub roll_deg: f32,
+}
+
+/// A sky object.
+#[derive(Debug, Clone)]
+pub struct SkyObject {
+    /// Unique name.
+    pub name: String,
+    /// Transparency priority 0..63.
+    pub priority: u8,
+    /// Drawn in the main view.
+    pub visible_in_main_scene: bool,
+    /// Drawn into environment maps.
+    pub visible_in_env_map: bool,
+    /// Index of the placing path.
+    pub path: Option<usize>,
+    /// Full-quality version.
+    pub standard: Version,
+    /// Fallback passes (0..=2).
+    pub fallback: Vec<Version>,
+}
+
+/// A version or fallback pass.
+#[derive(Debug, Clone)]
+pub struct Version {
+    /// Geometry.
+    pub shape: Shape,
+    /// Framebuffer blending.
+    pub blend: BlendMode,
+    /// Texture stages (at most 4).
+    pub stages: Vec<Stage>,
+    /// Diffuse colour.
+    pub diffuse: Color,
+    /// Constant colours.
+    pub constants: Vec<Color>,
+    /// Colour whose alpha hides the object.
+    pub ref_color: RefColor,
+    /// Weather gradients feeding one stage.
+    pub gradients: Option<Gradients>,
+    /// Billboard shading.
+    pub lighting: Lighting,
+}
+
+/// A texture stage.
+#[derive(Debug, Clone)]
+pub struct Stage {
+    /// Texture (None only for the gradient-fed stage).
+    pub texture: Option<Arc<TextureImage>>,
+    /// Combine operation.
+    pub op: StageOp,
+    /// Index of the multiplying constant colour.
+    pub constant: Option<usize>,
+    /// UV source.
+    pub uv: UvSource,
+    /// Repeats, (u, v).
+    pub uv_scale: [f32; 2],
+    /// Panner, repeats per game hour.
+    pub panner: [f32; 2],
+    /// UV offset bitmap and factor.
+    pub uv_offset: Option<(Arc<ColorBitmap>, f32)>,
+    /// Clamp instead of repeat.
+    pub clamp: bool,
+}
+
+/// A colour slot.
+#[derive(Debug, Clone)]
+pub struct Color {
+    /// Source.
+    pub mode: ColorMode,
+    /// Bitmap for the bitmap modes.
+    pub bitmap: Option<Arc<ColorBitmap>>,
+    /// Constant for `unused`.
+    pub value: Rgba,
+}
+
+/// Weather gradient bitmaps of a version.
+#[derive(Debug, Clone)]
+pub struct Gradients {
+    /// Stage receiving the 1xH gradient.
+    pub stage: usize,
+    /// One bitmap per weather step.
+    pub bitmaps: Vec<Arc<ColorBitmap>>,
+}
+
+/// Point-star field settings.
+#[derive(Debug, Clone)]
+pub struct Stars {
+    /// Stars generated before the cutoff.
+    pub count: u32,
+    /// Faintest visual magnitude kept.
+    pub magnitude_cutoff: f32,
+    /// Generator seed.
+    pub seed: u64,
+    /// Celestial pole elevation, degrees.
+    pub pole_elevation_deg: f32,
+    /// Colour/visibility over the day.
+    pub color: Color,
+    /// Size of a magnitude-0 star, pixels.
+    pub size_px: f32,
+    /// Drawn after objects of this priority or lower.
+    pub priority: u8,
+}
+
+/// Sun glare settings.
+#[derive(Debug, Clone)]
+pub struct Glare {
+    /// Halo texture.
+    pub halo: Arc<TextureImage>,
+    /// Halo size, degrees.
+    pub halo_size_deg: f32,
+    /// Occlusion-tested disc size, degrees.
+    pub disc_size_deg: f32,
+    /// Seconds of retinal persistence.
+    pub persistence_s: f32,
+    /// Shrink sprites as the sun disappears.
+    pub shrink: bool,
+    /// Rotation of sprites per unit of lost visibility, radians.
+    pub rotate: f32,
+    /// Glare colour over the day.
+    pub color: Color,
+    /// Flare sprites.
+    pub flares: Vec<Flare>,
+}
+
+/// A lens-flare sprite.
+#[derive(Debug, Clone)]
+pub struct Flare {
+    /// Texture.
+    pub texture: Arc<TextureImage>,
+    /// 0 at the sun, 1 at the screen centre.
+    pub position: f32,
+    /// Fraction of the screen height.
+    pub size: f32,
+    /// Tint.
+    pub tint: Rgba,
+}

@@ -1,0 +1,101 @@
+//! Shared helpers of the integration tests: GPU setup on lavapipe and image comparison.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use skytune::render::{AdapterChoice, GpuContext, Headless};
+
+/// A headless renderer on the software adapter (lavapipe): the same pixels on every machine.
+pub fn headless(width: u32, height: u32) -> Headless {
+    let ctx = GpuContext::headless(AdapterChoice::Cpu).expect("lavapipe (mesa-vulkan-drivers) is required: run scripts/setup.sh");
+    Headless::new(ctx, width, height).expect("creating the renderer")
+}
+
+/// Folder of committed reference images.
+pub fn reference_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/reference")
+}
+
+/// Git-ignored folder receiving actual and diff images of failed comparisons.
+pub fn output_dir() -> PathBuf {
+    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/output");
+    std::fs::create_dir_all(&d).expect("creating tests/output");
+    d
+}
+
+/// Per-pixel tolerance: a pixel differs when a channel differs by more than this (of 255).
+pub const CHANNEL_TOLERANCE: u8 = 10;
+/// Budget: the comparison fails when more than this fraction of pixels differ.
+pub const PIXEL_BUDGET: f64 = 0.01;
+
+/// Result of comparing two images.
+#[derive(Debug, Clone, Copy)]
+pub struct Diff {
+    /// Fraction of pixels beyond `CHANNEL_TOLERANCE`.
+    pub differing: f64,
+    /// Largest channel difference.
+    pub max: u8,
+    /// Mean absolute channel difference (of 255).
+    pub mean: f64,
+}
+
+/// Compares two equally sized images.
+pub fn diff(a: &image::RgbaImage, b: &image::RgbaImage, tolerance: u8) -> (Diff, image::RgbaImage) {
+    assert_eq!(a.dimensions(), b.dimensions(), "image sizes differ");
+    let mut out = image::RgbaImage::new(a.width(), a.height());
+    let (mut differing, mut max, mut sum) = (0u64, 0u8, 0u64);
+    for ((pa, pb), po) in a.pixels().zip(b.pixels()).zip(out.pixels_mut()) {
+        let d = (0..3).map(|i| pa[i].abs_diff(pb[i])).max().unwrap_or(0);
+        sum += (0..3).map(|i| pa[i].abs_diff(pb[i]) as u64).sum::<u64>();
+        max = max.max(d);
+        if d > tolerance {
+            differing += 1;
+            *po = image::Rgba([255, 0, 255, 255]);
+        } else {
+            let g = (d as u32 * 20).min(255) as u8;
+            *po = image::Rgba([g, g, g, 255]);
+        }
+    }
+    let n = (a.width() * a.height()) as f64;
+    (Diff { differing: differing as f64 / n, max, mean: sum as f64 / (n * 3.0) }, out)
+}
+
+/// Compares with `tests/reference/NAME.png`. `SKYTUNE_ACCEPT=1` writes the reference instead.
+/// On failure, writes NAME.actual.png and NAME.diff.png into tests/output and panics.
+pub fn check_reference(name: &str, actual: &image::RgbaImage) {
+    let reference = reference_dir().join(format!("{name}.png"));
+    if std::env::var("SKYTUNE_ACCEPT").is_ok_and(|v| v == "1") {
+        actual.save(&reference).expect("writing the reference");
+        eprintln!("accepted new reference {}", reference.display());
+        return;
+    }
+    let expected = match image::open(&reference) {
+        Ok(img) => img.to_rgba8(),
+        Err(e) => {
+            let out = output_dir().join(format!("{name}.actual.png"));
+            actual.save(&out).expect("writing the actual image");
+            panic!("no reference {} ({e}); actual written to {}; run with SKYTUNE_ACCEPT=1 to accept it", reference.display(), out.display());
+        }
+    };
+    let (d, diff_img) = diff(actual, &expected, CHANNEL_TOLERANCE);
+    if d.differing > PIXEL_BUDGET {
+        let out = output_dir();
+        actual.save(out.join(format!("{name}.actual.png"))).expect("writing actual");
+        diff_img.save(out.join(format!("{name}.diff.png"))).expect("writing diff");
+        panic!(
+            "{name}: {:.2}% of pixels differ by more than {CHANNEL_TOLERANCE}/255 (budget {:.2}%), max {}, mean {:.2}; see tests/output/{name}.actual.png and .diff.png",
+            d.differing * 100.0,
+            PIXEL_BUDGET * 100.0,
+            d.max,
+            d.mean
+        );
+    }
+}
+
+/// A fresh folder holding a copy of the default sky (sky.toml + bitmaps).
+pub fn default_sky_folder() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let palette = skytune::sky::procedural::preset("default").unwrap();
+    let sky = skytune::sky::builtin::write_sky_folder(dir.path(), palette, 7).expect("writing the default sky");
+    (dir, sky)
+}

@@ -1,0 +1,161 @@
+//! Parsing and validation: good files load, bad ones give located errors and never panic.
+
+mod common;
+
+use skytune::sky::builtin::{default_sky, DEFAULT_SKY_TOML};
+use skytune::sky::{load_sky_file, SkyErrors};
+
+/// Writes the default sky with `from` replaced by `to`; returns the errors and the 1-based line of `to`.
+fn broken(from: &str, to: &str) -> (SkyErrors, usize, String) {
+    let (dir, sky) = common::default_sky_folder();
+    let text = DEFAULT_SKY_TOML.replacen(from, to, 1);
+    assert_ne!(text, DEFAULT_SKY_TOML, "the replacement must change the file: {from}");
+    std::fs::write(&sky, &text).unwrap();
+    let errors = load_sky_file(&sky).expect_err("the broken sky must not load");
+    let line = text[..text.find(to).unwrap()].matches('\n').count() + 1;
+    let file = sky.display().to_string();
+    drop(dir);
+    (errors, line, file)
+}
+
+fn assert_error(errors: &SkyErrors, file: &str, line: usize, field: &str, message: &str) {
+    let found = errors.0.iter().any(|e| e.file == file && e.line == line && e.field == field && e.message.contains(message));
+    assert!(found, "expected {file}:{line}: {field}: ...{message}...; got:\n{errors}");
+}
+
+#[test]
+fn builtin_sky_is_valid() {
+    let sky = default_sky();
+    assert_eq!(sky.name, "Default");
+    assert_eq!(sky.objects.len(), 10);
+    // Sorted by priority, file order among equals.
+    let priorities: Vec<u8> = sky.objects.iter().map(|o| o.priority).collect();
+    assert!(priorities.windows(2).all(|w| w[0] <= w[1]), "{priorities:?}");
+    assert_eq!(sky.objects[0].name, "skydome");
+    assert_eq!(sky.objects.last().unwrap().name, "fog_dome");
+}
+
+#[test]
+fn written_sky_folder_is_valid_and_lists_its_files() {
+    let (_dir, path) = common::default_sky_folder();
+    let sky = load_sky_file(&path).unwrap();
+    assert!(sky.watched_files.iter().any(|p| p.ends_with("gradient_storm.png")));
+    assert!(sky.watched_files.iter().any(|p| p.ends_with("fog.png")));
+}
+
+#[test]
+fn priority_out_of_range() {
+    let (e, line, file) = broken("priority = 20", "priority = 64");
+    assert_error(&e, &file, line, "object[9].priority", "expected a priority in 0..=63, found 64");
+}
+
+#[test]
+fn unknown_field_is_rejected() {
+    let (e, line, file) = broken("blend = \"opaque\"", "blennd = \"opaque\"");
+    assert_error(&e, &file, line, "object[0].standard.blennd", "unknown field `blennd`, expected one of");
+}
+
+#[test]
+fn nan_is_rejected() {
+    let (e, line, file) = broken("uv_offset_factor = 1.0", "uv_offset_factor = nan");
+    assert_error(&e, &file, line, "object[9].standard.stage[0].uv_offset_factor", "expected a finite number");
+}
+
+#[test]
+fn elevation_out_of_range() {
+    let (e, line, file) = broken("{ hour = 12, azimuth_deg = 180, elevation_deg = 60 }", "{ hour = 12, azimuth_deg = 180, elevation_deg = 95 }");
+    assert_error(&e, &file, line, "path[0].keys[2].elevation_deg", "within [-90, 90]");
+}
+
+#[test]
+fn missing_image_names_file_line_and_field() {
+    let (e, line, file) = broken("texture = \"galaxy.png\"", "texture = \"galaxxy.png\"");
+    assert_error(&e, &file, line, "object[1].standard.stage[0].texture", "galaxxy.png");
+}
+
+#[test]
+fn missing_path_reference() {
+    let (e, line, file) = broken("path = \"small_moon\"", "path = \"tiny_moon\"");
+    assert_error(&e, &file, line, "object[4].path", "no path named \"tiny_moon\"");
+}
+
+#[test]
+fn cyclic_follow_is_an_error() {
+    // sun -> (keys) is fine; make planet follow moon and moon follow planet.
+    let (dir, sky) = common::default_sky_folder();
+    let text = DEFAULT_SKY_TOML
+        .replacen("name = \"moon\"\nfollow = \"sun\"", "name = \"moon\"\nfollow = \"planet\"", 1)
+        .replacen("name = \"planet\"\nfollow = \"sun\"", "name = \"planet\"\nfollow = \"moon\"", 1);
+    std::fs::write(&sky, &text).unwrap();
+    let e = load_sky_file(&sky).unwrap_err();
+    let line = text[..text.find("follow = \"planet\"").unwrap()].matches('\n').count() + 1;
+    assert_error(&e, &sky.display().to_string(), line, "path[1].follow", "cyclic follow: moon -> planet -> moon");
+    drop(dir);
+}
+
+#[test]
+fn gradient_heights_must_match() {
+    let (dir, sky) = common::default_sky_folder();
+    image::RgbaImage::new(24, 16).save(dir.path().join("gradient_cloudy.png")).unwrap();
+    let e = load_sky_file(&sky).unwrap_err();
+    let text = std::fs::read_to_string(&sky).unwrap();
+    let line = text[..text.find("weather_gradients = { stage = 0").unwrap()].matches('\n').count() + 1;
+    assert_error(&e, &sky.display().to_string(), line, "object[0].standard.weather_gradients.bitmaps[1]", "all weather steps must share a height");
+}
+
+#[test]
+fn undecodable_image() {
+    let (dir, sky) = common::default_sky_folder();
+    std::fs::write(dir.path().join("fog.png"), b"not a png").unwrap();
+    let e = load_sky_file(&sky).unwrap_err();
+    let line = DEFAULT_SKY_TOML.lines().position(|l| l.starts_with("fog_color")).unwrap() + 1;
+    assert_error(&e, &sky.display().to_string(), line, "fog_color", "cannot decode");
+}
+
+#[test]
+fn undefined_constant_and_ref_color() {
+    let (e, line, file) = broken("ref_color = \"constant0\"\n[[object.standard.stage]]\ntexture = \"galaxy.png\"", "ref_color = \"constant3\"\n[[object.standard.stage]]\ntexture = \"galaxy.png\"");
+    assert_error(&e, &file, line, "object[1].standard.ref_color", "constant 3, which is not defined");
+}
+
+#[test]
+fn syntax_error_has_line_and_column() {
+    let (e, line, file) = broken("hours_per_day = 24", "hours_per_day = = 24");
+    let err = &e.0[0];
+    assert_eq!((err.file.as_str(), err.line, err.field.as_str()), (file.as_str(), line, "<syntax>"), "{e}");
+    assert!(err.column > 1);
+}
+
+#[test]
+fn several_errors_are_reported_together() {
+    let (dir, sky) = common::default_sky_folder();
+    let text = DEFAULT_SKY_TOML.replacen("texture = \"stars.png\"", "texture = \"nostars.png\"", 1).replacen("texture = \"moon.png\"", "texture = \"nomoon.png\"", 1);
+    std::fs::write(&sky, text).unwrap();
+    let e = load_sky_file(&sky).unwrap_err();
+    assert!(e.0.len() >= 2, "{e}");
+    drop(dir);
+}
+
+#[test]
+fn continent_file_picks_a_sky_per_season() {
+    let (dir, _sky) = common::default_sky_folder();
+    let c = dir.path().join("continent.toml");
+    std::fs::write(&c, "name = \"Test\"\n[seasons]\nspring = \"sky.toml\"\nsummer = \"sky.toml\"\nautumn = \"sky.toml\"\nwinter = \"nosky.toml\"\n").unwrap();
+    let e = skytune::sky::load::load_continent(&c).unwrap_err();
+    assert_error(&e, &c.display().to_string(), 6, "seasons", "nosky.toml does not exist");
+    assert!(skytune::sky::load::is_continent_file(&c));
+}
+
+#[test]
+fn starfield_respects_magnitude_cutoff() {
+    let sky = default_sky();
+    let mut stars = sky.stars.clone().unwrap();
+    let all = skytune::sky::starfield::generate(&stars);
+    assert!(all.iter().all(|s| s.magnitude <= stars.magnitude_cutoff));
+    stars.magnitude_cutoff = 3.0;
+    let bright = skytune::sky::starfield::generate(&stars);
+    // Counts grow ~x3.2 per magnitude: 2.5 magnitudes fewer keeps about 10^(-0.5 * 2.5) = 5.6%.
+    let ratio = bright.len() as f64 / all.len() as f64;
+    assert!((0.03..0.10).contains(&ratio), "ratio {ratio}");
+    assert!(bright.iter().all(|s| s.magnitude <= 3.0));
+}

@@ -1,0 +1,145 @@
+//! Headless renders on lavapipe compared with small committed references.
+
+mod common;
+
+use skytune::render::{Camera, RenderOptions};
+use skytune::sky::builtin::{default_sky, DEFAULT_SKY_TOML};
+use skytune::sky::{load_sky_file, FrameInput, Hidden, Tier};
+
+const W: u32 = 160;
+const H: u32 = 90;
+
+fn camera() -> Camera {
+    // Looking south-west and up a little: sun, halo, clouds, horizon and scene all in view.
+    Camera { yaw_deg: 220.0, pitch_deg: 20.0, ..Camera::default() }
+}
+
+fn render_default(name: &str, hour: f32, weather: f32) {
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    let img = h.render(&sky, &FrameInput::new(hour, weather), &camera(), &RenderOptions::default()).unwrap();
+    common::check_reference(name, &img);
+}
+
+#[test]
+fn day() {
+    render_default("default_day", 13.0, 0.0);
+}
+
+#[test]
+fn dusk() {
+    render_default("default_dusk", 18.3, 0.1);
+}
+
+#[test]
+fn night() {
+    render_default("default_night", 23.0, 0.0);
+}
+
+#[test]
+fn storm() {
+    render_default("default_storm", 15.0, 0.95);
+}
+
+/// Adds an opaque full-dome object, drawn last, whose colour is `rgba` and whose ref colour is
+/// its diffuse: it paints the whole sky unless its alpha hides it.
+fn sky_with_wall(rgba: &str) -> (tempfile::TempDir, skytune::sky::Sky) {
+    let (dir, path) = common::default_sky_folder();
+    let wall = format!(
+        "\n[[object]]\nname = \"wall\"\npriority = 63\n[object.standard]\nshape = {{ kind = \"dome\" }}\nblend = \"opaque\"\nref_color = \"diffuse\"\ndiffuse = {{ mode = \"unused\", value = {rgba} }}\n[[object.standard.stage]]\ntexture = \"halo.png\"\n"
+    );
+    let text = DEFAULT_SKY_TOML.replacen("\n[stars]", &format!("{wall}\n[stars]"), 1);
+    std::fs::write(&path, text).unwrap();
+    let sky = load_sky_file(&path).unwrap();
+    (dir, sky)
+}
+
+#[test]
+fn ref_alpha_zero_draws_nothing() {
+    let input = FrameInput::new(12.0, 0.0);
+    let opts = RenderOptions { glare: false, ..Default::default() };
+    let mut h = common::headless(W, H);
+
+    let (_d, hidden) = sky_with_wall("[1, 0, 0, 0]");
+    let frame = hidden.evaluate(&input);
+    let wall = hidden.object_index("wall").unwrap();
+    assert_eq!(frame.objects.iter().find(|o| o.index == wall).unwrap().passes, Err(Hidden::RefAlphaZero(skytune::sky::resolved::RefColor::Diffuse)));
+    h.set_sky(&hidden).unwrap();
+    let with_hidden_wall = h.render(&hidden, &input, &camera(), &opts).unwrap();
+
+    let (_d2, plain) = common::default_sky_folder();
+    let plain = load_sky_file(&plain).unwrap();
+    h.set_sky(&plain).unwrap();
+    let baseline = h.render(&plain, &input, &camera(), &opts).unwrap();
+    let (d, _) = common::diff(&with_hidden_wall, &baseline, 0);
+    assert_eq!(d.differing, 0.0, "a hidden object changed pixels: {d:?}");
+
+    // Control: the same object with a visible alpha paints the sky, so the check above can fail.
+    let (_d3, visible) = sky_with_wall("[1, 0, 0, 0.01]");
+    h.set_sky(&visible).unwrap();
+    let with_wall = h.render(&visible, &input, &camera(), &opts).unwrap();
+    let (d, _) = common::diff(&with_wall, &baseline, 10);
+    assert!(d.differing > 0.3, "the visible wall should cover the sky: {d:?}");
+}
+
+#[test]
+fn tier_two_draws_fallback_passes_close_to_tier_four() {
+    let sky = default_sky();
+    let opts = RenderOptions { glare: false, ..Default::default() };
+    let mut input = FrameInput::new(21.5, 0.0);
+    let dome = sky.object_index("skydome").unwrap();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    let tier4 = h.render(&sky, &input, &camera(), &opts).unwrap();
+
+    input.tier = Tier::new(2).unwrap();
+    let frame = sky.evaluate(&input);
+    let of = frame.objects.iter().find(|o| o.index == dome).unwrap();
+    assert!(of.fallback);
+    let versions: Vec<usize> = of.passes.as_ref().unwrap().iter().map(|p| p.version).collect();
+    assert_eq!(versions, vec![1, 2], "both fallback passes are drawn");
+    let tier2 = h.render(&sky, &input, &camera(), &opts).unwrap();
+    let (d, diff) = common::diff(&tier2, &tier4, 12);
+    if d.differing > 0.02 || d.mean > 2.0 {
+        diff.save(common::output_dir().join("tier2.diff.png")).unwrap();
+        tier2.save(common::output_dir().join("tier2.actual.png")).unwrap();
+        panic!("tier 2 strays from tier 4: {d:?}");
+    }
+
+    // Without the skydome the sky is black: the fallback passes really drew it.
+    input.disabled = vec!["skydome".into()];
+    let no_dome = h.render(&sky, &input, &camera(), &opts).unwrap();
+    let (d, _) = common::diff(&no_dome, &tier2, 6);
+    assert!(d.differing > 0.2, "{d:?}");
+}
+
+#[test]
+fn tier_one_drops_passes_that_do_not_fit() {
+    let sky = default_sky();
+    let mut input = FrameInput::new(21.5, 0.0);
+    input.tier = Tier::new(1).unwrap();
+    let frame = sky.evaluate(&input);
+    let dome = &frame.objects[sky.object_index("skydome").unwrap()];
+    assert_eq!(dome.passes.as_ref().unwrap().iter().map(|p| p.version).collect::<Vec<_>>(), vec![1]);
+    assert_eq!(dome.dropped, vec![(2, 2)]);
+    // The storm clouds have no fallback: hidden at tier 1, with the reason.
+    let storm = &frame.objects[sky.object_index("clouds_storm").unwrap()];
+    assert_eq!(storm.passes, Err(Hidden::Tier { needs: 2, has: 1 }));
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+}
+
+#[test]
+fn env_map_view_skips_objects_not_visible_there() {
+    let (_d, path) = common::default_sky_folder();
+    let text = std::fs::read_to_string(&path).unwrap().replacen("name = \"sun\"\npriority = 5", "name = \"sun\"\npriority = 5\nvisible_in_env_map = false", 1);
+    std::fs::write(&path, text).unwrap();
+    let sky = load_sky_file(&path).unwrap();
+    let mut input = FrameInput::new(12.0, 0.0);
+    let sun = sky.object_index("sun").unwrap();
+    assert!(sky.evaluate(&input).objects[sun].passes.is_ok());
+    input.env_map = true;
+    assert_eq!(sky.evaluate(&input).objects[sun].passes, Err(Hidden::NotInView));
+}
