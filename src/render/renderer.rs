@@ -134,6 +134,11 @@ impl SkyRenderer {
         self.current.as_ref()?.glare.as_ref().map(|g| &g.state)
     }
 
+    /// Phase of the glare's occlusion queries, if the sky has glare.
+    pub fn glare_query_phase(&self) -> Option<super::glare::QueryPhase> {
+        self.current.as_ref()?.glare.as_ref().map(|g| g.query_phase().clone())
+    }
+
     /// Mutable glare state (freeze toggle).
     pub fn glare_state_mut(&mut self) -> Option<&mut GlareState> {
         self.current.as_mut()?.glare.as_mut().map(|g| &mut g.state)
