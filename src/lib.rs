@@ -5,6 +5,7 @@
 //! - [`render`]: the wgpu renderer (no UI types).
 //! - [`live`]: hot reload of sky files.
 
+pub mod app;
 pub mod live;
 pub mod render;
 pub mod sky;

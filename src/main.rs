@@ -1,6 +1,5 @@
 //! The `skytune` binary: window (default), `render`, `check`, `watch`, `new-sky`, `bench`.
 
-mod app;
 mod bench;
 mod cli;
 
@@ -26,7 +25,16 @@ fn main() {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        None => app::run(cli.sky, cli.app),
+        None => skytune::app::run(skytune::app::AppConfig {
+            sky: cli.sky,
+            season: cli.app.season,
+            tier: cli.app.tier,
+            frames: cli.app.frames,
+            screenshot_and_exit: cli.app.screenshot_and_exit,
+            shots: cli.app.shots,
+            cpu: cli.app.cpu,
+            shader_dir: cli.app.shader_dir,
+        }),
         Some(Command::Render(args)) => render(&args),
         Some(Command::Check { sky }) => check(&sky),
         Some(Command::Watch { render, max_reloads }) => watch(&render, max_reloads),

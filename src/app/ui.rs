@@ -1,0 +1,427 @@
+//! The window's panels. `draw` is a pure function of the controls and what the frame produced,
+//! returning actions for the app to carry out, so it can run in a headless egui context in tests.
+
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use egui::{Color32, RichText};
+
+use crate::render::camera::PRESETS;
+use crate::render::glare::GlareState;
+use crate::render::{Camera, FrameStats, RenderOptions};
+use crate::sky::bitmap::ColorBitmap;
+use crate::sky::eval::{FrameSky, Tier};
+use crate::sky::load::SEASONS;
+use crate::sky::resolved::ColorMode;
+use crate::sky::{Rgba, Sky};
+
+/// Everything the user controls from the panels and the keyboard.
+#[derive(Debug, Clone)]
+pub struct Controls {
+    /// Time of day, game hours.
+    pub hour: f32,
+    /// Total game hours elapsed (panners).
+    pub game_hours: f64,
+    /// Weather 0..1.
+    pub weather: f32,
+    /// Time runs.
+    pub playing: bool,
+    /// Game hours per real second while playing.
+    pub speed: f32,
+    /// Emulated GPU tier.
+    pub tier: Tier,
+    /// Season index (continent files).
+    pub season: usize,
+    /// Camera.
+    pub camera: Camera,
+    /// Scene, depth split, glare.
+    pub options: RenderOptions,
+    /// Objects switched off.
+    pub disabled: Vec<String>,
+    /// Help overlay open.
+    pub show_help: bool,
+    /// Bitmap inspector target: (label, object index or None for the sky's own bitmaps, slot).
+    pub inspect: Option<InspectTarget>,
+    /// Text of the "open" field.
+    pub path_input: String,
+    /// Contact sheet grid: hours x weathers.
+    pub sheet_grid: (u32, u32),
+}
+
+impl Default for Controls {
+    fn default() -> Self {
+        Self {
+            hour: 17.5,
+            game_hours: 17.5,
+            weather: 0.1,
+            playing: false,
+            speed: 0.25,
+            tier: Tier::FOUR,
+            season: 1,
+            camera: Camera::default(),
+            options: RenderOptions::default(),
+            disabled: Vec::new(),
+            show_help: false,
+            inspect: None,
+            path_input: String::new(),
+            sheet_grid: (8, 4),
+        }
+    }
+}
+
+/// A colour bitmap picked in the inspector.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InspectTarget {
+    /// What is shown, e.g. `skydome.standard.constants[0]`.
+    pub label: String,
+    /// The bitmap.
+    pub bitmap: Arc<ColorBitmap>,
+}
+
+/// What the app must do after the panels ran.
+#[derive(Debug, Clone, PartialEq)]
+pub enum UiAction {
+    /// Open a sky or continent file.
+    Open(PathBuf),
+    /// Show the built-in sky.
+    OpenBuiltin,
+    /// Switch season.
+    Season(usize),
+    /// Reload the sky now.
+    Reload,
+    /// Rebuild the shaders now.
+    ReloadShaders,
+    /// Save a screenshot.
+    Screenshot,
+    /// Start a contact sheet.
+    ContactSheet,
+}
+
+/// Read-only facts for the panels.
+pub struct UiInfo<'a> {
+    /// Current sky.
+    pub sky: &'a Sky,
+    /// Its evaluation this frame.
+    pub frame: &'a FrameSky,
+    /// Renderer counters.
+    pub stats: &'a FrameStats,
+    /// Glare state, if any.
+    pub glare: Option<&'a GlareState>,
+    /// Errors to show (reload, shaders, GPU).
+    pub errors: &'a [String],
+    /// Adapter description.
+    pub adapter: &'a str,
+    /// What is shown (path or "default").
+    pub source: &'a str,
+    /// Whether the source is a continent file.
+    pub continent: bool,
+    /// Recent files.
+    pub recent: &'a [PathBuf],
+    /// Frame times, ms, oldest first.
+    pub frame_times_ms: &'a VecDeque<f32>,
+    /// CPU time per frame section, ms.
+    pub cpu_ms: &'a [(&'static str, f32)],
+    /// GPU time per pass, ms (when timestamp queries work).
+    pub gpu_ms: &'a [(&'static str, f32)],
+    /// Contact sheet progress (done, total).
+    pub sheet_progress: Option<(usize, usize)>,
+    /// Last capture message.
+    pub last_capture: &'a str,
+}
+
+/// Keyboard shortcuts, shown in the help overlay.
+pub const SHORTCUTS: [(&str, &str); 13] = [
+    ("Space", "play / pause time"),
+    ("[ / ]", "hour -0.25 / +0.25"),
+    ("- / =", "weather -0.05 / +0.05"),
+    ("A / D", "turn left / right"),
+    ("W / S", "look up / down"),
+    ("drag (left mouse)", "free look"),
+    ("1 / 2 / 4", "GPU tier: 1, 2 or 4 texture stages"),
+    ("Z", "look at the zenith"),
+    ("F5", "reload the sky now"),
+    ("F6", "reload the shaders now"),
+    ("F12", "screenshot"),
+    ("F1", "this help"),
+    ("Esc", "quit"),
+];
+
+fn swatch(ui: &mut egui::Ui, c: Rgba) {
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(14.0, 14.0), egui::Sense::hover());
+    let to8 = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
+    ui.painter().rect_filled(rect, 2.0, Color32::from_rgb(to8(c[0]), to8(c[1]), to8(c[2])));
+    ui.painter().rect_stroke(rect, 2.0, egui::Stroke::new(1.0, Color32::GRAY), egui::StrokeKind::Inside);
+}
+
+/// Builds every panel for one frame and returns the actions the user asked for.
+pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_texture: Option<egui::TextureId>) -> Vec<UiAction> {
+    let mut actions = Vec::new();
+    let sky = info.sky;
+    egui::Panel::left("controls").default_size(300.0).show(ui, |ui| {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            ui.heading(&sky.name);
+            ui.label(RichText::new(info.source).small());
+            ui.label(RichText::new(info.adapter).small().weak());
+            ui.separator();
+
+            ui.collapsing("Sky file", |ui| {
+                ui.horizontal(|ui| {
+                    ui.text_edit_singleline(&mut c.path_input).on_hover_text("path of a sky or continent file");
+                    if ui.button("Open").clicked() && !c.path_input.trim().is_empty() {
+                        actions.push(UiAction::Open(PathBuf::from(c.path_input.trim())));
+                    }
+                });
+                ui.horizontal(|ui| {
+                    if ui.button("Built-in sky").clicked() {
+                        actions.push(UiAction::OpenBuiltin);
+                    }
+                    if ui.button("Reload (F5)").clicked() {
+                        actions.push(UiAction::Reload);
+                    }
+                    if ui.button("Shaders (F6)").clicked() {
+                        actions.push(UiAction::ReloadShaders);
+                    }
+                });
+                for p in info.recent {
+                    if ui.link(p.display().to_string()).clicked() {
+                        actions.push(UiAction::Open(p.clone()));
+                    }
+                }
+                ui.label(RichText::new("Tip: drop a sky file onto the window.").small().weak());
+                if info.continent {
+                    let mut season = c.season;
+                    egui::ComboBox::from_label("season").selected_text(SEASONS[season]).show_ui(ui, |ui| {
+                        for (i, s) in SEASONS.iter().enumerate() {
+                            ui.selectable_value(&mut season, i, *s);
+                        }
+                    });
+                    if season != c.season {
+                        c.season = season;
+                        actions.push(UiAction::Season(season));
+                    }
+                }
+            });
+
+            ui.separator();
+            ui.add(egui::Slider::new(&mut c.hour, 0.0..=sky.hours_per_day - 0.001).text("hour").fixed_decimals(2));
+            ui.horizontal(|ui| {
+                if ui.button(if c.playing { "Pause" } else { "Play" }).clicked() {
+                    c.playing = !c.playing;
+                }
+                ui.add(egui::Slider::new(&mut c.speed, 0.0..=4.0).text("game h/s"));
+            });
+            ui.add(egui::Slider::new(&mut c.weather, 0.0..=1.0).text("weather").fixed_decimals(2));
+            if !sky.weather_names.is_empty() {
+                let n = sky.weather_names.len();
+                let i = ((c.weather * (n - 1) as f32).round() as usize).min(n - 1);
+                ui.label(format!("weather step: {} ({})", sky.weather_names[i], sky.weather_names.join(" / ")));
+            }
+
+            ui.separator();
+            ui.horizontal(|ui| {
+                ui.label("GPU tier:");
+                for t in Tier::ALL {
+                    ui.radio_value(&mut c.tier, t, if t.stages() == 1 { "1 stage".to_string() } else { format!("{} stages", t.stages()) });
+                }
+            });
+            egui::ComboBox::from_label("sky model").selected_text("NeL bitmaps").show_ui(ui, |ui| {
+                let _ = ui.selectable_label(true, "NeL bitmaps");
+            });
+
+            ui.collapsing("View", |ui| {
+                ui.add(egui::Slider::new(&mut c.camera.fov_y_deg, 10.0..=120.0).text("fov"));
+                ui.add(egui::Slider::new(&mut c.camera.yaw_deg, 0.0..=360.0).text("yaw"));
+                ui.add(egui::Slider::new(&mut c.camera.pitch_deg, -89.0..=89.0).text("pitch"));
+                ui.horizontal_wrapped(|ui| {
+                    for (name, yaw, pitch) in PRESETS {
+                        if ui.button(name).clicked() {
+                            c.camera.yaw_deg = yaw;
+                            c.camera.pitch_deg = pitch;
+                        }
+                    }
+                });
+                ui.checkbox(&mut c.options.scene, "main-scene stand-in");
+                ui.checkbox(&mut c.options.depth_split, "depth-range split (scene [0, 0.95], sky [0.99, 1])");
+                ui.checkbox(&mut c.options.glare, "sun glare");
+            });
+
+            ui.collapsing("Sun glare", |ui| match info.glare {
+                Some(g) => {
+                    ui.label(format!("V = {}  T = {}", g.visible_samples, g.total_samples));
+                    ui.label(format!("visibility V/T = {:.3}", g.ratio));
+                    ui.label(format!("intensity = {:.3}", g.intensity));
+                    ui.label(format!("last result waited {} frame(s); {} frames without result", g.frames_waited, g.frames_without_result));
+                }
+                None => {
+                    ui.label("this sky has no [glare]");
+                }
+            });
+
+            ui.separator();
+            ui.horizontal(|ui| {
+                if ui.button("Screenshot (F12)").clicked() {
+                    actions.push(UiAction::Screenshot);
+                }
+                if ui.button("Contact sheet").clicked() && info.sheet_progress.is_none() {
+                    actions.push(UiAction::ContactSheet);
+                }
+            });
+            ui.horizontal(|ui| {
+                ui.add(egui::DragValue::new(&mut c.sheet_grid.0).range(1..=24).prefix("hours "));
+                ui.add(egui::DragValue::new(&mut c.sheet_grid.1).range(1..=8).prefix("weathers "));
+            });
+            if let Some((done, total)) = info.sheet_progress {
+                ui.add(egui::ProgressBar::new(done as f32 / total.max(1) as f32).text(format!("contact sheet {done}/{total}")));
+            }
+            if !info.last_capture.is_empty() {
+                ui.label(RichText::new(info.last_capture).small());
+            }
+
+            ui.separator();
+            stats(ui, info);
+        });
+    });
+
+    egui::Panel::right("objects").default_size(280.0).show(ui, |ui| {
+        egui::ScrollArea::vertical().show(ui, |ui| objects(ui, c, info));
+    });
+
+    if !info.errors.is_empty() {
+        egui::Panel::bottom("errors").show(ui, |ui| {
+            for e in info.errors {
+                ui.colored_label(Color32::from_rgb(255, 110, 110), e);
+            }
+        });
+    }
+
+    if let (Some(target), Some(tex)) = (c.inspect.clone(), inspector_texture) {
+        let mut open = true;
+        egui::Window::new("Bitmap inspector").open(&mut open).show(ui.ctx(), |ui| {
+            ui.label(&target.label);
+            let b = &target.bitmap;
+            let scale = (360.0 / b.width as f32).min(120.0 / b.height as f32).max(1.0);
+            let size = egui::vec2(b.width as f32 * scale, b.height as f32 * scale);
+            let response = ui.add(egui::Image::new((tex, size)).fit_to_exact_size(size));
+            let (x, y) = b.sample_position(c.hour, sky.hours_per_day, c.weather);
+            // Texel centres: the sample at x sits x texels from the left edge of column 0's centre.
+            let p = response.rect.min + egui::vec2((x + 0.5) * scale, (y + 0.5) * scale);
+            ui.painter().circle_stroke(p, 5.0, egui::Stroke::new(2.0, Color32::RED));
+            let v = b.sample(c.hour, sky.hours_per_day, c.weather);
+            ui.horizontal(|ui| {
+                swatch(ui, v);
+                ui.label(format!("({x:.2}, {y:.2}) -> rgba {:.3} {:.3} {:.3} {:.3}", v[0], v[1], v[2], v[3]));
+            });
+        });
+        if !open {
+            c.inspect = None;
+        }
+    }
+
+    if c.show_help {
+        egui::Window::new("Keyboard shortcuts").open(&mut c.show_help).show(ui.ctx(), |ui| {
+            egui::Grid::new("shortcuts").striped(true).show(ui, |ui| {
+                for (k, what) in SHORTCUTS {
+                    ui.monospace(k);
+                    ui.label(what);
+                    ui.end_row();
+                }
+            });
+        });
+    }
+    actions
+}
+
+fn stats(ui: &mut egui::Ui, info: &UiInfo<'_>) {
+    let times: Vec<[f64; 2]> = info.frame_times_ms.iter().enumerate().map(|(i, t)| [i as f64, *t as f64]).collect();
+    let last = info.frame_times_ms.back().copied().unwrap_or(0.0);
+    let mut sorted: Vec<f32> = info.frame_times_ms.iter().copied().collect();
+    sorted.sort_by(f32::total_cmp);
+    let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+    ui.label(format!("frame {last:.1} ms (median {median:.1} ms, {:.0} fps)", if median > 0.0 { 1000.0 / median } else { 0.0 }));
+    egui_plot::Plot::new("frame_times").height(70.0).show_axes([false, true]).allow_drag(false).allow_zoom(false).allow_scroll(false).show(ui, |p| {
+        p.line(egui_plot::Line::new("frame ms", times));
+    });
+    let section = |ui: &mut egui::Ui, title: &str, rows: &[(&str, f32)]| {
+        if !rows.is_empty() {
+            ui.label(title);
+            for (name, ms) in rows {
+                ui.label(format!("  {name}: {ms:.2} ms"));
+            }
+        }
+    };
+    section(ui, "GPU time per pass (timestamp queries):", info.gpu_ms);
+    section(ui, "CPU time per frame section:", info.cpu_ms);
+    let s = info.stats;
+    ui.label(format!("draw calls {}, objects drawn {}, hidden {}, stars {}", s.draw_calls, s.objects_drawn, s.objects_hidden, s.stars));
+    if let Some(g) = info.glare {
+        ui.label(format!("sun visibility {:.3}, glare intensity {:.3}", g.ratio, g.intensity));
+    }
+}
+
+fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
+    ui.heading("Objects");
+    let sky = info.sky;
+    for of in &info.frame.objects {
+        let o = &sky.objects[of.index];
+        let mut on = !c.disabled.contains(&o.name);
+        let status = match &of.passes {
+            Ok(p) if of.fallback => format!("fallback ({} pass{})", p.len(), if p.len() == 1 { "" } else { "es" }),
+            Ok(_) => "standard".to_string(),
+            Err(why) => format!("hidden: {why}"),
+        };
+        let color = if of.passes.is_ok() { Color32::LIGHT_GREEN } else { Color32::from_rgb(230, 170, 90) };
+        ui.horizontal(|ui| {
+            if ui.checkbox(&mut on, "").changed() {
+                if on {
+                    c.disabled.retain(|n| n != &o.name);
+                } else {
+                    c.disabled.push(o.name.clone());
+                }
+            }
+            ui.label(RichText::new(format!("[{}] {}", o.priority, o.name)).strong());
+        });
+        ui.label(RichText::new(status).color(color).small());
+        for (pass, dropped) in &of.dropped {
+            ui.label(RichText::new(format!("fallback pass {pass} dropped: needs {dropped} stages")).small().weak());
+        }
+        if let Ok(passes) = &of.passes {
+            for p in passes {
+                let version = if p.version == 0 { &o.standard } else { &o.fallback[p.version - 1] };
+                ui.horizontal(|ui| {
+                    swatch(ui, p.diffuse);
+                    inspect_button(ui, c, &version.diffuse, format!("{}.{}diffuse", o.name, version_label(p.version)));
+                    for (k, col) in version.constants.iter().enumerate() {
+                        swatch(ui, p.constants[k]);
+                        inspect_button(ui, c, col, format!("{}.{}constants[{k}]", o.name, version_label(p.version)));
+                    }
+                });
+            }
+        }
+        ui.separator();
+    }
+    ui.label("Sky bitmaps:");
+    ui.horizontal_wrapped(|ui| {
+        for (name, b) in [("fog_color", &sky.fog_color), ("sun_ambient", &sky.sun_ambient), ("sun_diffuse", &sky.sun_diffuse)] {
+            if ui.small_button(name).clicked() {
+                c.inspect = Some(InspectTarget { label: name.to_string(), bitmap: b.clone() });
+            }
+        }
+    });
+}
+
+fn version_label(v: usize) -> String {
+    if v == 0 {
+        "standard.".into()
+    } else {
+        format!("fallback[{}].", v - 1)
+    }
+}
+
+fn inspect_button(ui: &mut egui::Ui, c: &mut Controls, color: &crate::sky::resolved::Color, label: String) {
+    if let (Some(b), ColorMode::Bitmap | ColorMode::BitmapTimesFog) = (&color.bitmap, color.mode) {
+        if ui.small_button("inspect").on_hover_text(format!("inspect {label}")).clicked() {
+            c.inspect = Some(InspectTarget { label, bitmap: b.clone() });
+        }
+    }
+}

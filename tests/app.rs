@@ -1,0 +1,178 @@
+//! The desktop app: its panels run in a headless egui context, and the binary starts under
+//! Xvfb on lavapipe, renders frames, saves a screenshot through its own code path and exits.
+
+mod common;
+
+use std::collections::VecDeque;
+use std::path::Path;
+use std::process::Command;
+
+use skytune::app::ui::{self, Controls, UiAction, UiInfo};
+use skytune::render::FrameStats;
+use skytune::sky::builtin::default_sky;
+use skytune::sky::FrameInput;
+
+fn run_panels(controls: &mut Controls, events: Vec<egui::Event>) -> Vec<UiAction> {
+    let sky = default_sky();
+    let mut input = FrameInput::new(controls.hour, controls.weather);
+    input.tier = controls.tier;
+    let frame = sky.evaluate(&input);
+    let stats = FrameStats::default();
+    let times: VecDeque<f32> = [16.0, 17.0, 15.5].into_iter().collect();
+    let info = UiInfo {
+        sky: &sky,
+        frame: &frame,
+        stats: &stats,
+        glare: None,
+        errors: &["sky reload failed: sky.toml:3:1: name: expected a string".to_string()],
+        adapter: "test",
+        source: "default",
+        continent: false,
+        recent: &[],
+        frame_times_ms: &times,
+        cpu_ms: &[("record", 1.0)],
+        gpu_ms: &[],
+        sheet_progress: Some((3, 32)),
+        last_capture: "",
+    };
+    let ctx = egui::Context::default();
+    let mut actions = Vec::new();
+    // Two passes: egui lays out on the first and answers clicks on the second.
+    for events in [Vec::new(), events] {
+        let raw = egui::RawInput {
+            screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(1280.0, 800.0))),
+            events,
+            ..Default::default()
+        };
+        let mut out = ctx.run_ui(raw, |ui| actions = ui::draw(ui, controls, &info, None));
+        // Nothing is painted in this test: the font atlas upload is dropped on purpose.
+        out.textures_delta.clear();
+        assert!(!out.shapes.is_empty(), "the panels drew nothing");
+    }
+    actions
+}
+
+#[test]
+fn panels_lay_out_with_every_section_and_no_action_by_default() {
+    let mut c = Controls::default();
+    c.show_help = true;
+    let actions = run_panels(&mut c, Vec::new());
+    assert!(actions.is_empty(), "{actions:?}");
+    assert!(c.show_help, "help stays open until closed");
+}
+
+#[test]
+fn hidden_objects_keep_their_reason_in_the_model_the_panel_shows() {
+    let sky = default_sky();
+    let frame = sky.evaluate(&FrameInput::new(12.0, 0.0));
+    let galaxy = &frame.objects[sky.object_index("galaxy").unwrap()];
+    assert_eq!(galaxy.passes.as_ref().unwrap_err().to_string(), "ref colour Constant0 has alpha 0");
+}
+
+#[test]
+fn screenshot_names_carry_sky_time_and_weather() {
+    assert_eq!(skytune::app::capture::screenshot_name("Lakes (winter)", 6.5, 0.25), "lakes__winter__06.50h_w0.25.png");
+    let dir = tempfile::tempdir().unwrap();
+    let a = skytune::app::capture::free_path(dir.path(), "x.png").unwrap();
+    std::fs::write(&a, b"").unwrap();
+    assert_eq!(skytune::app::capture::free_path(dir.path(), "x.png").unwrap(), dir.path().join("x-2.png"));
+}
+
+#[test]
+fn contact_sheet_covers_the_grid() {
+    let mut sheet = skytune::app::capture::ContactSheet::new(24.0, 4, 3, (10, 5), "s.png".into());
+    let mut cells = Vec::new();
+    while let Some((h, w, c, r)) = sheet.next_cell() {
+        cells.push((h, w));
+        sheet.put(c, r, &image::RgbaImage::from_pixel(10, 5, image::Rgba([c as u8, r as u8, 0, 255])));
+    }
+    assert_eq!(cells.len(), 12);
+    assert_eq!(cells[0], (0.0, 0.0));
+    assert_eq!(cells[5], (6.0, 0.5));
+    assert_eq!(cells[11], (18.0, 1.0));
+    assert_eq!(sheet.image.dimensions(), (40, 15));
+    assert_eq!(sheet.image.get_pixel(35, 12).0, [3, 2, 0, 255]);
+}
+
+/// Starts Xvfb on a free display number; returns the child and the display name.
+fn xvfb() -> Option<(std::process::Child, String)> {
+    for n in 90..110 {
+        if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() || Path::new(&format!("/tmp/.X{n}-lock")).exists() {
+            continue;
+        }
+        let child = Command::new("Xvfb").args([format!(":{n}").as_str(), "-screen", "0", "1024x768x24", "-nolisten", "tcp"]).spawn().ok()?;
+        for _ in 0..100 {
+            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
+                return Some((child, format!(":{n}")));
+            }
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+    }
+    None
+}
+
+#[test]
+fn window_starts_renders_screenshots_and_exits_under_xvfb() {
+    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
+    let shots = tempfile::tempdir().unwrap();
+    let config = shots.path().join("state.toml");
+    let (_d, sky) = common::default_sky_folder();
+    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
+        .arg(&sky)
+        .args(["--cpu", "--screenshot-and-exit", "--shots"])
+        .arg(shots.path())
+        .env("DISPLAY", &display)
+        .env("SKYTUNE_CONFIG", &config)
+        .output()
+        .expect("running skytune");
+    let _ = server.kill();
+    let _ = server.wait();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "exit {:?}\nstdout:\n{stdout}\nstderr:\n{}", out.status, String::from_utf8_lossy(&out.stderr));
+    let shot = std::fs::read_dir(shots.path()).unwrap().filter_map(|e| e.ok()).map(|e| e.path()).find(|p| p.extension().is_some_and(|x| x == "png")).expect("a screenshot");
+    assert!(shot.file_name().unwrap().to_string_lossy().starts_with("default_17.50h_w0.10"), "{}", shot.display());
+    let img = image::open(&shot).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (1280, 720));
+    // A real sky: the top is not black, and the image is not one flat colour.
+    let top = img.get_pixel(640, 40).0;
+    assert!(top[0] as u32 + top[1] as u32 + top[2] as u32 > 60, "{top:?}");
+    assert_ne!(img.get_pixel(640, 40), img.get_pixel(640, 700));
+    // The window remembered its size and the sky it showed.
+    let state = std::fs::read_to_string(&config).unwrap();
+    assert!(state.contains("window_size") && state.contains("sky.toml"), "{state}");
+}
+
+#[test]
+fn window_runs_a_fixed_number_of_frames() {
+    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
+        .args(["--cpu", "--frames", "5"])
+        .env("DISPLAY", &display)
+        .env("SKYTUNE_CONFIG", dir.path().join("state.toml"))
+        .env("RUST_LOG", "info")
+        .output()
+        .expect("running skytune");
+    let _ = server.kill();
+    let _ = server.wait();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("rendered 5 frames, exiting"), "{stderr}");
+}
+
+#[test]
+fn without_a_display_it_says_so_and_renders_headless() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
+        .arg("--cpu")
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("SKYTUNE_CONFIG", dir.path().join("state.toml"))
+        .current_dir(dir.path())
+        .output()
+        .expect("running skytune");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("no display available") && stderr.contains("skytune render"), "{stderr}");
+    assert!(dir.path().join("skytune-default.png").is_file());
+}
