@@ -143,3 +143,21 @@ fn env_map_view_skips_objects_not_visible_there() {
     input.env_map = true;
     assert_eq!(sky.evaluate(&input).objects[sun].passes, Err(Hidden::NotInView));
 }
+
+#[test]
+fn gpu_pass_times_arrive_without_blocking() {
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    assert!(h.ctx.timestamps, "lavapipe reports timestamp queries");
+    h.set_sky(&sky).unwrap();
+    let input = FrameInput::new(12.0, 0.0);
+    for _ in 0..4 {
+        h.frame(&sky, &input, &camera(), &RenderOptions::default(), 1.0 / 60.0);
+        h.ctx.wait_idle().unwrap();
+    }
+    h.frame(&sky, &input, &camera(), &RenderOptions::default(), 1.0 / 60.0);
+    let times = h.renderer.gpu_pass_ms().to_vec();
+    let names: Vec<&str> = times.iter().map(|(n, _)| *n).collect();
+    assert!(names.contains(&"scene") && names.contains(&"sky"), "{times:?}");
+    assert!(times.iter().all(|(_, ms)| ms.is_finite() && *ms >= 0.0 && *ms < 10_000.0), "{times:?}");
+}

@@ -420,7 +420,11 @@ impl App {
 
         let raw = gpu.egui_state.take_egui_input(&gpu.window);
         let spec = self.live.spec();
+        if let Some(g) = gpu.renderer.glare_state_mut() {
+            g.frozen = self.controls.freeze_glare;
+        }
         let glare = gpu.renderer.glare_state().cloned();
+        let gpu_ms = gpu.renderer.gpu_pass_ms().to_vec();
         let stats = gpu.renderer.stats.clone();
         let mut actions = Vec::new();
         let info = UiInfo {
@@ -435,7 +439,7 @@ impl App {
             recent: &self.settings.recent,
             frame_times_ms: &self.frame_times,
             cpu_ms: &self.cpu_ms,
-            gpu_ms: &[],
+            gpu_ms: &gpu_ms,
             sheet_progress: self.sheet.as_ref().map(|s| (s.done, s.total())),
             last_capture: &self.last_capture,
         };

@@ -47,6 +47,8 @@ pub struct Controls {
     pub path_input: String,
     /// Contact sheet grid: hours x weathers.
     pub sheet_grid: (u32, u32),
+    /// Keep the glare's measured visibility as it is.
+    pub freeze_glare: bool,
 }
 
 impl Default for Controls {
@@ -66,6 +68,7 @@ impl Default for Controls {
             inspect: None,
             path_input: String::new(),
             sheet_grid: (8, 4),
+            freeze_glare: false,
         }
     }
 }
@@ -252,6 +255,7 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
                     ui.label(format!("visibility V/T = {:.3}", g.ratio));
                     ui.label(format!("intensity = {:.3}", g.intensity));
                     ui.label(format!("last result waited {} frame(s); {} frames without result", g.frames_waited, g.frames_without_result));
+                    ui.checkbox(&mut c.freeze_glare, "freeze the visibility ratio");
                 }
                 None => {
                     ui.label("this sky has no [glare]");

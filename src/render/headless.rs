@@ -88,6 +88,9 @@ impl Offscreen {
     }
 }
 
+/// Most extra frames a still waits for the glare's first occlusion result.
+const STILL_WARMUP_FRAMES: usize = 6;
+
 /// A headless renderer with its target: renders frames of a sky to images.
 pub struct Headless {
     /// GPU context.
@@ -121,9 +124,23 @@ impl Headless {
         self.renderer.after_submit();
     }
 
-    /// Renders one frame and reads it back.
+    /// Renders a still and reads it back. With glare, frames are rendered until an occlusion
+    /// result has arrived, each counting as one persistence period, so the glare shows at its
+    /// settled intensity as it would after the viewer looked for a while.
     pub fn render(&mut self, sky: &Sky, input: &FrameInput, camera: &Camera, options: &RenderOptions) -> anyhow::Result<image::RgbaImage> {
-        self.frame(sky, input, camera, options, 1.0 / 60.0);
+        let settle = sky.glare.as_ref().filter(|_| options.glare).map_or(0.0, |g| g.persistence_s.max(1e-3));
+        self.frame(sky, input, camera, options, settle);
+        if settle > 0.0 {
+            for _ in 0..STILL_WARMUP_FRAMES {
+                let before = self.renderer.glare_state().map(|g| g.frames_without_result);
+                self.ctx.wait_idle()?;
+                self.frame(sky, input, camera, options, settle);
+                let after = self.renderer.glare_state().map(|g| g.frames_without_result);
+                if before.is_some() && before == after {
+                    break;
+                }
+            }
+        }
         self.target.read(&self.ctx)
     }
 }

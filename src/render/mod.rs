@@ -12,6 +12,7 @@ pub mod shaders;
 pub mod sky_objects;
 pub mod stars;
 pub mod textures;
+pub mod timing;
 
 pub use camera::Camera;
 pub use context::{AdapterChoice, GpuContext};

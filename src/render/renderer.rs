@@ -9,6 +9,7 @@ use super::shaders::ShaderLibrary;
 use super::sky_objects::{SkyObjectDraws, SkyObjectsPass};
 use super::stars::{StarField, StarsPass};
 use super::textures::TextureCache;
+use super::timing::GpuTimer;
 use super::GpuContext;
 use crate::sky::{FrameSky, Sky};
 
@@ -67,6 +68,7 @@ pub struct SkyRenderer {
     glare: GlarePass,
     current: Option<SkyGpu>,
     frame_number: u64,
+    timer: Option<GpuTimer>,
     /// Counters of the last recorded frame.
     pub stats: FrameStats,
 }
@@ -86,6 +88,7 @@ impl SkyRenderer {
             library,
             current: None,
             frame_number: 0,
+            timer: ctx.timestamps.then(|| GpuTimer::new(device, &ctx.queue)),
             stats: FrameStats::default(),
         })
     }
@@ -181,36 +184,53 @@ impl SkyRenderer {
             stars: gpu.stars.as_ref().map_or(0, |(f, _)| f.count()),
             ..Default::default()
         };
-        {
-            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("SkyRenderer::main_pass"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+        if let Some(t) = self.timer.as_mut() {
+            t.begin_frame();
+        }
+        let (wf, hf) = (w as f32, h as f32);
+        let attachments = |load_color: wgpu::LoadOp<wgpu::Color>, load_depth: wgpu::LoadOp<f32>| {
+            (
+                [Some(wgpu::RenderPassColorAttachment {
                     view: color,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations { load: load_color, store: wgpu::StoreOp::Store },
                 })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: depth,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
+                wgpu::RenderPassDepthStencilAttachment { view: depth, depth_ops: Some(wgpu::Operations { load: load_depth, store: wgpu::StoreOp::Store }), stencil_ops: None },
+            )
+        };
+        {
+            // Scene pass: clears, and draws the main-scene stand-in first when the depth split is on.
+            let (colors, depth_att) = attachments(wgpu::LoadOp::Clear(wgpu::Color::BLACK), wgpu::LoadOp::Clear(1.0));
+            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("SkyRenderer::scene_pass"),
+                color_attachments: &colors,
+                depth_stencil_attachment: Some(depth_att),
+                timestamp_writes: self.timer.as_mut().and_then(|t| t.writes(0)),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
             rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-            let (wf, hf) = (w as f32, h as f32);
-            let draw_scene = |rpass: &mut wgpu::RenderPass<'_>, range: (f32, f32)| {
-                rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
-                self.scene.draw(rpass, options.scene, options.occluder.is_some())
-            };
             if options.depth_split {
-                stats.draw_calls += draw_scene(&mut rpass, SCENE_DEPTH);
-                rpass.set_viewport(0.0, 0.0, wf, hf, SKY_DEPTH.0, SKY_DEPTH.1);
-            } else {
-                rpass.set_viewport(0.0, 0.0, wf, hf, 0.0, 1.0);
+                rpass.set_viewport(0.0, 0.0, wf, hf, SCENE_DEPTH.0, SCENE_DEPTH.1);
+                stats.draw_calls += self.scene.draw(&mut rpass, options.scene, options.occluder.is_some());
             }
+        }
+        {
+            // Sky pass: objects by priority with the stars in between. With the split, sky fragments
+            // behind the scene fail the depth test; without it the sky covers the screen first.
+            let (colors, depth_att) = attachments(wgpu::LoadOp::Load, wgpu::LoadOp::Load);
+            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("SkyRenderer::sky_pass"),
+                color_attachments: &colors,
+                depth_stencil_attachment: Some(depth_att),
+                timestamp_writes: self.timer.as_mut().and_then(|t| t.writes(1)),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            rpass.set_bind_group(0, &self.globals.bind_group, &[]);
+            let range = if options.depth_split { SKY_DEPTH } else { (0.0, 1.0) };
+            rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
             let stars_priority = gpu.stars.as_ref().map_or(u8::MAX, |(_, p)| *p);
             let below = |o: &crate::sky::ObjectFrame| sky.objects[o.index].priority <= stars_priority;
             stats.draw_calls += gpu.draws.draw(&mut rpass, &self.sky_objects, frame, below);
@@ -223,27 +243,19 @@ impl SkyRenderer {
             stats.draw_calls += gpu.draws.draw(&mut rpass, &self.sky_objects, frame, |o| !below(o));
             if !options.depth_split {
                 // Without the split the scene is painted over an already fully shaded sky.
-                rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-                stats.draw_calls += draw_scene(&mut rpass, (0.0, 1.0));
+                rpass.set_viewport(0.0, 0.0, wf, hf, 0.0, 1.0);
+                stats.draw_calls += self.scene.draw(&mut rpass, options.scene, options.occluder.is_some());
             }
         }
 
         if let (Some(glare), Some(color_now), true) = (gpu.glare.as_mut(), frame.glare, options.glare) {
             glare.prepare(&ctx.device, &ctx.queue, &GlareFrame { towards_sun: frame.towards_sun, color: color_now, dt_s, frame: self.frame_number }, camera, aspect);
+            let (colors, depth_att) = attachments(wgpu::LoadOp::Load, wgpu::LoadOp::Load);
             let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("SkyRenderer::glare_pass"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: depth,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
+                color_attachments: &colors,
+                depth_stencil_attachment: Some(depth_att),
+                timestamp_writes: self.timer.as_mut().and_then(|t| t.writes(2)),
                 occlusion_query_set: Some(glare.query_set()),
                 multiview_mask: None,
             });
@@ -255,11 +267,22 @@ impl SkyRenderer {
         } else if let Some(glare) = gpu.glare.as_mut() {
             glare.state.drawn_last_frame = false;
         }
+        if let Some(t) = &self.timer {
+            t.resolve(encoder);
+        }
         self.stats = stats;
+    }
+
+    /// GPU time of each pass of a recent frame, ms (empty without timestamp queries).
+    pub fn gpu_pass_ms(&self) -> &[(&'static str, f32)] {
+        self.timer.as_ref().map_or(&[], |t| &t.last_ms)
     }
 
     /// Call after the encoder of [`Self::render`] was submitted: starts asynchronous readbacks.
     pub fn after_submit(&mut self) {
+        if let Some(t) = self.timer.as_mut() {
+            t.after_submit();
+        }
         if let Some(g) = self.current.as_mut().and_then(|c| c.glare.as_mut()) {
             g.after_submit();
         }
