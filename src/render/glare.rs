@@ -13,7 +13,6 @@ use glam::{Mat4, Vec3, Vec4};
 use super::camera::Camera;
 use super::shaders::{self, ShaderLibrary};
 use super::textures::TextureCache;
-use super::DEPTH_FORMAT;
 use crate::sky::resolved::{Glare, MAX_FLARES};
 use crate::sky::Rgba;
 
@@ -192,12 +191,7 @@ impl GlarePass {
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("Glare::layout"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX,
-                    ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
-                    count: None,
-                },
+                super::uniform_entry(0, wgpu::ShaderStages::VERTEX),
                 wgpu::BindGroupLayoutEntry {
                     binding: 1,
                     visibility: wgpu::ShaderStages::FRAGMENT,
@@ -239,13 +233,7 @@ impl GlarePass {
                         compilation_options: Default::default(),
                     },
                     primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(compare),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
+                    depth_stencil: super::depth_state(false, compare),
                     multisample: Default::default(),
                     fragment: Some(wgpu::FragmentState {
                         module: &module,
@@ -275,13 +263,7 @@ impl GlarePass {
                     compilation_options: Default::default(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Always),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
+                depth_stencil: super::depth_state(false, wgpu::CompareFunction::Always),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,

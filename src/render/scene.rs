@@ -6,7 +6,6 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::shaders::{self, ShaderLibrary};
-use super::DEPTH_FORMAT;
 
 /// Vertex of the stand-in scene. Keep in sync with `vs_main` in shaders/scene.wgsl.
 #[repr(C)]
@@ -110,13 +109,7 @@ impl ScenePass {
 
     fn build(device: &wgpu::Device, layout: &wgpu::PipelineLayout, library: &ShaderLibrary, format: wgpu::TextureFormat) -> Result<(wgpu::RenderPipeline, wgpu::RenderPipeline), String> {
         let module = shaders::module(device, library, "scene")?;
-        let depth = Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        });
+        let depth = super::depth_state(true, wgpu::CompareFunction::Less);
         let make = |label: &'static str, vs: &'static str, fs: &'static str, buffer: wgpu::VertexBufferLayout<'_>| {
             shaders::validated(device, label, || {
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {

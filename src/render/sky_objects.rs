@@ -10,7 +10,6 @@ use super::camera::Camera;
 use super::mesh::{shape_key, shape_mesh, GpuMesh, SkyVertex};
 use super::shaders::{self, ShaderLibrary};
 use super::textures::{self, TextureCache};
-use super::DEPTH_FORMAT;
 use crate::sky::eval::{FrameSky, ObjectFrame, PassFrame};
 use crate::sky::resolved::{BlendMode, Lighting, Shape, Sky, StageOp, UvSource, Version, MAX_STAGES};
 
@@ -127,21 +126,13 @@ fn blend_index(b: BlendMode) -> usize {
 const BLENDS: [Option<wgpu::BlendState>; 3] = [
     None,
     Some(wgpu::BlendState::ALPHA_BLENDING),
-    Some(wgpu::BlendState {
-        color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::SrcAlpha, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
-        alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
-    }),
+    Some(super::ADDITIVE_ALPHA),
 ];
 
 impl SkyObjectsPass {
     /// Builds the layouts and pipelines.
     pub fn new(device: &wgpu::Device, globals: &wgpu::BindGroupLayout, library: &ShaderLibrary, color_format: wgpu::TextureFormat) -> Result<Self, String> {
-        let mut entries = vec![wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-            ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
-            count: None,
-        }];
+        let mut entries = vec![super::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)];
         for i in 0..4 {
             entries.push(wgpu::BindGroupLayoutEntry {
                 binding: 1 + i,
@@ -182,13 +173,7 @@ impl SkyObjectsPass {
                     layout: Some(layout),
                     vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[Some(SkyVertex::LAYOUT)], compilation_options: Default::default() },
                     primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH_FORMAT,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
+                    depth_stencil: super::depth_state(false, wgpu::CompareFunction::Less),
                     multisample: Default::default(),
                     fragment: Some(wgpu::FragmentState {
                         module: &module,

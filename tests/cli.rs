@@ -1,0 +1,142 @@
+//! The `skytune` binary's subcommands, end to end.
+
+mod common;
+
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn skytune() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_skytune"));
+    c.env("SKYTUNE_ADAPTER", "cpu").env_remove("DISPLAY");
+    c
+}
+
+#[test]
+fn render_writes_a_png_of_the_requested_size() {
+    let (dir, sky) = common::default_sky_folder();
+    let out = dir.path().join("shot.png");
+    let o = skytune().arg("render").arg(&sky).args(["--hour", "18.5", "--weather", "0.3", "--size", "96x54", "--tier", "2", "--out"]).arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("adapter: llvmpipe"));
+    assert_eq!(image::open(&out).unwrap().to_rgba8().dimensions(), (96, 54));
+}
+
+#[test]
+fn check_prints_a_summary_or_located_errors() {
+    let (_dir, sky) = common::default_sky_folder();
+    let o = skytune().arg("check").arg(&sky).output().unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success());
+    assert!(stdout.contains("10 objects") && stdout.contains("skydome") && stdout.contains("fallback passes with 1 + 2 stage(s)"), "{stdout}");
+
+    let text = std::fs::read_to_string(&sky).unwrap().replacen("size_deg = 6", "size_deg = -6", 1);
+    std::fs::write(&sky, &text).unwrap();
+    let line = text[..text.find("size_deg = -6").unwrap()].matches('\n').count() + 1;
+    let o = skytune().arg("check").arg(&sky).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(stderr.contains(&format!("sky.toml:{line}:")) && stderr.contains("object[2].standard.shape:") && stderr.contains("expected a finite number > 0"), "{stderr}");
+}
+
+#[test]
+fn bad_arguments_are_clear_errors() {
+    let o = skytune().args(["render", "--tier", "3", "--out", "/tmp/never.png"]).output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--tier: expected 4, 2 or 1, found 3"));
+    let o = skytune().args(["render", "--size", "12by4"]).output().unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("expected WIDTHxHEIGHT"));
+}
+
+fn wait_for_line(reader: &mut impl BufRead, needle: &str) -> String {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let mut all = String::new();
+    while Instant::now() < deadline {
+        let mut line = String::new();
+        if reader.read_line(&mut line).unwrap() == 0 {
+            break;
+        }
+        all.push_str(&line);
+        if line.contains(needle) {
+            return all;
+        }
+    }
+    panic!("never saw \"{needle}\" in:\n{all}");
+}
+
+#[test]
+fn watch_rerenders_on_edits_and_keeps_the_last_good_image() {
+    let (dir, sky) = common::default_sky_folder();
+    let out = dir.path().join("live.png");
+    let mut child = skytune()
+        .arg("watch")
+        .arg(&sky)
+        .args(["--size", "64x36", "--view", "zenith", "--no-scene", "--out"])
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stderr = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
+    let sink = stderr.clone();
+    let mut child_err = BufReader::new(child.stderr.take().unwrap());
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        while child_err.read_line(&mut line).unwrap_or(0) > 0 {
+            sink.lock().unwrap().push_str(&line);
+            line.clear();
+        }
+    });
+    let mut stdout = BufReader::new(child.stdout.take().unwrap());
+    wait_for_line(&mut stdout, "watching");
+    let first = image::open(&out).unwrap().to_rgba8();
+
+    // Paint the clear-weather gradient red: the re-rendered zenith turns red.
+    image::RgbaImage::from_pixel(24, 32, image::Rgba([255, 0, 0, 255])).save(dir.path().join("gradient_clear.png")).unwrap();
+    wait_for_line(&mut stdout, "wrote");
+    std::thread::sleep(Duration::from_millis(500));
+    let second = image::open(&out).unwrap().to_rgba8();
+    let p = second.get_pixel(32, 18).0;
+    assert!(p[0] > 200 && p[1] < 80, "zenith should be red after the edit: {p:?} (before {:?})", first.get_pixel(32, 18).0);
+
+    // A broken edit: reported, and the image stays the last good one.
+    let text = std::fs::read_to_string(&sky).unwrap().replacen("priority = 20", "priority = 99", 1);
+    std::fs::write(&sky, text).unwrap();
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while !stderr.lock().unwrap().contains("reload failed") && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    let log = stderr.lock().unwrap().clone();
+    assert!(log.contains("reload failed") && log.contains("object[9].priority"), "{log}");
+    assert_eq!(image::open(&out).unwrap().to_rgba8(), second);
+}
+
+#[test]
+fn new_sky_writes_a_valid_folder_for_every_preset() {
+    let dir = tempfile::tempdir().unwrap();
+    for preset in ["default", "desert", "forest", "lakes", "jungle"] {
+        let o = skytune().args(["new-sky"]).arg(dir.path().join(preset)).args(["--preset", preset]).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        skytune::sky::load_sky_file(&dir.path().join(preset).join("sky.toml")).unwrap();
+    }
+    let o = skytune().args(["new-sky"]).arg(dir.path().join("x")).args(["--preset", "moon"]).output().unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown preset \"moon\""));
+}
+
+#[test]
+fn every_committed_sky_is_valid() {
+    let skies = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("skies");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&skies).unwrap() {
+        let path = entry.unwrap().path().join("sky.toml");
+        if path.is_file() {
+            skytune::sky::load_sky_file(&path).unwrap_or_else(|e| panic!("{e}"));
+            n += 1;
+        }
+    }
+    assert!(n >= 4, "expected at least four continent skies, found {n}");
+    let c = skytune::sky::load::load_continent(&skies.join("lakes/continent.toml")).unwrap();
+    assert!(c.skies[3].ends_with("winter.toml"));
+}
