@@ -161,3 +161,34 @@ fn gpu_pass_times_arrive_without_blocking() {
     assert!(names.contains(&"scene") && names.contains(&"sky"), "{times:?}");
     assert!(times.iter().all(|(_, ms)| ms.is_finite() && *ms >= 0.0 && *ms < 10_000.0), "{times:?}");
 }
+
+#[test]
+fn broken_shader_edit_keeps_the_old_pipelines() {
+    let sky = default_sky();
+    let dir = tempfile::tempdir().unwrap();
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    for e in std::fs::read_dir(&src).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, dir.path().join(p.file_name().unwrap())).unwrap();
+    }
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    h.renderer.set_library(skytune::render::ShaderLibrary { dir: Some(dir.path().to_path_buf()) });
+    h.renderer.reload_shaders(&h.ctx).unwrap();
+    let input = FrameInput::new(13.0, 0.0);
+    let before = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+
+    let file = dir.path().join("sky_objects.wgsl");
+    let good = std::fs::read_to_string(&file).unwrap();
+    std::fs::write(&file, good.replace("var color = sum * draw.diffuse;", "var color = sum * draw.diffuse +;")).unwrap();
+    let err = h.renderer.reload_shaders(&h.ctx).unwrap_err();
+    assert!(err.contains("sky_objects"), "{err}");
+    let still = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+    assert_eq!(common::diff(&still, &before, 2).0.differing, 0.0, "the old pipelines must keep rendering");
+
+    // A valid edit is picked up: the sky turns red.
+    std::fs::write(&file, good.replace("    return color;\n}", "    return vec4<f32>(1.0, 0.0, 0.0, 1.0);\n}")).unwrap();
+    h.renderer.reload_shaders(&h.ctx).unwrap();
+    let red = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+    assert_eq!(red.get_pixel(W / 2, 5).0, [255, 0, 0, 255]);
+}
