@@ -159,3 +159,9 @@ fn starfield_respects_magnitude_cutoff() {
     assert!((0.03..0.10).contains(&ratio), "ratio {ratio}");
     assert!(bright.iter().all(|s| s.magnitude <= 3.0));
 }
+
+#[test]
+fn bitmap_mode_without_bitmap_points_at_the_owner() {
+    let (e, line, file) = broken("diffuse = { mode = \"bitmap\", bitmap = \"clouds_storm.png\" }", "diffuse = { mode = \"bitmap\" }");
+    assert_error(&e, &file, line, "object[8].standard.diffuse", "needs a `bitmap`");
+}

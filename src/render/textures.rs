@@ -77,9 +77,4 @@ impl TextureCache {
             })
             .clone()
     }
-
-    /// Forgets every uploaded image (a new sky version may have changed them).
-    pub fn clear(&mut self) {
-        self.views.clear();
-    }
 }

@@ -238,7 +238,7 @@ impl Validator<'_> {
             if s.count > MAX_STARS {
                 self.err_near("[stars]", "stars.count", format!("expected at most {MAX_STARS} stars, found {}", s.count));
             }
-            let color = self.color(&s.color, "stars.color")?;
+            let color = self.color(&s.color, "stars.color", "[stars]")?;
             Some(Stars {
                 count: s.count.min(MAX_STARS),
                 magnitude_cutoff: s.magnitude_cutoff.get(),
@@ -483,10 +483,10 @@ impl Validator<'_> {
                 clamp: s.clamp,
             });
         }
-        let diffuse = self.color(&v.diffuse, &format!("{field}.diffuse"));
+        let diffuse = self.color(&v.diffuse, &format!("{field}.diffuse"), &anchor);
         let mut constants = Vec::new();
         for (k, c) in v.constants.iter().enumerate().take(4) {
-            constants.push(self.color(c, &format!("{field}.constants[{k}]")));
+            constants.push(self.color(c, &format!("{field}.constants[{k}]"), &anchor));
         }
         let ref_index = match v.ref_color {
             model::RefColor::Constant0 => Some(0),
@@ -509,13 +509,15 @@ impl Validator<'_> {
         Some(Version { shape: v.shape, blend: v.blend, stages, diffuse, constants: constants?, ref_color: v.ref_color, gradients, lighting: v.lighting })
     }
 
-    fn color(&mut self, c: &model::ColorDef, field: &str) -> Option<Color> {
+    /// `anchor` locates the owner in the text (an object's quoted name, `[stars]`, `[glare]`).
+    fn color(&mut self, c: &model::ColorDef, field: &str, anchor: &str) -> Option<Color> {
         use model::ColorMode::*;
         let needs_bitmap = matches!(c.mode, Bitmap | BitmapTimesFog);
         let bitmap = match (&c.bitmap, needs_bitmap) {
             (Some(b), true) => Some(self.bitmap(b, &format!("{field}.bitmap"))?),
             (None, true) => {
-                self.err_near(field.rsplit('.').next().unwrap_or(field), field, format!("mode {:?} needs a `bitmap`", c.mode));
+                let key = field.rsplit('.').next().unwrap_or(field).split('[').next().unwrap_or(field);
+                self.err_in(anchor, key, field, format!("mode {:?} needs a `bitmap`", c.mode));
                 return None;
             }
             (Some(b), false) => {
@@ -529,7 +531,7 @@ impl Validator<'_> {
 
     fn glare(&mut self, g: &model::GlareDef) -> Option<Glare> {
         let halo = self.image(&g.halo, "glare.halo");
-        let color = self.color(&g.color, "glare.color");
+        let color = self.color(&g.color, "glare.color", "[glare]");
         if g.flares.len() > MAX_FLARES {
             self.err_near("[glare]", "glare.flare", format!("at most {MAX_FLARES} flare sprites, found {}", g.flares.len()));
             return None;
