@@ -66,7 +66,7 @@ fn hidden_objects_keep_their_reason_in_the_model_the_panel_shows() {
     let sky = default_sky();
     let frame = sky.evaluate(&FrameInput::new(12.0, 0.0));
     let galaxy = &frame.objects[sky.object_index("galaxy").unwrap()];
-    assert_eq!(galaxy.passes.as_ref().unwrap_err().to_string(), "ref colour Constant0 has alpha 0");
+    assert_eq!(galaxy.passes.as_ref().unwrap_err().to_string(), "ref_color constant0 has alpha 0");
 }
 
 #[test]

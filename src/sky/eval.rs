@@ -78,7 +78,17 @@ pub enum Hidden {
 impl std::fmt::Display for Hidden {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Hidden::RefAlphaZero(c) => write!(f, "ref colour {c:?} has alpha 0"),
+            Hidden::RefAlphaZero(c) => {
+                let name = match c {
+                    RefColor::None => "none",
+                    RefColor::Diffuse => "diffuse",
+                    RefColor::Constant0 => "constant0",
+                    RefColor::Constant1 => "constant1",
+                    RefColor::Constant2 => "constant2",
+                    RefColor::Constant3 => "constant3",
+                };
+                write!(f, "ref_color {name} has alpha 0")
+            }
             Hidden::Tier { needs, has } => write!(f, "needs {needs} texture stages, tier has {has}, no fallback fits"),
             Hidden::Toggled => write!(f, "switched off"),
             Hidden::NotInView => write!(f, "not visible in this view"),
