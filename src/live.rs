@@ -7,6 +7,7 @@ use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use notify_debouncer_full::notify::event::{AccessKind, AccessMode, EventKind, ModifyKind};
 use notify_debouncer_full::notify::RecursiveMode;
 use notify_debouncer_full::{new_debouncer, DebounceEventResult, Debouncer, RecommendedCache};
 
@@ -164,7 +165,7 @@ impl LiveSky {
         let debouncer = new_debouncer(Duration::from_millis(150), None, move |res: DebounceEventResult| {
             let Ok(events) = res else { return };
             let relevant = handler_shared.lock().is_ok_and(|s| {
-                events.iter().flat_map(|e| e.paths.iter()).any(|p| {
+                events.iter().filter(|e| is_content_change(&e.kind)).flat_map(|e| e.paths.iter()).any(|p| {
                     let p = normalize(p);
                     !is_editor_noise(&p) && (s.files.contains(&p) || p.parent().is_some_and(|d| s.sky_dirs.contains(d)))
                 })
@@ -270,6 +271,17 @@ impl LiveSky {
         }
         s.files = files;
         s.dirs = dirs;
+    }
+}
+
+/// Whether a file event can mean new content. Reading a file (our own reloads included) raises
+/// open/close events, which must not trigger another reload.
+pub fn is_content_change(kind: &EventKind) -> bool {
+    match kind {
+        EventKind::Create(_) | EventKind::Remove(_) | EventKind::Any => true,
+        EventKind::Modify(m) => !matches!(m, ModifyKind::Metadata(_)),
+        EventKind::Access(a) => matches!(a, AccessKind::Close(AccessMode::Write)),
+        EventKind::Other => false,
     }
 }
 

@@ -94,21 +94,19 @@ fn contact_sheet_covers_the_grid() {
     assert_eq!(sheet.image.get_pixel(35, 12).0, [3, 2, 0, 255]);
 }
 
-/// Starts Xvfb on a free display number; returns the child and the display name.
+/// Starts Xvfb on a display it picks itself (`-displayfd`), so parallel tests never collide.
 fn xvfb() -> Option<(std::process::Child, String)> {
-    for n in 90..110 {
-        if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() || Path::new(&format!("/tmp/.X{n}-lock")).exists() {
-            continue;
-        }
-        let child = Command::new("Xvfb").args([format!(":{n}").as_str(), "-screen", "0", "1024x768x24", "-nolisten", "tcp"]).spawn().ok()?;
-        for _ in 0..100 {
-            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
-                return Some((child, format!(":{n}")));
-            }
-            std::thread::sleep(std::time::Duration::from_millis(50));
-        }
-    }
-    None
+    use std::io::BufRead;
+    let mut child = Command::new("Xvfb")
+        .args(["-displayfd", "1", "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .ok()?;
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take()?).read_line(&mut line).ok()?;
+    let n: u32 = line.trim().parse().ok()?;
+    Some((child, format!(":{n}")))
 }
 
 #[test]
@@ -158,6 +156,8 @@ fn window_runs_a_fixed_number_of_frames() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("rendered 5 frames, exiting"), "{stderr}");
+    // Reading the shaders must not look like an edit of them (that would reload in a loop).
+    assert!(!stderr.contains("shaders reloaded"), "{stderr}");
 }
 
 #[test]

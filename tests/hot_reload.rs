@@ -69,3 +69,15 @@ fn a_new_file_fixes_a_missing_reference() {
     std::fs::copy(dir.path().join("galaxy.png"), dir.path().join("galaxy2.png")).unwrap();
     assert_eq!(live.wait(WAIT), Some(ReloadEvent::Reloaded));
 }
+
+#[test]
+fn reading_the_files_does_not_trigger_reloads() {
+    let (_dir, sky_path) = common::default_sky_folder();
+    let mut live = LiveSky::new(SkySpec::File(sky_path.clone())).unwrap();
+    // A manual reload reads every file; those reads must not schedule further reloads.
+    live.request_reload();
+    assert_eq!(live.wait(WAIT), Some(ReloadEvent::Reloaded));
+    assert_eq!(live.wait(Duration::from_millis(1500)), None, "a reload without any edit");
+    let _ = std::fs::read_to_string(&sky_path).unwrap();
+    assert_eq!(live.wait(Duration::from_millis(1000)), None, "reading the sky file is not an edit");
+}

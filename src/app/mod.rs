@@ -203,7 +203,8 @@ impl App {
         if let Some(dir) = &library.dir {
             let flag = self.shaders_changed.clone();
             match notify_debouncer_full::new_debouncer(Duration::from_millis(150), None, move |r: notify_debouncer_full::DebounceEventResult| {
-                if r.is_ok_and(|ev| ev.iter().any(|e| e.paths.iter().any(|p| p.extension().is_some_and(|x| x == "wgsl")))) {
+                let changed = |e: &notify_debouncer_full::DebouncedEvent| crate::live::is_content_change(&e.kind) && e.paths.iter().any(|p| p.extension().is_some_and(|x| x == "wgsl"));
+                if r.is_ok_and(|ev| ev.iter().any(changed)) {
                     flag.store(true, Ordering::Release);
                 }
             }) {
