@@ -133,26 +133,8 @@ impl SkyObjectsPass {
     /// Builds the layouts and pipelines.
     pub fn new(device: &wgpu::Device, globals: &wgpu::BindGroupLayout, library: &ShaderLibrary, color_format: wgpu::TextureFormat) -> Result<Self, String> {
         let mut entries = vec![super::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)];
-        for i in 0..4 {
-            entries.push(wgpu::BindGroupLayoutEntry {
-                binding: 1 + i,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            });
-        }
-        for i in 0..4 {
-            entries.push(wgpu::BindGroupLayoutEntry {
-                binding: 5 + i,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                count: None,
-            });
-        }
+        entries.extend((0..4).map(|i| super::texture_entry(1 + i)));
+        entries.extend((0..4).map(|i| super::sampler_entry(5 + i)));
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("SkyObjects::draw_layout"), entries: &entries });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("SkyObjects::pipeline_layout"),
