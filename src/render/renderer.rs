@@ -188,28 +188,9 @@ impl SkyRenderer {
             t.begin_frame();
         }
         let (wf, hf) = (w as f32, h as f32);
-        let attachments = |load_color: wgpu::LoadOp<wgpu::Color>, load_depth: wgpu::LoadOp<f32>| {
-            (
-                [Some(wgpu::RenderPassColorAttachment {
-                    view: color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: load_color, store: wgpu::StoreOp::Store },
-                })],
-                wgpu::RenderPassDepthStencilAttachment { view: depth, depth_ops: Some(wgpu::Operations { load: load_depth, store: wgpu::StoreOp::Store }), stencil_ops: None },
-            )
-        };
         {
             // Scene pass: clears, and draws the main-scene stand-in first when the depth split is on.
-            let (colors, depth_att) = attachments(wgpu::LoadOp::Clear(wgpu::Color::BLACK), wgpu::LoadOp::Clear(1.0));
-            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("SkyRenderer::scene_pass"),
-                color_attachments: &colors,
-                depth_stencil_attachment: Some(depth_att),
-                timestamp_writes: self.timer.as_mut().and_then(|t| t.writes(0)),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut rpass = begin_pass(encoder, "SkyRenderer::scene_pass", color, depth, (wgpu::LoadOp::Clear(wgpu::Color::BLACK), wgpu::LoadOp::Clear(1.0)), self.timer.as_mut().and_then(|t| t.writes(0)), None);
             rpass.set_bind_group(0, &self.globals.bind_group, &[]);
             if options.depth_split {
                 rpass.set_viewport(0.0, 0.0, wf, hf, SCENE_DEPTH.0, SCENE_DEPTH.1);
@@ -219,15 +200,7 @@ impl SkyRenderer {
         {
             // Sky pass: objects by priority with the stars in between. With the split, sky fragments
             // behind the scene fail the depth test; without it the sky covers the screen first.
-            let (colors, depth_att) = attachments(wgpu::LoadOp::Load, wgpu::LoadOp::Load);
-            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("SkyRenderer::sky_pass"),
-                color_attachments: &colors,
-                depth_stencil_attachment: Some(depth_att),
-                timestamp_writes: self.timer.as_mut().and_then(|t| t.writes(1)),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut rpass = begin_pass(encoder, "SkyRenderer::sky_pass", color, depth, (wgpu::LoadOp::Load, wgpu::LoadOp::Load), self.timer.as_mut().and_then(|t| t.writes(1)), None);
             rpass.set_bind_group(0, &self.globals.bind_group, &[]);
             let range = if options.depth_split { SKY_DEPTH } else { (0.0, 1.0) };
             rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
@@ -250,17 +223,9 @@ impl SkyRenderer {
 
         if let (Some(glare), Some(color_now), true) = (gpu.glare.as_mut(), frame.glare, options.glare) {
             glare.prepare(&ctx.device, &ctx.queue, &GlareFrame { towards_sun: frame.towards_sun, color: color_now, dt_s, frame: self.frame_number }, camera, aspect);
-            let (colors, depth_att) = attachments(wgpu::LoadOp::Load, wgpu::LoadOp::Load);
-            let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("SkyRenderer::glare_pass"),
-                color_attachments: &colors,
-                depth_stencil_attachment: Some(depth_att),
-                timestamp_writes: self.timer.as_mut().and_then(|t| t.writes(2)),
-                occlusion_query_set: Some(glare.query_set()),
-                multiview_mask: None,
-            });
+            let mut rpass = begin_pass(encoder, "SkyRenderer::glare_pass", color, depth, (wgpu::LoadOp::Load, wgpu::LoadOp::Load), self.timer.as_mut().and_then(|t| t.writes(2)), Some(glare.query_set()));
             rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-            rpass.set_viewport(0.0, 0.0, w as f32, h as f32, SKY_DEPTH.0, SKY_DEPTH.1);
+            rpass.set_viewport(0.0, 0.0, wf, hf, SKY_DEPTH.0, SKY_DEPTH.1);
             stats.draw_calls += glare.draw(&mut rpass, &self.glare);
             drop(rpass);
             glare.resolve(encoder);
@@ -287,4 +252,33 @@ impl SkyRenderer {
             g.after_submit();
         }
     }
+}
+
+/// Begins one of the renderer's passes on the shared colour and depth targets.
+fn begin_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    color: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+    (load_color, load_depth): (wgpu::LoadOp<wgpu::Color>, wgpu::LoadOp<f32>),
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    occlusion_query_set: Option<&wgpu::QuerySet>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: color,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load: load_color, store: wgpu::StoreOp::Store },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations { load: load_depth, store: wgpu::StoreOp::Store }),
+            stencil_ops: None,
+        }),
+        timestamp_writes,
+        occlusion_query_set,
+        multiview_mask: None,
+    })
 }
