@@ -240,20 +240,24 @@ impl App {
         FrameInput { hour: c.hour, game_hours: c.game_hours, weather: c.weather, tier: c.tier, env_map: false, disabled: c.disabled.clone() }
     }
 
-    fn screenshot(&mut self) -> anyhow::Result<PathBuf> {
-        let input = self.frame_input();
-        let sky = self.live.sky().clone();
-        let dir = self.config.shots.clone().unwrap_or_else(|| PathBuf::from("shots"));
-        let path = free_path(&dir, &screenshot_name(&sky.name, input.hour, input.weather))?;
-        let generation = self.live.generation;
-        let (camera, options) = (self.controls.camera, self.controls.options);
+    /// Renders `input` offscreen at `size` through the capture renderer (created on first use).
+    fn capture_image(&mut self, input: &FrameInput, size: (u32, u32)) -> anyhow::Result<image::RgbaImage> {
+        let (generation, camera, options) = (self.live.generation, self.controls.camera, self.controls.options);
         let gpu = self.gpu.as_mut().ok_or_else(|| anyhow!("no GPU yet"))?;
-        let (w, h) = (gpu.surface_config.width, gpu.surface_config.height);
         if gpu.capture.is_none() {
-            gpu.capture = Some(Capture::new(&gpu.ctx, gpu.renderer.library().clone(), w, h)?);
+            gpu.capture = Some(Capture::new(&gpu.ctx, gpu.renderer.library().clone(), size.0, size.1)?);
         }
         let capture = gpu.capture.as_mut().expect("just created");
-        let img = capture.render(&gpu.ctx, &sky, generation, &input, &camera, &options, w, h)?;
+        capture.render(&gpu.ctx, self.live.sky(), generation, input, &camera, &options, size.0, size.1)
+    }
+
+    fn screenshot(&mut self) -> anyhow::Result<PathBuf> {
+        let input = self.frame_input();
+        let dir = self.config.shots.clone().unwrap_or_else(|| PathBuf::from("shots"));
+        let path = free_path(&dir, &screenshot_name(&self.live.sky().name, input.hour, input.weather))?;
+        let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU yet"))?;
+        let size = (gpu.surface_config.width, gpu.surface_config.height);
+        let img = self.capture_image(&input, size)?;
         img.save(&path).with_context(|| format!("writing {}", path.display()))?;
         Ok(path)
     }
@@ -272,14 +276,7 @@ impl App {
         input.hour = hour;
         input.weather = weather;
         input.game_hours = hour as f64;
-        let sky = self.live.sky().clone();
-        let generation = self.live.generation;
-        let (camera, options) = (self.controls.camera, self.controls.options);
-        let gpu = self.gpu.as_mut().ok_or_else(|| anyhow!("no GPU yet"))?;
-        if gpu.capture.is_none() {
-            gpu.capture = Some(Capture::new(&gpu.ctx, gpu.renderer.library().clone(), cell.0, cell.1)?);
-        }
-        let img = gpu.capture.as_mut().expect("just created").render(&gpu.ctx, &sky, generation, &input, &camera, &options, cell.0, cell.1)?;
+        let img = self.capture_image(&input, cell)?;
         if let Some(sheet) = self.sheet.as_mut() {
             sheet.put(col, row, &img);
         }
