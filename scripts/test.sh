@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The test command of the README and of CI: installs system packages, runs every test on
-# lavapipe, then renders every sky in skies/ headless (the CI smoke set).
+# The test command of the README and of CI: installs system packages, checks formatting and
+# clippy, runs every test on lavapipe, then renders every sky in skies/ headless (the CI smoke set)
+# and runs `skytune bench` briefly.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -10,6 +11,10 @@ export SKYTUNE_ADAPTER=cpu
 # Mesa's WSI complains without one; nothing here uses Wayland.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 export RUST_BACKTRACE=1
+
+echo "lint: cargo fmt --check, cargo clippy -D warnings"
+cargo fmt --check
+cargo clippy --locked --all-targets -- -D warnings
 
 cargo build --locked --bins
 cargo test --locked -- --test-threads=2
@@ -30,3 +35,12 @@ done
 [ "$count" -gt 0 ] || { echo "smoke: no skies found in skies/" >&2; exit 1; }
 ./target/debug/skytune render --size 320x180 --out "$out/builtin.png" >/dev/null
 echo "smoke: $count sky files rendered at 4 (hour, weather) pairs each, plus the built-in sky"
+
+echo "smoke: skytune bench (a few frames; the report goes to a temporary file)"
+./target/debug/skytune bench --frames 3 --size 160x90 --out "$out/benchmarks.md" >/dev/null
+if grep -q "NaN" "$out/benchmarks.md"; then
+    echo "smoke: the benchmark report has missing timings:" >&2
+    cat "$out/benchmarks.md" >&2
+    exit 1
+fi
+echo "smoke: bench ok"

@@ -115,9 +115,15 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         std::thread::available_parallelism().map_or(0, |n| n.get()),
         if cfg!(debug_assertions) { "debug" } else { "release" }
     );
-    let _ = writeln!(md, "- method: {ROUNDS} interleaved rounds x {per_round} frames per configuration (2 warm-up frames dropped each round); each frame is submitted and waited for.");
-    let _ = writeln!(md, "  Wall = submit to GPU idle (on lavapipe this is the rasterisation itself). GPU = timestamp queries around each pass{}.", if timestamps { "" } else { " (not supported by this adapter: columns empty)" });
-    let _ = writeln!(md, "- scene coverage (fraction of pixels covered by the main-scene stand-in): looking down {:.1}%, looking up {:.1}%\n", cover_down * 100.0, cover_up * 100.0);
+    let _ =
+        writeln!(md, "- method: {ROUNDS} interleaved rounds x {per_round} frames per configuration (2 warm-up frames dropped each round); each frame is submitted and waited for.");
+    let _ = writeln!(
+        md,
+        "  Wall = submit to GPU idle (on lavapipe this is the rasterisation itself). GPU = timestamp queries around each pass{}.",
+        if timestamps { "" } else { " (not supported by this adapter: columns empty)" }
+    );
+    let _ =
+        writeln!(md, "- scene coverage (fraction of pixels covered by the main-scene stand-in): looking down {:.1}%, looking up {:.1}%\n", cover_down * 100.0, cover_up * 100.0);
     let _ = writeln!(md, "| configuration | frame wall ms (median) | scene pass GPU ms | sky pass GPU ms | frames |");
     let _ = writeln!(md, "|---|---:|---:|---:|---:|");
     for c in &configs {
@@ -134,13 +140,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         ratio(0, 1),
         median(&configs[0].sky_ms)
     );
-    let _ = writeln!(
-        md,
-        "- Sky pass with the split, scene covering {:.0}% vs {:.0}% of the screen: {:.2}x.",
-        cover_down * 100.0,
-        cover_up * 100.0,
-        sky_ratio(0, 2)
-    );
+    let _ = writeln!(md, "- Sky pass with the split, scene covering {:.0}% vs {:.0}% of the screen: {:.2}x.", cover_down * 100.0, cover_up * 100.0, sky_ratio(0, 2));
     let _ = writeln!(md, "- With the sky filling the screen (almost nothing for the split to reject): split / no split = {:.2}x.", ratio(2, 3));
     let _ = writeln!(md, "- Tier 2 fallbacks vs tier 4, sky pass: {:.2}x; tier 1 vs tier 4: {:.2}x.", sky_ratio(4, 2), sky_ratio(5, 2));
     std::fs::write(&args.out, &md).with_context(|| format!("writing {}", args.out.display()))?;

@@ -4,8 +4,10 @@
 //!   (no GPU types).
 //! - [`render`]: the wgpu renderer (no UI types).
 //! - [`live`]: hot reload of sky files.
+//! - [`watch`]: file watching, shared by sky and shader hot reload.
 
 pub mod app;
 pub mod live;
 pub mod render;
 pub mod sky;
+pub mod watch;

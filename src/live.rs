@@ -7,13 +7,10 @@ use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use notify_debouncer_full::notify::event::{AccessKind, AccessMode, EventKind, ModifyKind};
-use notify_debouncer_full::notify::RecursiveMode;
-use notify_debouncer_full::{new_debouncer, DebounceEventResult, Debouncer, RecommendedCache};
-
 use crate::sky::builtin;
 use crate::sky::load::{is_continent_file, load_continent, SEASONS};
 use crate::sky::{load_sky_file, Sky, SkyError, SkyErrors};
+use crate::watch::{normalize, FileWatcher};
 
 /// Which sky to show.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -88,17 +85,6 @@ impl SkySpec {
     }
 }
 
-/// Absolute, symlink-free form of a path that may not exist yet (editors delete and recreate).
-fn normalize(p: &Path) -> PathBuf {
-    if let Ok(c) = p.canonicalize() {
-        return c;
-    }
-    match (p.parent().and_then(|d| d.canonicalize().ok()), p.file_name()) {
-        (Some(dir), Some(name)) => dir.join(name),
-        _ => std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf()),
-    }
-}
-
 /// What a call to [`LiveSky::poll`] found.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ReloadEvent {
@@ -114,8 +100,6 @@ struct Shared {
     spec: SkySpec,
     /// Normalised files that trigger a reload.
     files: HashSet<PathBuf>,
-    /// Folders being watched.
-    dirs: HashSet<PathBuf>,
     /// Folders of the sky and continent files: any file appearing there may be a new reference.
     sky_dirs: HashSet<PathBuf>,
 }
@@ -131,14 +115,14 @@ pub struct LiveSky {
     trigger: Sender<u64>,
     results: Receiver<LoadResult>,
     requested: u64,
-    debouncer: Option<Debouncer<notify_debouncer_full::notify::RecommendedWatcher, RecommendedCache>>,
+    watcher: Option<FileWatcher>,
 }
 
 impl LiveSky {
     /// Loads a sky (blocking) and starts watching its files. Fails only if the first load fails.
     pub fn new(spec: SkySpec) -> Result<Self, SkyErrors> {
         let sky = spec.load()?;
-        let shared = Arc::new(Mutex::new(Shared { spec: spec.clone(), files: HashSet::new(), dirs: HashSet::new(), sky_dirs: HashSet::new() }));
+        let shared = Arc::new(Mutex::new(Shared { spec: spec.clone(), files: HashSet::new(), sky_dirs: HashSet::new() }));
         let (trigger, trigger_rx) = channel::<u64>();
         let (result_tx, results) = channel::<LoadResult>();
         let loader_shared = shared.clone();
@@ -162,26 +146,20 @@ impl LiveSky {
 
         let handler_shared = shared.clone();
         let handler_trigger = trigger.clone();
-        let debouncer = new_debouncer(Duration::from_millis(150), None, move |res: DebounceEventResult| {
-            let Ok(events) = res else { return };
-            let relevant = handler_shared.lock().is_ok_and(|s| {
-                events.iter().filter(|e| is_content_change(&e.kind)).flat_map(|e| e.paths.iter()).any(|p| {
-                    let p = normalize(p);
-                    !is_editor_noise(&p) && (s.files.contains(&p) || p.parent().is_some_and(|d| s.sky_dirs.contains(d)))
-                })
-            });
+        let watcher = FileWatcher::new(move |changed| {
+            let relevant = handler_shared.lock().is_ok_and(|s| changed.iter().any(|p| s.files.contains(p) || p.parent().is_some_and(|d| s.sky_dirs.contains(d))));
             if relevant {
                 let _ = handler_trigger.send(0);
             }
         });
-        let debouncer = match debouncer {
-            Ok(d) => Some(d),
+        let watcher = match watcher {
+            Ok(w) => Some(w),
             Err(e) => {
                 log::warn!("file watching unavailable ({e}); edits will not reload");
                 None
             }
         };
-        let mut live = Self { current: Arc::new(sky), error: None, generation: 0, shared, trigger, results, requested: 0, debouncer };
+        let mut live = Self { current: Arc::new(sky), error: None, generation: 0, shared, trigger, results, requested: 0, watcher };
         live.refresh_watches();
         Ok(live)
     }
@@ -258,35 +236,9 @@ impl LiveSky {
         let mut files: HashSet<PathBuf> = own.into_iter().collect();
         files.extend(self.current.watched_files.iter().map(|p| normalize(p)));
         let dirs: HashSet<PathBuf> = files.iter().filter_map(|f| f.parent().map(Path::to_path_buf)).collect();
-        if let Some(d) = self.debouncer.as_mut() {
-            for dir in dirs.difference(&s.dirs) {
-                // Folders, not files: editors that save by rename replace the file's inode.
-                if let Err(e) = d.watch(dir, RecursiveMode::NonRecursive) {
-                    log::warn!("cannot watch {}: {e}", dir.display());
-                }
-            }
-            for dir in s.dirs.difference(&dirs) {
-                let _ = d.unwatch(dir);
-            }
+        if let Some(w) = self.watcher.as_mut() {
+            w.set_dirs(dirs);
         }
         s.files = files;
-        s.dirs = dirs;
     }
-}
-
-/// Whether a file event can mean new content. Reading a file (our own reloads included) raises
-/// open/close events, which must not trigger another reload.
-pub fn is_content_change(kind: &EventKind) -> bool {
-    match kind {
-        EventKind::Create(_) | EventKind::Remove(_) | EventKind::Any => true,
-        EventKind::Modify(m) => !matches!(m, ModifyKind::Metadata(_)),
-        EventKind::Access(a) => matches!(a, AccessKind::Close(AccessMode::Write)),
-        EventKind::Other => false,
-    }
-}
-
-/// Swap and backup files that editors write next to the real one.
-fn is_editor_noise(p: &Path) -> bool {
-    let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
-    name.ends_with('~') || name.ends_with(".swp") || name.ends_with(".swx") || name.starts_with(".#") || name == "4913"
 }

@@ -39,8 +39,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Check { sky }) => check(&sky),
         Some(Command::Watch { render, max_reloads }) => watch(&render, max_reloads),
         Some(Command::NewSky { dir, preset, seed }) => {
-            let palette = procedural::preset(&preset)
-                .ok_or_else(|| anyhow!("unknown preset \"{preset}\"; expected one of {}", procedural::PRESETS.map(|p| p.name).join(", ")))?;
+            let palette = procedural::preset(&preset).ok_or_else(|| anyhow!("unknown preset \"{preset}\"; expected one of {}", procedural::PRESETS.map(|p| p.name).join(", ")))?;
             let sky = skytune::sky::builtin::write_sky_folder(&dir, palette, seed).with_context(|| format!("writing {}", dir.display()))?;
             println!("wrote {} and its bitmaps; open it with `skytune {}`", sky.display(), sky.display());
             Ok(())
@@ -90,13 +89,22 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
     let options = RenderOptions { scene: !args.frame.no_scene, ..Default::default() };
     let frame = sky.evaluate(&input);
     for o in &frame.objects {
-        if let Err(why) = &o.passes {
+        if let Err(why) = &o.versions {
             log::info!("hidden: {} ({why})", sky.objects[o.index].name);
         }
     }
     let image = headless.render(sky, &input, &camera, &options)?;
     image.save(&args.out).with_context(|| format!("writing {}", args.out.display()))?;
-    println!("wrote {} ({}x{}, sky \"{}\", hour {}, weather {}, tier {})", args.out.display(), image.width(), image.height(), sky.name, input.hour, input.weather, input.tier.stages());
+    println!(
+        "wrote {} ({}x{}, sky \"{}\", hour {}, weather {}, tier {})",
+        args.out.display(),
+        image.width(),
+        image.height(),
+        sky.name,
+        input.hour,
+        input.weather,
+        input.tier.stages()
+    );
     Ok(())
 }
 

@@ -4,7 +4,6 @@
 mod common;
 
 use std::collections::VecDeque;
-use std::path::Path;
 use std::process::Command;
 
 use skytune::app::ui::{self, Controls, UiAction, UiInfo};
@@ -39,11 +38,7 @@ fn run_panels(controls: &mut Controls, events: Vec<egui::Event>) -> Vec<UiAction
     let mut actions = Vec::new();
     // Two passes: egui lays out on the first and answers clicks on the second.
     for events in [Vec::new(), events] {
-        let raw = egui::RawInput {
-            screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(1280.0, 800.0))),
-            events,
-            ..Default::default()
-        };
+        let raw = egui::RawInput { screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(1280.0, 800.0))), events, ..Default::default() };
         let mut out = ctx.run_ui(raw, |ui| actions = ui::draw(ui, controls, &info, None));
         // Nothing is painted in this test: the font atlas upload is dropped on purpose.
         out.textures_delta.clear();
@@ -54,8 +49,7 @@ fn run_panels(controls: &mut Controls, events: Vec<egui::Event>) -> Vec<UiAction
 
 #[test]
 fn panels_lay_out_with_every_section_and_no_action_by_default() {
-    let mut c = Controls::default();
-    c.show_help = true;
+    let mut c = Controls { show_help: true, ..Default::default() };
     let actions = run_panels(&mut c, Vec::new());
     assert!(actions.is_empty(), "{actions:?}");
     assert!(c.show_help, "help stays open until closed");
@@ -66,7 +60,7 @@ fn hidden_objects_keep_their_reason_in_the_model_the_panel_shows() {
     let sky = default_sky();
     let frame = sky.evaluate(&FrameInput::new(12.0, 0.0));
     let galaxy = &frame.objects[sky.object_index("galaxy").unwrap()];
-    assert_eq!(galaxy.passes.as_ref().unwrap_err().to_string(), "ref_color constant0 has alpha 0");
+    assert_eq!(galaxy.versions.as_ref().unwrap_err().to_string(), "ref_color constant0 has alpha 0");
 }
 
 #[test]

@@ -95,6 +95,6 @@ fn gradient_weather_blend_picks_two_steps() {
 fn gradient_reads_the_column_of_the_hour() {
     // Two columns: hour 0 is 0, hour 12 is 1; hour 6 is halfway, hour 18 halfway back (wrap).
     let b = ColorBitmap::from_fn(2, 2, |x, _| [x as f32, 0.0, 0.0, 1.0]);
-    close(weather_gradient(&[b.clone()], 6.0, 24.0, 0.0)[0], [0.5, 0.0, 0.0, 1.0]);
+    close(weather_gradient(std::slice::from_ref(&b), 6.0, 24.0, 0.0)[0], [0.5, 0.0, 0.0, 1.0]);
     close(weather_gradient(&[b], 18.0, 24.0, 0.0)[0], [0.5, 0.0, 0.0, 1.0]);
 }

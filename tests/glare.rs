@@ -79,13 +79,7 @@ fn visibility_matches_the_occluded_fraction() {
         let expected = 1.0 - occluded as f32;
         eprintln!("occluded {occluded}: V/T = {}/{} = {:.4} (expected {expected})", s.visible_samples, s.total_samples, s.ratio);
         assert!(s.total_samples > 1500, "disc too small to measure: T = {}", s.total_samples);
-        assert!(
-            (s.ratio - expected).abs() <= 0.02,
-            "occluded {occluded}: V/T = {}/{} = {:.4}, expected {expected} +- 0.02",
-            s.visible_samples,
-            s.total_samples,
-            s.ratio
-        );
+        assert!((s.ratio - expected).abs() <= 0.02, "occluded {occluded}: V/T = {}/{} = {:.4}, expected {expected} +- 0.02", s.visible_samples, s.total_samples, s.ratio);
     }
 }
 

@@ -83,9 +83,11 @@ fn missing_path_reference() {
 fn cyclic_follow_is_an_error() {
     // sun -> (keys) is fine; make planet follow moon and moon follow planet.
     let (dir, sky) = common::default_sky_folder();
-    let text = DEFAULT_SKY_TOML
-        .replacen("name = \"moon\"\nfollow = \"sun\"", "name = \"moon\"\nfollow = \"planet\"", 1)
-        .replacen("name = \"planet\"\nfollow = \"sun\"", "name = \"planet\"\nfollow = \"moon\"", 1);
+    let text = DEFAULT_SKY_TOML.replacen("name = \"moon\"\nfollow = \"sun\"", "name = \"moon\"\nfollow = \"planet\"", 1).replacen(
+        "name = \"planet\"\nfollow = \"sun\"",
+        "name = \"planet\"\nfollow = \"moon\"",
+        1,
+    );
     std::fs::write(&sky, &text).unwrap();
     let e = load_sky_file(&sky).unwrap_err();
     let line = text[..text.find("follow = \"planet\"").unwrap()].matches('\n').count() + 1;
@@ -114,7 +116,8 @@ fn undecodable_image() {
 
 #[test]
 fn undefined_constant_and_ref_color() {
-    let (e, line, file) = broken("ref_color = \"constant0\"\n[[object.standard.stage]]\ntexture = \"galaxy.png\"", "ref_color = \"constant3\"\n[[object.standard.stage]]\ntexture = \"galaxy.png\"");
+    let (e, line, file) =
+        broken("ref_color = \"constant0\"\n[[object.standard.stage]]\ntexture = \"galaxy.png\"", "ref_color = \"constant3\"\n[[object.standard.stage]]\ntexture = \"galaxy.png\"");
     assert_error(&e, &file, line, "object[1].standard.ref_color", "constant 3, which is not defined");
 }
 

@@ -64,7 +64,7 @@ fn ref_alpha_zero_draws_nothing() {
     let (_d, hidden) = sky_with_wall("[1, 0, 0, 0]");
     let frame = hidden.evaluate(&input);
     let wall = hidden.object_index("wall").unwrap();
-    assert_eq!(frame.objects.iter().find(|o| o.index == wall).unwrap().passes, Err(Hidden::RefAlphaZero(skytune::sky::resolved::RefColor::Diffuse)));
+    assert_eq!(frame.objects.iter().find(|o| o.index == wall).unwrap().versions, Err(Hidden::RefAlphaZero(skytune::sky::resolved::RefColor::Diffuse)));
     h.set_sky(&hidden).unwrap();
     let with_hidden_wall = h.render(&hidden, &input, &camera(), &opts).unwrap();
 
@@ -97,7 +97,7 @@ fn tier_two_draws_fallback_passes_close_to_tier_four() {
     let frame = sky.evaluate(&input);
     let of = frame.objects.iter().find(|o| o.index == dome).unwrap();
     assert!(of.fallback);
-    let versions: Vec<usize> = of.passes.as_ref().unwrap().iter().map(|p| p.version).collect();
+    let versions: Vec<usize> = of.versions.as_ref().unwrap().iter().map(|p| p.version).collect();
     assert_eq!(versions, vec![1, 2], "both fallback passes are drawn");
     let tier2 = h.render(&sky, &input, &camera(), &opts).unwrap();
     let (d, diff) = common::diff(&tier2, &tier4, 12);
@@ -121,11 +121,11 @@ fn tier_one_drops_passes_that_do_not_fit() {
     input.tier = Tier::new(1).unwrap();
     let frame = sky.evaluate(&input);
     let dome = &frame.objects[sky.object_index("skydome").unwrap()];
-    assert_eq!(dome.passes.as_ref().unwrap().iter().map(|p| p.version).collect::<Vec<_>>(), vec![1]);
+    assert_eq!(dome.versions.as_ref().unwrap().iter().map(|p| p.version).collect::<Vec<_>>(), vec![1]);
     assert_eq!(dome.dropped, vec![(2, 2)]);
     // The storm clouds have no fallback: hidden at tier 1, with the reason.
     let storm = &frame.objects[sky.object_index("clouds_storm").unwrap()];
-    assert_eq!(storm.passes, Err(Hidden::Tier { needs: 2, has: 1 }));
+    assert_eq!(storm.versions, Err(Hidden::Tier { needs: 2, has: 1 }));
     let mut h = common::headless(W, H);
     h.set_sky(&sky).unwrap();
     h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
@@ -139,9 +139,9 @@ fn env_map_view_skips_objects_not_visible_there() {
     let sky = load_sky_file(&path).unwrap();
     let mut input = FrameInput::new(12.0, 0.0);
     let sun = sky.object_index("sun").unwrap();
-    assert!(sky.evaluate(&input).objects[sun].passes.is_ok());
+    assert!(sky.evaluate(&input).objects[sun].versions.is_ok());
     input.env_map = true;
-    assert_eq!(sky.evaluate(&input).objects[sun].passes, Err(Hidden::NotInView));
+    assert_eq!(sky.evaluate(&input).objects[sun].versions, Err(Hidden::NotInView));
 }
 
 #[test]
@@ -181,7 +181,7 @@ fn broken_shader_edit_keeps_the_old_pipelines() {
     let file = dir.path().join("sky_objects.wgsl");
     let good = std::fs::read_to_string(&file).unwrap();
     std::fs::write(&file, good.replace("var color = sum * draw.diffuse;", "var color = sum * draw.diffuse +;")).unwrap();
-    let err = h.renderer.reload_shaders(&h.ctx).unwrap_err();
+    let err = h.renderer.reload_shaders(&h.ctx).unwrap_err().to_string();
     assert!(err.contains("sky_objects"), "{err}");
     let still = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
     assert_eq!(common::diff(&still, &before, 2).0.differing, 0.0, "the old pipelines must keep rendering");

@@ -1,46 +1,10 @@
-//! Screenshots and contact sheets, rendered offscreen through the same renderer code path.
+//! Screenshots and contact sheets: file names and the sheet layout. The pixels come from
+//! [`crate::render::Headless`], the same still path as `skytune render`
+//! ([`super::window::WindowGpu::capture`]).
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{anyhow, Context as _};
-
-use crate::render::{Camera, GpuContext, Offscreen, RenderOptions, ShaderLibrary, SkyRenderer, OFFSCREEN_FORMAT};
-use crate::sky::{FrameInput, Sky};
-
-/// An offscreen renderer sharing the window's device.
-pub struct Capture {
-    renderer: SkyRenderer,
-    target: Offscreen,
-    sky_generation: Option<u64>,
-}
-
-impl Capture {
-    /// Creates the renderer and a target of the given size.
-    pub fn new(ctx: &GpuContext, library: ShaderLibrary, width: u32, height: u32) -> anyhow::Result<Self> {
-        let renderer = SkyRenderer::new(ctx, OFFSCREEN_FORMAT, library).map_err(|e| anyhow!(e))?;
-        Ok(Self { renderer, target: Offscreen::new(&ctx.device, width, height), sky_generation: None })
-    }
-
-    /// Renders one frame and reads it back.
-    #[allow(clippy::too_many_arguments)]
-    pub fn render(&mut self, ctx: &GpuContext, sky: &Sky, generation: u64, input: &FrameInput, camera: &Camera, options: &RenderOptions, width: u32, height: u32) -> anyhow::Result<image::RgbaImage> {
-        if self.sky_generation != Some(generation) {
-            self.renderer.set_sky(ctx, sky).map_err(|e| anyhow!(e))?;
-            self.sky_generation = Some(generation);
-        }
-        if (self.target.width, self.target.height) != (width, height) {
-            self.target = Offscreen::new(&ctx.device, width, height);
-        }
-        let frame = sky.evaluate(input);
-        let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("Capture::frame") });
-        // Glare intensity needs a history of frames; a still shows the sky without it.
-        let options = RenderOptions { glare: false, ..*options };
-        self.renderer.render(ctx, &mut encoder, &self.target.color_view, &self.target.depth_view, (width, height), sky, &frame, camera, &options, 0.0, input.game_hours);
-        ctx.queue.submit([encoder.finish()]);
-        self.renderer.after_submit();
-        self.target.read(ctx)
-    }
-}
+use anyhow::Context as _;
 
 /// File name for a screenshot: sky name, time and weather.
 pub fn screenshot_name(sky: &str, hour: f32, weather: f32) -> String {

@@ -1,30 +1,37 @@
 //! The desktop app: a winit window showing the live sky with egui panels. It wires the renderer
 //! (which knows nothing of egui or winit), the hot-reloading sky and the UI.
+//!
+//! - this file: start-up and the event loop;
+//! - [`frame`]: one redraw, step by step (reloads, clock, evaluation, panels, present, actions);
+//! - [`window`]: the GPU side of the window;
+//! - [`capture`]: screenshots and contact sheets (through [`crate::render::Headless`]);
+//! - [`ui`]: the panels.
 
 pub mod capture;
+pub mod frame;
 pub mod settings;
 pub mod ui;
+pub mod window;
 
 use std::collections::VecDeque;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, Context as _};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
-use winit::keyboard::{Key, NamedKey};
-use winit::window::{Window, WindowId};
+use winit::window::WindowId;
 
-use crate::live::{LiveSky, ReloadEvent, SkySpec};
-use crate::render::headless::depth_view;
-use crate::render::{AdapterChoice, GpuContext, Headless, RenderOptions, ShaderLibrary, SkyRenderer};
-use crate::sky::{FrameInput, Tier};
-use capture::{free_path, screenshot_name, Capture, ContactSheet};
+use crate::live::{LiveSky, SkySpec};
+use crate::render::{AdapterChoice, GpuContext, Headless, RenderOptions, ShaderLibrary};
+use crate::sky::{Clock, FrameInput, Stepping, Tier};
+use crate::watch::FileWatcher;
+use capture::{screenshot_name, ContactSheet};
 use settings::Settings;
-use ui::{Controls, UiAction, UiInfo};
+use ui::Controls;
+use window::WindowGpu;
 
 /// How the window was asked to start.
 #[derive(Debug, Clone, Default)]
@@ -91,8 +98,7 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         controls,
         gpu: None,
         error: None,
-        frame_count: 0,
-        last_frame: Instant::now(),
+        clock: Clock::new(Stepping::RealTime),
         frame_times: VecDeque::new(),
         cpu_ms: Vec::new(),
         shader_error: None,
@@ -128,29 +134,15 @@ fn headless_fallback(spec: &SkySpec, config: &AppConfig) -> anyhow::Result<()> {
     Ok(())
 }
 
-struct Gpu {
-    window: Arc<Window>,
-    surface: wgpu::Surface<'static>,
-    surface_config: wgpu::SurfaceConfiguration,
-    ctx: GpuContext,
-    renderer: SkyRenderer,
-    depth: wgpu::TextureView,
-    egui_state: egui_winit::State,
-    egui_renderer: egui_wgpu::Renderer,
-    capture: Option<Capture>,
-    inspector: Option<(usize, egui::TextureHandle)>,
-    sky_generation: u64,
-}
-
-struct App {
+/// The app's state between frames.
+pub struct App {
     config: AppConfig,
     settings: Settings,
     live: LiveSky,
     controls: Controls,
-    gpu: Option<Gpu>,
+    gpu: Option<WindowGpu>,
     error: Option<anyhow::Error>,
-    frame_count: u64,
-    last_frame: Instant,
+    clock: Clock,
     frame_times: VecDeque<f32>,
     cpu_ms: Vec<(&'static str, f32)>,
     shader_error: Option<String>,
@@ -158,7 +150,7 @@ struct App {
     sheet: Option<ContactSheet>,
     last_capture: String,
     drag: Option<(f64, f64)>,
-    shader_watch: Option<notify_debouncer_full::Debouncer<notify_debouncer_full::notify::RecommendedWatcher, notify_debouncer_full::RecommendedCache>>,
+    shader_watch: Option<FileWatcher>,
     shaders_changed: Arc<AtomicBool>,
 }
 
@@ -173,382 +165,33 @@ impl App {
     }
 
     fn init(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
-        let [w, h] = self.settings.window_size;
-        let attrs = Window::default_attributes()
-            .with_title(format!("skytune - {}", self.live.sky().name))
-            .with_inner_size(winit::dpi::LogicalSize::new(w.max(320), h.max(240)));
-        let window = Arc::new(event_loop.create_window(attrs).context("creating the window")?);
-        let instance = crate::render::context::new_instance();
-        let surface = instance.create_surface(window.clone()).context("creating the window surface")?;
-        let choice = if self.config.cpu { AdapterChoice::Cpu } else { AdapterChoice::from_env() };
-        let ctx = GpuContext::new(instance, choice, Some(&surface))?;
-        log::info!("adapter: {}", ctx.adapter_line());
-        let size = window.inner_size();
-        let caps = surface.get_capabilities(&ctx.adapter);
-        // Colours are display-encoded (as in the 2005 pipeline): prefer a non-sRGB surface.
-        let format = caps.formats.iter().copied().find(|f| !f.is_srgb()).unwrap_or(caps.formats[0]);
-        let surface_config = wgpu::SurfaceConfiguration {
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            format,
-            width: size.width.max(1),
-            height: size.height.max(1),
-            present_mode: wgpu::PresentMode::AutoVsync,
-            desired_maximum_frame_latency: 2,
-            alpha_mode: caps.alpha_modes[0],
-            view_formats: vec![],
-            color_space: Default::default(),
-        };
-        surface.configure(&ctx.device, &surface_config);
         let library = self.shader_library();
         if let Some(dir) = &library.dir {
-            let flag = self.shaders_changed.clone();
-            match notify_debouncer_full::new_debouncer(Duration::from_millis(150), None, move |r: notify_debouncer_full::DebounceEventResult| {
-                let changed = |e: &notify_debouncer_full::DebouncedEvent| crate::live::is_content_change(&e.kind) && e.paths.iter().any(|p| p.extension().is_some_and(|x| x == "wgsl"));
-                if r.is_ok_and(|ev| ev.iter().any(changed)) {
-                    flag.store(true, Ordering::Release);
-                }
-            }) {
-                Ok(mut d) => {
-                    if let Err(e) = d.watch(dir, notify_debouncer_full::notify::RecursiveMode::NonRecursive) {
-                        log::warn!("cannot watch {}: {e}", dir.display());
-                    }
-                    log::info!("hot-reloading shaders from {}", dir.display());
-                    self.shader_watch = Some(d);
-                }
-                Err(e) => log::warn!("shader hot reload unavailable: {e}"),
-            }
+            self.watch_shaders(dir.clone());
         }
-        let mut renderer = match SkyRenderer::new(&ctx, format, library) {
-            Ok(r) => r,
-            Err(e) => {
-                // A broken shader on disk must not stop the tool: fall back to the embedded ones.
-                self.shader_error = Some(format!("shaders on disk failed, using the embedded ones: {e}"));
-                SkyRenderer::new(&ctx, format, ShaderLibrary::embedded()).map_err(|e| anyhow!(e))?
-            }
-        };
-        renderer.set_sky(&ctx, self.live.sky()).map_err(|e| anyhow!(e))?;
-        let egui_ctx = egui::Context::default();
-        let egui_state = egui_winit::State::new(egui_ctx, egui::ViewportId::ROOT, &window, Some(window.scale_factor() as f32), None, Some(ctx.device.limits().max_texture_dimension_2d as usize));
-        let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, format, egui_wgpu::RendererOptions::default());
-        let depth = depth_view(&ctx.device, surface_config.width, surface_config.height);
-        self.gpu = Some(Gpu { window, surface, surface_config, ctx, renderer, depth, egui_state, egui_renderer, capture: None, inspector: None, sky_generation: self.live.generation });
+        let adapter = if self.config.cpu { AdapterChoice::Cpu } else { AdapterChoice::from_env() };
+        let title = format!("skytune - {}", self.live.sky().name);
+        let (gpu, shader_error) = WindowGpu::new(event_loop, &title, self.settings.window_size, adapter, library, self.live.sky())?;
+        self.shader_error = shader_error;
+        self.gpu = Some(gpu);
         Ok(())
     }
 
-    fn frame_input(&self) -> FrameInput {
-        let c = &self.controls;
-        FrameInput { hour: c.hour, game_hours: c.game_hours, weather: c.weather, tier: c.tier, env_map: false, disabled: c.disabled.clone() }
-    }
-
-    /// Renders `input` offscreen at `size` through the capture renderer (created on first use).
-    fn capture_image(&mut self, input: &FrameInput, size: (u32, u32)) -> anyhow::Result<image::RgbaImage> {
-        let (generation, camera, options) = (self.live.generation, self.controls.camera, self.controls.options);
-        let gpu = self.gpu.as_mut().ok_or_else(|| anyhow!("no GPU yet"))?;
-        if gpu.capture.is_none() {
-            gpu.capture = Some(Capture::new(&gpu.ctx, gpu.renderer.library().clone(), size.0, size.1)?);
-        }
-        let capture = gpu.capture.as_mut().expect("just created");
-        capture.render(&gpu.ctx, self.live.sky(), generation, input, &camera, &options, size.0, size.1)
-    }
-
-    fn screenshot(&mut self) -> anyhow::Result<PathBuf> {
-        let input = self.frame_input();
-        let dir = self.config.shots.clone().unwrap_or_else(|| PathBuf::from("shots"));
-        let path = free_path(&dir, &screenshot_name(&self.live.sky().name, input.hour, input.weather))?;
-        let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU yet"))?;
-        let size = (gpu.surface_config.width, gpu.surface_config.height);
-        let img = self.capture_image(&input, size)?;
-        img.save(&path).with_context(|| format!("writing {}", path.display()))?;
-        Ok(path)
-    }
-
-    fn step_contact_sheet(&mut self) -> anyhow::Result<()> {
-        let Some(sheet) = self.sheet.as_mut() else { return Ok(()) };
-        let Some((hour, weather, col, row)) = sheet.next_cell() else {
-            let sheet = self.sheet.take().expect("present");
-            sheet.image.save(&sheet.path).with_context(|| format!("writing {}", sheet.path.display()))?;
-            self.last_capture = format!("contact sheet saved to {}", sheet.path.display());
-            println!("{}", self.last_capture);
-            return Ok(());
-        };
-        let cell = sheet.cell;
-        let mut input = self.frame_input();
-        input.hour = hour;
-        input.weather = weather;
-        input.game_hours = hour as f64;
-        let img = self.capture_image(&input, cell)?;
-        if let Some(sheet) = self.sheet.as_mut() {
-            sheet.put(col, row, &img);
-        }
-        Ok(())
-    }
-
-    fn open(&mut self, spec: SkySpec) {
-        if let SkySpec::File(p) | SkySpec::Continent { path: p, .. } = &spec {
-            self.settings.opened(p.clone());
-        }
-        self.live.switch(spec);
-    }
-
-    fn open_path(&mut self, path: &Path) {
-        match SkySpec::from_path(path, None) {
-            Ok(spec) => {
-                if let SkySpec::Continent { season, .. } = spec {
-                    self.controls.season = season;
-                }
-                self.open(spec);
+    /// Watches the shader folder with the same facility as the sky files.
+    fn watch_shaders(&mut self, dir: PathBuf) {
+        let flag = self.shaders_changed.clone();
+        match FileWatcher::new(move |changed| {
+            if changed.iter().any(|p| p.extension().is_some_and(|x| x == "wgsl")) {
+                flag.store(true, Ordering::Release);
             }
-            Err(e) => self.gpu_error = Some(e.to_string()),
-        }
-    }
-
-    fn handle_key(&mut self, key: &Key, event_loop: &ActiveEventLoop) {
-        let c = &mut self.controls;
-        let hpd = self.live.sky().hours_per_day;
-        match key {
-            Key::Named(NamedKey::Space) => c.playing = !c.playing,
-            Key::Named(NamedKey::F1) => c.show_help = !c.show_help,
-            Key::Named(NamedKey::F5) => self.live.request_reload(),
-            Key::Named(NamedKey::F6) => self.reload_shaders(),
-            Key::Named(NamedKey::F12) => self.take_screenshot(),
-            Key::Named(NamedKey::Escape) => event_loop.exit(),
-            Key::Character(s) => match s.as_str() {
-                "[" => c.hour = (c.hour - 0.25).rem_euclid(hpd),
-                "]" => c.hour = (c.hour + 0.25).rem_euclid(hpd),
-                "-" => c.weather = (c.weather - 0.05).max(0.0),
-                "=" | "+" => c.weather = (c.weather + 0.05).min(1.0),
-                "a" | "A" => c.camera.yaw_deg = (c.camera.yaw_deg - 5.0).rem_euclid(360.0),
-                "d" | "D" => c.camera.yaw_deg = (c.camera.yaw_deg + 5.0).rem_euclid(360.0),
-                "w" | "W" => c.camera.pitch_deg = (c.camera.pitch_deg + 5.0).min(89.0),
-                "s" | "S" => c.camera.pitch_deg = (c.camera.pitch_deg - 5.0).max(-89.0),
-                "z" | "Z" => c.camera.pitch_deg = 89.0,
-                "1" | "2" | "4" => c.tier = Tier::new(s.parse().unwrap_or(4)).unwrap_or_default(),
-                _ => {}
-            },
-            _ => {}
-        }
-    }
-
-    fn take_screenshot(&mut self) {
-        match self.screenshot() {
-            Ok(p) => {
-                self.last_capture = format!("screenshot saved to {}", p.display());
-                println!("{}", self.last_capture);
+        }) {
+            Ok(mut w) => {
+                w.set_dirs([dir.clone()].into_iter().collect());
+                log::info!("hot-reloading shaders from {}", dir.display());
+                self.shader_watch = Some(w);
             }
-            Err(e) => self.gpu_error = Some(format!("screenshot failed: {e:#}")),
+            Err(e) => log::warn!("shader hot reload unavailable: {e}"),
         }
-    }
-
-    fn reload_shaders(&mut self) {
-        let Some(gpu) = self.gpu.as_mut() else { return };
-        match gpu.renderer.reload_shaders(&gpu.ctx) {
-            Ok(()) => {
-                self.shader_error = None;
-                // The screenshot renderer rebuilds from the same sources on next use.
-                gpu.capture = None;
-                log::info!("shaders reloaded");
-            }
-            Err(e) => {
-                // Shown once in the panel and the log; the previous pipelines keep rendering.
-                if self.shader_error.as_deref() != Some(e.as_str()) {
-                    log::error!("shader reload failed, keeping the previous pipelines:\n{e}");
-                }
-                self.shader_error = Some(e);
-            }
-        }
-    }
-
-    fn redraw(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
-        let now = Instant::now();
-        let dt = now.duration_since(self.last_frame).as_secs_f32().min(0.25);
-        self.last_frame = now;
-        let t0 = Instant::now();
-
-        match self.live.poll() {
-            Some(ReloadEvent::Reloaded) => {
-                if let Some(gpu) = self.gpu.as_mut() {
-                    match gpu.renderer.set_sky(&gpu.ctx, self.live.sky()) {
-                        Ok(()) => {
-                            gpu.sky_generation = self.live.generation;
-                            self.gpu_error = None;
-                            gpu.window.set_title(&format!("skytune - {}", self.live.sky().name));
-                        }
-                        Err(e) => self.gpu_error = Some(format!("GPU upload failed, keeping the previous sky: {e}")),
-                    }
-                }
-            }
-            Some(ReloadEvent::Failed(_)) | None => {}
-        }
-        if self.shaders_changed.swap(false, Ordering::AcqRel) {
-            self.reload_shaders();
-        }
-        if let Err(e) = self.step_contact_sheet() {
-            self.sheet = None;
-            self.gpu_error = Some(format!("contact sheet failed: {e:#}"));
-        }
-
-        let sky = self.live.sky().clone();
-        if self.controls.playing {
-            self.controls.hour = (self.controls.hour + dt * self.controls.speed).rem_euclid(sky.hours_per_day);
-            self.controls.game_hours += (dt * self.controls.speed) as f64;
-        }
-        let input = self.frame_input();
-        let frame = sky.evaluate(&input);
-        let t_eval = t0.elapsed();
-
-        let mut errors: Vec<String> = Vec::new();
-        if let Some(e) = &self.live.error {
-            errors.push(format!("sky reload failed; showing the last good sky:\n{e}"));
-        }
-        errors.extend(self.shader_error.iter().map(|e| format!("shader reload failed; previous pipelines kept:\n{e}")));
-        errors.extend(self.gpu_error.iter().cloned());
-
-        let Some(gpu) = self.gpu.as_mut() else { return Ok(()) };
-        // Bitmap inspector texture, rebuilt when the target changes.
-        let inspector_id = self.controls.inspect.as_ref().map(|t| {
-            let key = Arc::as_ptr(&t.bitmap) as usize;
-            if gpu.inspector.as_ref().is_none_or(|(k, _)| *k != key) {
-                let b = &t.bitmap;
-                let img = egui::ColorImage::from_rgba_unmultiplied([b.width as usize, b.height as usize], &b.to_rgba8());
-                let handle = gpu.egui_state.egui_ctx().load_texture("inspector", img, egui::TextureOptions::NEAREST);
-                gpu.inspector = Some((key, handle));
-            }
-            gpu.inspector.as_ref().expect("just set").1.id()
-        });
-
-        let raw = gpu.egui_state.take_egui_input(&gpu.window);
-        let spec = self.live.spec();
-        if let Some(g) = gpu.renderer.glare_state_mut() {
-            g.frozen = self.controls.freeze_glare;
-        }
-        let glare = gpu.renderer.glare_state().cloned();
-        let gpu_ms = gpu.renderer.gpu_pass_ms().to_vec();
-        let stats = gpu.renderer.stats.clone();
-        let mut actions = Vec::new();
-        let info = UiInfo {
-            sky: &sky,
-            frame: &frame,
-            stats: &stats,
-            glare: glare.as_ref(),
-            errors: &errors,
-            adapter: &gpu.ctx.adapter_line(),
-            source: &spec.display(),
-            continent: matches!(spec, SkySpec::Continent { .. }),
-            recent: &self.settings.recent,
-            frame_times_ms: &self.frame_times,
-            cpu_ms: &self.cpu_ms,
-            gpu_ms: &gpu_ms,
-            sheet_progress: self.sheet.as_ref().map(|s| (s.done, s.total())),
-            last_capture: &self.last_capture,
-        };
-        let controls = &mut self.controls;
-        let full = gpu.egui_state.egui_ctx().clone().run_ui(raw, |ui| actions = ui::draw(ui, controls, &info, inspector_id));
-        gpu.egui_state.handle_platform_output(&gpu.window, full.platform_output);
-        let ppp = full.pixels_per_point;
-        let jobs = gpu.egui_state.egui_ctx().tessellate(full.shapes, ppp);
-        let t_ui = t0.elapsed();
-        // Texture uploads do not need the surface: apply them now so no delta is ever lost.
-        let mut deltas = full.textures_delta;
-        for (id, list) in &deltas.set {
-            for delta in list {
-                gpu.egui_renderer.update_texture(&gpu.ctx.device, &gpu.ctx.queue, *id, delta);
-            }
-        }
-        let frees = std::mem::take(&mut deltas.free);
-        deltas.clear();
-
-        let surface_texture = match gpu.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
-            other => {
-                log::debug!("no surface texture this frame: {other:?}");
-                if matches!(other, wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost) {
-                    gpu.surface.configure(&gpu.ctx.device, &gpu.surface_config);
-                }
-                for id in &frees {
-                    gpu.egui_renderer.free_texture(id);
-                }
-                return Ok(());
-            }
-        };
-        let view = surface_texture.texture.create_view(&Default::default());
-        let size = (gpu.surface_config.width, gpu.surface_config.height);
-        let mut encoder = gpu.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("App::frame") });
-        gpu.renderer.render(&gpu.ctx, &mut encoder, &view, &gpu.depth, size, &sky, &frame, &self.controls.camera, &self.controls.options, dt, input.game_hours);
-
-        let screen = egui_wgpu::ScreenDescriptor { size_in_pixels: [size.0, size.1], pixels_per_point: ppp };
-        let extra = gpu.egui_renderer.update_buffers(&gpu.ctx.device, &gpu.ctx.queue, &mut encoder, &jobs, &screen);
-        {
-            let rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("App::egui_pass"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            gpu.egui_renderer.render(&mut rpass.forget_lifetime(), &jobs, &screen);
-        }
-        for id in &frees {
-            gpu.egui_renderer.free_texture(id);
-        }
-        let t_record = t0.elapsed();
-        gpu.ctx.queue.submit(extra.into_iter().chain([encoder.finish()]));
-        gpu.renderer.after_submit();
-        gpu.window.pre_present_notify();
-        gpu.ctx.queue.present(surface_texture);
-        let t_submit = t0.elapsed();
-
-        let ms = |d: Duration| d.as_secs_f32() * 1000.0;
-        self.cpu_ms = vec![
-            ("reload + evaluate", ms(t_eval)),
-            ("ui", ms(t_ui - t_eval)),
-            ("record", ms(t_record - t_ui)),
-            ("submit + present", ms(t_submit - t_record)),
-        ];
-        self.frame_times.push_back(dt * 1000.0);
-        if self.frame_times.len() > 240 {
-            self.frame_times.pop_front();
-        }
-        self.frame_count += 1;
-
-        for action in actions {
-            match action {
-                UiAction::Open(p) => self.open_path(&p),
-                UiAction::OpenBuiltin => self.open(SkySpec::Builtin),
-                UiAction::Season(s) => {
-                    if let SkySpec::Continent { path, .. } = self.live.spec() {
-                        self.open(SkySpec::Continent { path, season: s });
-                    }
-                }
-                UiAction::Reload => self.live.request_reload(),
-                UiAction::ReloadShaders => self.reload_shaders(),
-                UiAction::Screenshot => self.take_screenshot(),
-                UiAction::ContactSheet => {
-                    let (cols, rows) = self.controls.sheet_grid;
-                    let dir = self.config.shots.clone().unwrap_or_else(|| PathBuf::from("shots"));
-                    let name = screenshot_name(&sky.name, 0.0, 0.0).replace("_00.00h_w0.00", "_contact_sheet");
-                    match free_path(&dir, &name) {
-                        Ok(path) => self.sheet = Some(ContactSheet::new(sky.hours_per_day, cols, rows, (240, 135), path)),
-                        Err(e) => self.gpu_error = Some(format!("{e:#}")),
-                    }
-                }
-            }
-        }
-
-        if self.config.screenshot_and_exit && self.frame_count == 3 {
-            self.take_screenshot();
-            event_loop.exit();
-        }
-        if self.config.frames.is_some_and(|n| self.frame_count >= n) {
-            log::info!("rendered {} frames, exiting", self.frame_count);
-            event_loop.exit();
-        }
-        Ok(())
     }
 }
 
@@ -568,21 +211,16 @@ impl ApplicationHandler for App {
         let egui_ctx = gpu.egui_state.egui_ctx().clone();
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
-            WindowEvent::Resized(size) if size.width > 0 && size.height > 0 => {
-                gpu.surface_config.width = size.width;
-                gpu.surface_config.height = size.height;
-                gpu.surface.configure(&gpu.ctx.device, &gpu.surface_config);
-                gpu.depth = depth_view(&gpu.ctx.device, size.width, size.height);
-                let logical = size.to_logical::<u32>(gpu.window.scale_factor());
-                self.settings.window_size = [logical.width, logical.height];
+            WindowEvent::Resized(size) => {
+                gpu.resize(size.width, size.height);
+                if size.width > 0 && size.height > 0 {
+                    let logical = size.to_logical::<u32>(gpu.window.scale_factor());
+                    self.settings.window_size = [logical.width, logical.height];
+                }
             }
             WindowEvent::DroppedFile(path) => self.open_path(&path),
             WindowEvent::MouseInput { state, button: MouseButton::Left, .. } => {
-                if state == ElementState::Released || egui_ctx.egui_wants_pointer_input() {
-                    self.drag = None;
-                } else {
-                    self.drag = Some((f64::NAN, f64::NAN));
-                }
+                self.drag = (state == ElementState::Pressed && !egui_ctx.egui_wants_pointer_input()).then_some((f64::NAN, f64::NAN));
             }
             WindowEvent::CursorMoved { position, .. } => {
                 if let Some((x, y)) = self.drag {

@@ -369,12 +369,12 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     for of in &info.frame.objects {
         let o = &sky.objects[of.index];
         let mut on = !c.disabled.contains(&o.name);
-        let status = match &of.passes {
+        let status = match &of.versions {
             Ok(p) if of.fallback => format!("fallback ({} pass{})", p.len(), if p.len() == 1 { "" } else { "es" }),
             Ok(_) => "standard".to_string(),
             Err(why) => format!("hidden: {why}"),
         };
-        let color = if of.passes.is_ok() { Color32::LIGHT_GREEN } else { Color32::from_rgb(230, 170, 90) };
+        let color = if of.versions.is_ok() { Color32::LIGHT_GREEN } else { Color32::from_rgb(230, 170, 90) };
         ui.horizontal(|ui| {
             if ui.checkbox(&mut on, "").changed() {
                 if on {
@@ -389,8 +389,8 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         for (pass, dropped) in &of.dropped {
             ui.label(RichText::new(format!("fallback pass {pass} dropped: needs {dropped} stages")).small().weak());
         }
-        if let Ok(passes) = &of.passes {
-            for p in passes {
+        if let Ok(versions) = &of.versions {
+            for p in versions {
                 let version = if p.version == 0 { &o.standard } else { &o.fallback[p.version - 1] };
                 ui.horizontal(|ui| {
                     swatch(ui, p.diffuse);

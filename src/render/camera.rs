@@ -25,8 +25,7 @@ impl Default for Camera {
 }
 
 /// Named views for the UI and the CLI.
-pub const PRESETS: [(&str, f32, f32); 5] =
-    [("south", 180.0, 12.0), ("east", 90.0, 8.0), ("west", 270.0, 8.0), ("north", 0.0, 12.0), ("zenith", 180.0, 89.0)];
+pub const PRESETS: [(&str, f32, f32); 5] = [("south", 180.0, 12.0), ("east", 90.0, 8.0), ("west", 270.0, 8.0), ("north", 0.0, 12.0), ("zenith", 180.0, 89.0)];
 
 impl Camera {
     /// A preset view by name (`south`, `east`, `west`, `north`, `zenith`).

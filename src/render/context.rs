@@ -1,7 +1,7 @@
 //! GPU device creation: headless (offscreen) or for a window surface. Vulkan only, so CI runs on
 //! Mesa's lavapipe and desktops on their native driver.
 
-use anyhow::{anyhow, Context as _};
+use super::error::{RenderError, RenderResult};
 
 /// Which adapter to ask for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -23,7 +23,8 @@ impl AdapterChoice {
     }
 }
 
-/// Device, queue and what they can do.
+/// Device, queue and what they can do. Cloning shares the same device (the handles are shared).
+#[derive(Clone)]
 pub struct GpuContext {
     /// The wgpu instance (kept to create surfaces).
     pub instance: wgpu::Instance,
@@ -42,7 +43,7 @@ pub const POLL_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(120
 
 impl GpuContext {
     /// Creates a context; with `surface`, the adapter must be able to present to it.
-    pub fn new(instance: wgpu::Instance, choice: AdapterChoice, surface: Option<&wgpu::Surface<'_>>) -> anyhow::Result<Self> {
+    pub fn new(instance: wgpu::Instance, choice: AdapterChoice, surface: Option<&wgpu::Surface<'_>>) -> RenderResult<Self> {
         let adapter = Self::pick_adapter(&instance, choice, surface)?;
         let info = adapter.get_info();
         log::info!("adapter: {} ({:?}, {:?}, driver {} {})", info.name, info.device_type, info.backend, info.driver, info.driver_info);
@@ -57,40 +58,33 @@ impl GpuContext {
             required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
             memory_hints: wgpu::MemoryHints::MemoryUsage,
             ..Default::default()
-        }))
-        .context("requesting the GPU device")?;
+        }))?;
         // Errors outside an error scope are bugs of ours; log them rather than abort the artist's session.
         device.on_uncaptured_error(std::sync::Arc::new(|e| log::error!("wgpu: {e}")));
         Ok(Self { instance, adapter, device, queue, timestamps })
     }
 
     /// A headless context (no surface).
-    pub fn headless(choice: AdapterChoice) -> anyhow::Result<Self> {
+    pub fn headless(choice: AdapterChoice) -> RenderResult<Self> {
         Self::new(new_instance(), choice, None)
     }
 
-    fn pick_adapter(instance: &wgpu::Instance, choice: AdapterChoice, surface: Option<&wgpu::Surface<'_>>) -> anyhow::Result<wgpu::Adapter> {
+    fn pick_adapter(instance: &wgpu::Instance, choice: AdapterChoice, surface: Option<&wgpu::Surface<'_>>) -> RenderResult<wgpu::Adapter> {
         let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
         let usable = |a: &wgpu::Adapter| surface.is_none_or(|s| a.is_surface_supported(s));
         let cpu = adapters.iter().find(|a| a.get_info().device_type == wgpu::DeviceType::Cpu && usable(a));
         let pick = match choice {
             AdapterChoice::Cpu => cpu,
-            AdapterChoice::Auto => adapters
-                .iter()
-                .filter(|a| usable(a))
-                .max_by_key(|a| match a.get_info().device_type {
-                    wgpu::DeviceType::DiscreteGpu => 3,
-                    wgpu::DeviceType::IntegratedGpu => 2,
-                    wgpu::DeviceType::VirtualGpu => 1,
-                    _ => 0,
-                }),
+            AdapterChoice::Auto => adapters.iter().filter(|a| usable(a)).max_by_key(|a| match a.get_info().device_type {
+                wgpu::DeviceType::DiscreteGpu => 3,
+                wgpu::DeviceType::IntegratedGpu => 2,
+                wgpu::DeviceType::VirtualGpu => 1,
+                _ => 0,
+            }),
         };
         pick.cloned().ok_or_else(|| {
             let names: Vec<String> = adapters.iter().map(|a| format!("{} ({:?})", a.get_info().name, a.get_info().device_type)).collect();
-            anyhow!(
-                "no suitable Vulkan adapter ({choice:?}); found: [{}]. On Debian install mesa-vulkan-drivers (scripts/setup.sh does).",
-                names.join(", ")
-            )
+            RenderError::NoAdapter { wanted: format!("{choice:?}"), found: names.join(", ") }
         })
     }
 
@@ -101,11 +95,9 @@ impl GpuContext {
     }
 
     /// Waits for submitted work, with a generous timeout for software rasterisers.
-    pub fn wait_idle(&self) -> anyhow::Result<()> {
-        self.device
-            .poll(wgpu::PollType::Wait { submission_index: None, timeout: Some(POLL_TIMEOUT) })
-            .map(|_| ())
-            .map_err(|e| anyhow!("waiting for the GPU: {e}"))
+    pub fn wait_idle(&self) -> RenderResult<()> {
+        self.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: Some(POLL_TIMEOUT) })?;
+        Ok(())
     }
 }
 

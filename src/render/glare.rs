@@ -11,7 +11,10 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
 use super::camera::Camera;
-use super::shaders::{self, ShaderLibrary};
+use super::error::RenderResult;
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SkyUpload, Staged};
+use super::renderer::RenderOptions;
+use super::shaders;
 use super::textures::TextureCache;
 use crate::sky::resolved::{Glare, MAX_FLARES};
 use crate::sky::Rgba;
@@ -143,13 +146,22 @@ impl OcclusionQueries {
 }
 
 /// Pipelines of the glare pass.
-pub struct GlarePass {
-    bind_layout: wgpu::BindGroupLayout,
-    pipeline_layout: wgpu::PipelineLayout,
+struct Pipelines {
     disc_visible: wgpu::RenderPipeline,
     disc_total: wgpu::RenderPipeline,
     sprite: wgpu::RenderPipeline,
-    color_format: wgpu::TextureFormat,
+}
+
+/// The glare pass: pipelines, and the current sky's glare with its queries and state.
+pub struct GlarePass {
+    bind_layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    pipelines: Staged<Pipelines>,
+    resources: Staged<Option<GlareResources>>,
+    /// Whether the glare takes part in this frame (the sky has glare, it is switched on).
+    active: bool,
+    /// Whether this frame shows the steady state: the sun is hidden, or a query result arrived.
+    settled: bool,
 }
 
 /// Disc placement. Keep in sync with `Disc` in shaders/glare.wgsl.
@@ -187,31 +199,24 @@ fn disc_vertices() -> Vec<[f32; 2]> {
 
 impl GlarePass {
     /// Builds the pipelines.
-    pub fn new(device: &wgpu::Device, globals: &wgpu::BindGroupLayout, library: &ShaderLibrary, color_format: wgpu::TextureFormat) -> Result<Self, String> {
+    pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
+        let (device, globals) = (b.device, b.globals_layout);
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("Glare::layout"),
-            entries: &[
-                super::uniform_entry(0, wgpu::ShaderStages::VERTEX),
-                super::texture_entry(1),
-                super::sampler_entry(2),
-            ],
+            entries: &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX), super::texture_entry(1), super::sampler_entry(2)],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Glare::pipeline_layout"),
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let (disc_visible, disc_total, sprite) = Self::build(device, &pipeline_layout, library, color_format)?;
-        Ok(Self { bind_layout, pipeline_layout, disc_visible, disc_total, sprite, color_format })
+        let pipelines = Self::build(b, &pipeline_layout)?;
+        Ok(Self { bind_layout, pipeline_layout, pipelines: Staged::new(pipelines), resources: Staged::new(None), active: false, settled: true })
     }
 
-    fn build(
-        device: &wgpu::Device,
-        layout: &wgpu::PipelineLayout,
-        library: &ShaderLibrary,
-        format: wgpu::TextureFormat,
-    ) -> Result<(wgpu::RenderPipeline, wgpu::RenderPipeline, wgpu::RenderPipeline), String> {
-        let module = shaders::module(device, library, "glare")?;
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<Pipelines> {
+        let (device, format) = (b.device, b.color_format);
+        let module = shaders::module(device, b.library, "glare")?;
         let disc = |label: &'static str, compare: wgpu::CompareFunction| {
             shaders::validated(device, label, || {
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -220,7 +225,11 @@ impl GlarePass {
                     vertex: wgpu::VertexState {
                         module: &module,
                         entry_point: Some("vs_disc"),
-                        buffers: &[Some(wgpu::VertexBufferLayout { array_stride: 8, step_mode: wgpu::VertexStepMode::Vertex, attributes: &wgpu::vertex_attr_array![0 => Float32x2] })],
+                        buffers: &[Some(wgpu::VertexBufferLayout {
+                            array_stride: 8,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes: &wgpu::vertex_attr_array![0 => Float32x2],
+                        })],
                         compilation_options: Default::default(),
                     },
                     primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
@@ -273,17 +282,105 @@ impl GlarePass {
                 cache: None,
             })
         })?;
-        Ok((visible, total, sprite))
+        Ok(Pipelines { disc_visible: visible, disc_total: total, sprite })
     }
 
-    /// Builds new pipelines from the library with the existing layouts (for hot reload).
-    pub fn rebuilt(&self, device: &wgpu::Device, library: &ShaderLibrary) -> Result<(wgpu::RenderPipeline, wgpu::RenderPipeline, wgpu::RenderPipeline), String> {
-        Self::build(device, &self.pipeline_layout, library, self.color_format)
+    /// The current sky's glare, if it has one.
+    pub fn resources(&self) -> Option<&GlareResources> {
+        self.resources.current.as_ref()
     }
 
-    /// Swaps in pipelines made by [`Self::rebuilt`].
-    pub fn install(&mut self, pipelines: (wgpu::RenderPipeline, wgpu::RenderPipeline, wgpu::RenderPipeline)) {
-        (self.disc_visible, self.disc_total, self.sprite) = pipelines;
+    /// The current sky's glare, mutable (freeze toggle).
+    pub fn resources_mut(&mut self) -> Option<&mut GlareResources> {
+        self.resources.current.as_mut()
+    }
+}
+
+impl Pass for GlarePass {
+    fn name(&self) -> &'static str {
+        "glare"
+    }
+
+    fn phase(&self) -> Phase {
+        Phase::Overlay
+    }
+
+    fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
+        let p = Self::build(b, &self.pipeline_layout)?;
+        self.pipelines.stage(p);
+        Ok(())
+    }
+
+    fn commit_pipelines(&mut self, accept: bool) {
+        self.pipelines.commit(accept);
+    }
+
+    fn stage_sky(&mut self, up: &mut SkyUpload<'_>) {
+        let next = up.sky.glare.as_ref().map(|g| GlareResources::new(up.device, up.queue, &self.bind_layout, up.textures, g));
+        self.resources.stage(next);
+    }
+
+    fn commit_sky(&mut self, accept: bool) {
+        let Some(Some(mut old)) = self.resources.commit(accept) else { return };
+        // The glare survives a reload: the eye keeps its adaptation and in-flight queries still land.
+        if let Some(new) = self.resources.current.as_mut() {
+            std::mem::swap(&mut new.state, &mut old.state);
+            std::mem::swap(&mut new.queries, &mut old.queries);
+        }
+    }
+
+    fn prepare(&mut self, cx: &FrameContext<'_>) {
+        self.settled = true;
+        let color = cx.frame.glare.filter(|_| cx.options.glare);
+        self.active = false;
+        let Some(g) = self.resources.current.as_mut() else { return };
+        match color {
+            Some(color) => {
+                let f = GlareFrame { towards_sun: cx.frame.towards_sun, color, dt_s: cx.frame.dt_s, frame: cx.frame.frame };
+                let arrived = g.prepare(cx.device, cx.queue, &f, cx.camera, cx.aspect());
+                self.active = true;
+                self.settled = !g.draw_this_frame || arrived;
+            }
+            None => {
+                g.state.drawn_last_frame = false;
+                g.issue_this_frame = false;
+                g.draw_this_frame = false;
+            }
+        }
+    }
+
+    fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
+        if self.active {
+            out.push(DrawItem { priority: 0, key: 0 });
+        }
+    }
+
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize) -> u32 {
+        self.resources.current.as_ref().map_or(0, |g| g.draw(rpass, &self.pipelines.current))
+    }
+
+    fn occlusion_query_set(&self) -> Option<&wgpu::QuerySet> {
+        self.resources.current.as_ref().filter(|_| self.active).map(|g| &g.queries.set)
+    }
+
+    fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let (true, Some(g)) = (self.active, &self.resources.current) {
+            g.resolve(encoder);
+        }
+    }
+
+    fn after_submit(&mut self) {
+        if let Some(g) = self.resources.current.as_mut() {
+            g.after_submit();
+        }
+    }
+
+    fn settle_dt_s(&self, options: &RenderOptions) -> Option<f32> {
+        self.resources.current.as_ref().filter(|_| options.glare).map(|g| g.settings.persistence_s.max(1e-3))
+    }
+
+    fn settled(&self) -> bool {
+        self.settled
     }
 }
 
@@ -318,7 +415,7 @@ pub struct GlareFrame {
 
 impl GlareResources {
     /// Uploads the glare of a sky.
-    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, pass: &GlarePass, cache: &mut TextureCache, glare: &Glare) -> Self {
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, layout: &wgpu::BindGroupLayout, cache: &mut TextureCache, glare: &Glare) -> Self {
         use wgpu::util::DeviceExt;
         let disc_uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Glare::disc_uniform"),
@@ -337,7 +434,7 @@ impl GlareResources {
                 let view = cache.get(device, queue, img);
                 device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("Glare::bind_group"),
-                    layout: &pass.bind_layout,
+                    layout,
                     entries: &[
                         wgpu::BindGroupEntry { binding: 0, resource: disc_uniform.as_entire_binding() },
                         wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
@@ -372,13 +469,15 @@ impl GlareResources {
     }
 
     /// Collects any finished result, updates the intensity and prepares this frame's draws.
-    pub fn prepare(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, f: &GlareFrame, camera: &Camera, aspect: f32) {
+    /// Returns whether a query result arrived.
+    pub fn prepare(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, f: &GlareFrame, camera: &Camera, aspect: f32) -> bool {
         let (_, clip_from_sky) = camera.matrices(aspect);
         let clip = clip_from_sky * f.towards_sun.extend(1.0);
         let in_front = clip.w > 1e-4;
         let visible = in_front && f.color[3] > 0.5 / 255.0;
 
         let result = self.queries.try_take(device).map(|(v, t, issued)| (v, t, (f.frame.saturating_sub(issued)).max(1) as u32));
+        let arrived = result.is_some();
         self.state.step(f.dt_s, self.settings.persistence_s, result);
         // A new query only when none is in flight: NeL's rule, and the reason frames are counted.
         self.issue_this_frame = visible && self.queries.phase == QueryPhase::Idle;
@@ -397,11 +496,12 @@ impl GlareResources {
 
         if !visible {
             self.sprite_count = 0;
-            return;
+            return arrived;
         }
         let sprites = self.sprites(Vec3::new(clip.x / clip.w, clip.y / clip.w, 0.0), f.color, camera, aspect);
         self.sprite_count = sprites.len() as u32;
         queue.write_buffer(&self.sprites, 0, bytemuck::cast_slice(&sprites));
+        arrived
     }
 
     fn sprites(&self, sun_ndc: Vec3, color: Rgba, camera: &Camera, aspect: f32) -> Vec<SpriteInstance> {
@@ -423,7 +523,7 @@ impl GlareResources {
 
     /// Records the occlusion queries (if one is due) and the sprites. Needs a pass created with
     /// this resource's query set. Returns draw calls.
-    pub fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, pass: &GlarePass) -> u32 {
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, pass: &Pipelines) -> u32 {
         let mut calls = 0;
         if self.issue_this_frame {
             rpass.set_bind_group(1, &self.bind_groups[0], &[]);
@@ -446,11 +546,6 @@ impl GlareResources {
             }
         }
         calls
-    }
-
-    /// The query set the glare render pass must be created with.
-    pub fn query_set(&self) -> &wgpu::QuerySet {
-        &self.queries.set
     }
 
     /// After the glare pass: resolve the queries into the readback buffer.

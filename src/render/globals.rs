@@ -35,7 +35,7 @@ const _: () = assert!(std::mem::size_of::<Globals>() == 3 * 64 + 7 * 16);
 
 impl Globals {
     /// Globals for a frame seen by `camera` on a `width` x `height` target.
-    pub fn new(frame: &FrameSky, camera: &Camera, width: u32, height: u32, hours_per_day: f32, game_hours: f64) -> Self {
+    pub fn new(frame: &FrameSky, camera: &Camera, width: u32, height: u32) -> Self {
         let aspect = width as f32 / height.max(1) as f32;
         let (clip_from_world, clip_from_sky) = camera.matrices(aspect);
         let v = |c: [f32; 4]| c;
@@ -48,7 +48,7 @@ impl Globals {
             fog_color: v(frame.fog_color),
             sun_ambient: v(frame.sun_ambient),
             sun_diffuse: v(frame.sun_diffuse),
-            time: [frame.hour, hours_per_day, frame.weather, game_hours as f32],
+            time: [frame.hour, frame.hours_per_day, frame.weather, frame.game_hours as f32],
             viewport: [width as f32, height as f32, 1.0 / width.max(1) as f32, 1.0 / height.max(1) as f32],
             camera_position: camera.position().extend(1.0).to_array(),
         }
@@ -76,7 +76,7 @@ impl GlobalsBinding {
         });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("Globals::layout"),
-            entries: &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
+            entries: &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE)],
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("Globals::bind_group"),

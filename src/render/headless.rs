@@ -1,9 +1,9 @@
-//! Offscreen rendering: a colour + depth target and readback to an image.
+//! Offscreen rendering: a colour + depth target, readback to an image, and [`Headless`], the one
+//! path of headless renders, stills and the app's screenshots and contact sheets.
 
-use anyhow::{anyhow, Context as _};
-
-use super::renderer::{RenderOptions, SkyRenderer};
-use super::{Camera, GpuContext, DEPTH_FORMAT, OFFSCREEN_FORMAT};
+use super::error::{RenderError, RenderResult};
+use super::renderer::{RenderOptions, RenderTarget, SkyRenderer};
+use super::{Camera, GpuContext, ShaderLibrary, DEPTH_FORMAT, OFFSCREEN_FORMAT};
 use crate::sky::{FrameInput, Sky};
 
 /// An offscreen colour and depth target.
@@ -54,7 +54,7 @@ impl Offscreen {
     }
 
     /// Copies the colour target back to the CPU (blocks until the GPU is done).
-    pub fn read(&self, ctx: &GpuContext) -> anyhow::Result<image::RgbaImage> {
+    pub fn read(&self, ctx: &GpuContext) -> RenderResult<image::RgbaImage> {
         let row = (self.width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Offscreen::readback"),
@@ -74,24 +74,30 @@ impl Offscreen {
             let _ = tx.send(r);
         });
         ctx.wait_idle()?;
-        rx.recv().context("readback callback never ran")?.map_err(|e| anyhow!("mapping the readback buffer: {e}"))?;
+        rx.recv().map_err(|_| RenderError::Readback("the readback callback never ran".into()))?.map_err(|e| RenderError::Readback(e.to_string()))?;
         let mut pixels = Vec::with_capacity((self.width * self.height * 4) as usize);
         {
-            let view = buffer.get_mapped_range(..).map_err(|e| anyhow!("{e}"))?;
+            let view = buffer.get_mapped_range(..).map_err(|e| RenderError::Readback(e.to_string()))?;
             for y in 0..self.height as usize {
                 let start = y * row as usize;
                 pixels.extend_from_slice(&view[start..start + self.width as usize * 4]);
             }
         }
         buffer.unmap();
-        image::RgbaImage::from_raw(self.width, self.height, pixels).ok_or_else(|| anyhow!("readback size mismatch"))
+        image::RgbaImage::from_raw(self.width, self.height, pixels).ok_or_else(|| RenderError::Readback("size mismatch".into()))
+    }
+
+    /// The target as the renderer draws into it.
+    pub fn target(&self) -> RenderTarget<'_> {
+        RenderTarget { color: &self.color_view, depth: &self.depth_view, size: (self.width, self.height) }
     }
 }
 
-/// Most extra frames a still waits for the glare's first occlusion result.
-const STILL_WARMUP_FRAMES: usize = 6;
+/// Most extra frames a still renders while its passes settle.
+const STILL_SETTLE_FRAMES: usize = 6;
 
-/// A headless renderer with its target: renders frames of a sky to images.
+/// A renderer with its own offscreen target: renders frames of a sky to images. The context may
+/// be shared with a window (it is a set of shared handles).
 pub struct Headless {
     /// GPU context.
     pub ctx: GpuContext,
@@ -99,46 +105,60 @@ pub struct Headless {
     pub renderer: SkyRenderer,
     /// Target.
     pub target: Offscreen,
+    /// Frames rendered so far.
+    frames: u64,
 }
 
 impl Headless {
-    /// Creates a context, a renderer with embedded shaders and a target of the given size.
-    pub fn new(ctx: GpuContext, width: u32, height: u32) -> anyhow::Result<Self> {
-        let renderer = SkyRenderer::new(&ctx, OFFSCREEN_FORMAT, super::ShaderLibrary::embedded()).map_err(|e| anyhow!(e))?;
+    /// Creates a renderer with embedded shaders and a target of the given size.
+    pub fn new(ctx: GpuContext, width: u32, height: u32) -> RenderResult<Self> {
+        Self::with_library(ctx, ShaderLibrary::embedded(), width, height)
+    }
+
+    /// Creates a renderer with shaders from `library` and a target of the given size.
+    pub fn with_library(ctx: GpuContext, library: ShaderLibrary, width: u32, height: u32) -> RenderResult<Self> {
+        let renderer = SkyRenderer::new(&ctx, OFFSCREEN_FORMAT, library)?;
         let target = Offscreen::new(&ctx.device, width, height);
-        Ok(Self { ctx, renderer, target })
+        Ok(Self { ctx, renderer, target, frames: 0 })
+    }
+
+    /// Makes the target `width` x `height` (no-op when it already is).
+    pub fn resize(&mut self, width: u32, height: u32) {
+        if (self.target.width, self.target.height) != (width, height) {
+            self.target = Offscreen::new(&self.ctx.device, width, height);
+        }
     }
 
     /// Uploads a sky.
-    pub fn set_sky(&mut self, sky: &Sky) -> anyhow::Result<()> {
-        self.renderer.set_sky(&self.ctx, sky).map_err(|e| anyhow!(e))
+    pub fn set_sky(&mut self, sky: &Sky) -> RenderResult<()> {
+        self.renderer.set_sky(&self.ctx, sky)
     }
 
-    /// Renders one frame without reading it back; returns once it is submitted.
+    /// Renders one frame `dt_s` seconds after the previous one, without reading it back; returns
+    /// once it is submitted.
     pub fn frame(&mut self, sky: &Sky, input: &FrameInput, camera: &Camera, options: &RenderOptions, dt_s: f32) {
-        let frame = sky.evaluate(input);
+        self.frames += 1;
+        let input = FrameInput { dt_s, frame: self.frames, ..input.clone() };
+        let frame = sky.evaluate(&input);
         let mut encoder = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("Headless::frame") });
-        let size = (self.target.width, self.target.height);
-        self.renderer.render(&self.ctx, &mut encoder, &self.target.color_view, &self.target.depth_view, size, sky, &frame, camera, options, dt_s, input.game_hours);
+        self.renderer.render(&self.ctx, &mut encoder, &self.target.target(), &frame, camera, options);
         self.ctx.queue.submit([encoder.finish()]);
         self.renderer.after_submit();
     }
 
-    /// Renders a still and reads it back. With glare, frames are rendered until an occlusion
-    /// result has arrived, each counting as one persistence period, so the glare shows at its
-    /// settled intensity as it would after the viewer looked for a while.
-    pub fn render(&mut self, sky: &Sky, input: &FrameInput, camera: &Camera, options: &RenderOptions) -> anyhow::Result<image::RgbaImage> {
-        let settle = sky.glare.as_ref().filter(|_| options.glare).map_or(0.0, |g| g.persistence_s.max(1e-3));
-        self.frame(sky, input, camera, options, settle);
-        if settle > 0.0 {
-            for _ in 0..STILL_WARMUP_FRAMES {
-                let before = self.renderer.glare_state().map(|g| g.frames_without_result);
-                self.ctx.wait_idle()?;
-                self.frame(sky, input, camera, options, settle);
-                let after = self.renderer.glare_state().map(|g| g.frames_without_result);
-                if before.is_some() && before == after {
+    /// Renders a still and reads it back. Passes that need history (the glare) settle first:
+    /// frames are rendered with a fixed step, each waiting for the GPU, until every pass says its
+    /// steady state shows, so the same input always gives the same picture.
+    pub fn render(&mut self, sky: &Sky, input: &FrameInput, camera: &Camera, options: &RenderOptions) -> RenderResult<image::RgbaImage> {
+        let settle_dt = self.renderer.settle_dt_s(options);
+        self.frame(sky, input, camera, options, settle_dt.unwrap_or(0.0));
+        if let Some(dt) = settle_dt {
+            for _ in 0..STILL_SETTLE_FRAMES {
+                if self.renderer.settled() {
                     break;
                 }
+                self.ctx.wait_idle()?;
+                self.frame(sky, input, camera, options, dt);
             }
         }
         self.target.read(&self.ctx)

@@ -1,11 +1,14 @@
-//! wgpu renderer of sky scenes. One pass = one module here + one `.wgsl` file in `shaders/`.
+//! wgpu renderer of sky scenes, organised as an ordered list of phases (see [`pass`]). One pass =
+//! one module here + one `.wgsl` file in `shaders/` of the same name.
 
 pub mod camera;
 pub mod context;
+pub mod error;
 pub mod glare;
 pub mod globals;
 pub mod headless;
 pub mod mesh;
+pub mod pass;
 pub mod renderer;
 pub mod scene;
 pub mod shaders;
@@ -16,8 +19,10 @@ pub mod timing;
 
 pub use camera::Camera;
 pub use context::{AdapterChoice, GpuContext};
+pub use error::{RenderError, RenderResult};
 pub use headless::{Headless, Offscreen};
-pub use renderer::{FrameStats, RenderOptions, SkyRenderer};
+pub use pass::{Pass, Phase, PASSES};
+pub use renderer::{FrameStats, RenderOptions, RenderTarget, SkyRenderer, UploadStats, SCENE_DEPTH, SKY_DEPTH};
 pub use shaders::ShaderLibrary;
 
 /// Depth buffer format of every pass.
@@ -27,13 +32,7 @@ pub const OFFSCREEN_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unor
 
 /// Depth state of a pass: `write` the depth or not, with `compare`.
 pub(crate) fn depth_state(write: bool, compare: wgpu::CompareFunction) -> Option<wgpu::DepthStencilState> {
-    Some(wgpu::DepthStencilState {
-        format: DEPTH_FORMAT,
-        depth_write_enabled: Some(write),
-        depth_compare: Some(compare),
-        stencil: Default::default(),
-        bias: Default::default(),
-    })
+    Some(wgpu::DepthStencilState { format: DEPTH_FORMAT, depth_write_enabled: Some(write), depth_compare: Some(compare), stencil: Default::default(), bias: Default::default() })
 }
 
 /// Layout entry of a uniform buffer at `binding`.
@@ -57,11 +56,7 @@ pub(crate) fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: true },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
+        ty: wgpu::BindingType::Texture { sample_type: wgpu::TextureSampleType::Float { filterable: true }, view_dimension: wgpu::TextureViewDimension::D2, multisampled: false },
         count: None,
     }
 }

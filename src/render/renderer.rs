@@ -1,13 +1,12 @@
-//! The sky renderer: owns the passes and the current sky's GPU resources, and records a frame.
-//! It knows nothing of egui or winit; the app and the CLI drive it.
+//! The sky renderer: runs the passes of [`PASSES`] phase by phase. It owns bind group 0 and the
+//! shared textures; each pass owns its pipelines, its per-sky resources and its state. It knows
+//! nothing of egui or winit; the app and the CLI drive it.
 
 use super::camera::Camera;
-use super::glare::{GlareFrame, GlarePass, GlareResources, GlareState};
+use super::error::RenderResult;
 use super::globals::{Globals, GlobalsBinding};
-use super::scene::{Occluder, ScenePass};
-use super::shaders::ShaderLibrary;
-use super::sky_objects::{SkyObjectDraws, SkyObjectsPass};
-use super::stars::{StarField, StarsPass};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SkyUpload, PASSES};
+use super::shaders::{self, ShaderLibrary};
 use super::textures::TextureCache;
 use super::timing::GpuTimer;
 use super::GpuContext;
@@ -29,7 +28,7 @@ pub struct RenderOptions {
     /// Draw the sun glare (and run its occlusion queries).
     pub glare: bool,
     /// Draw a test occluder into the scene's depth.
-    pub occluder: Option<Occluder>,
+    pub occluder: Option<super::scene::Occluder>,
 }
 
 impl Default for RenderOptions {
@@ -51,75 +50,96 @@ pub struct FrameStats {
     pub stars: u32,
 }
 
-struct SkyGpu {
-    draws: SkyObjectDraws,
-    stars: Option<(StarField, u8)>,
-    glare: Option<GlareResources>,
+/// What the last sky upload did with the textures of the sky before it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct UploadStats {
+    /// Textures uploaded (new files, or files whose content changed).
+    pub textures_uploaded: u32,
+    /// Textures taken over from the previous sky unchanged.
+    pub textures_reused: u32,
+}
+
+/// Where a frame is drawn.
+pub struct RenderTarget<'a> {
+    /// Colour view, in the renderer's colour format.
+    pub color: &'a wgpu::TextureView,
+    /// Depth view ([`super::DEPTH_FORMAT`]).
+    pub depth: &'a wgpu::TextureView,
+    /// Size, pixels.
+    pub size: (u32, u32),
 }
 
 /// Records frames of a sky.
 pub struct SkyRenderer {
     globals: GlobalsBinding,
     library: ShaderLibrary,
+    color_format: wgpu::TextureFormat,
     textures: TextureCache,
-    sky_objects: SkyObjectsPass,
-    stars: StarsPass,
-    scene: ScenePass,
-    glare: GlarePass,
-    current: Option<SkyGpu>,
-    frame_number: u64,
+    passes: Vec<Box<dyn Pass>>,
+    has_sky: bool,
     timer: Option<GpuTimer>,
     /// Counters of the last recorded frame.
     pub stats: FrameStats,
+    /// What the last sky upload reused.
+    pub upload_stats: UploadStats,
 }
 
 impl SkyRenderer {
-    /// Builds every pass for a colour format. Errors are shader or pipeline errors.
-    pub fn new(ctx: &GpuContext, color_format: wgpu::TextureFormat, library: ShaderLibrary) -> Result<Self, String> {
+    /// Builds every pass of [`PASSES`] for a colour format.
+    pub fn new(ctx: &GpuContext, color_format: wgpu::TextureFormat, library: ShaderLibrary) -> RenderResult<Self> {
+        Self::with_passes(ctx, color_format, library, &[])
+    }
+
+    /// Builds the passes of [`PASSES`] and then `extra` ones (tools and tests that add a pass
+    /// without touching the product's list).
+    pub fn with_passes(ctx: &GpuContext, color_format: wgpu::TextureFormat, library: ShaderLibrary, extra: &[(&str, super::pass::PassConstructor)]) -> RenderResult<Self> {
         let device = &ctx.device;
         let globals = GlobalsBinding::new(device);
+        let build = PassBuild { device, globals_layout: &globals.layout, library: &library, color_format };
+        let passes = PASSES.iter().chain(extra).map(|(_, new)| new(&build)).collect::<RenderResult<Vec<_>>>()?;
         Ok(Self {
-            sky_objects: SkyObjectsPass::new(device, &globals.layout, &library, color_format)?,
-            stars: StarsPass::new(device, &globals.layout, &library, color_format)?,
-            scene: ScenePass::new(device, &globals.layout, &library, color_format)?,
-            glare: GlarePass::new(device, &globals.layout, &library, color_format)?,
             textures: TextureCache::new(device, &ctx.queue),
             globals,
             library,
-            current: None,
-            frame_number: 0,
+            color_format,
+            passes,
+            has_sky: false,
             timer: ctx.timestamps.then(|| GpuTimer::new(device, &ctx.queue)),
             stats: FrameStats::default(),
+            upload_stats: UploadStats::default(),
         })
     }
 
-    /// Uploads a sky, replacing the previous one only if the upload succeeds.
-    pub fn set_sky(&mut self, ctx: &GpuContext, sky: &Sky) -> Result<(), String> {
-        let (device, queue) = (&ctx.device, &ctx.queue);
-        let mut textures = TextureCache::new(device, queue);
-        let gpu = super::shaders::validated(device, "uploading the sky", || SkyGpu {
-            draws: SkyObjectDraws::new(device, queue, &self.sky_objects, &mut textures, sky),
-            stars: sky.stars.as_ref().map(|s| (StarField::new(device, &self.stars, s), s.priority)),
-            glare: sky.glare.as_ref().map(|g| GlareResources::new(device, queue, &self.glare, &mut textures, g)),
-        })?;
+    /// Uploads a sky into every pass, replacing the previous one only if every upload succeeds.
+    /// Textures whose file did not change, meshes and the state of simulations carry over.
+    pub fn set_sky(&mut self, ctx: &GpuContext, sky: &Sky) -> RenderResult<()> {
+        let mut textures = self.textures.successor();
+        let result = shaders::validated(&ctx.device, "uploading the sky", || {
+            let mut upload = SkyUpload { device: &ctx.device, queue: &ctx.queue, sky, textures: &mut textures };
+            for pass in &mut self.passes {
+                pass.stage_sky(&mut upload);
+            }
+        });
+        for pass in &mut self.passes {
+            pass.commit_sky(result.is_ok());
+        }
+        result?;
+        textures.forget_previous();
+        self.upload_stats = UploadStats { textures_uploaded: textures.uploaded, textures_reused: textures.reused };
         self.textures = textures;
-        self.current = Some(gpu);
+        self.has_sky = true;
         Ok(())
     }
 
     /// Rebuilds every pipeline from the shader library (hot reload). All or nothing: on any error
     /// every pass keeps its previous pipelines and the error is returned.
-    pub fn reload_shaders(&mut self, ctx: &GpuContext) -> Result<(), String> {
-        let (d, lib) = (&ctx.device, &self.library);
-        let sky_objects = self.sky_objects.rebuilt(d, lib)?;
-        let stars = self.stars.rebuilt(d, lib)?;
-        let scene = self.scene.rebuilt(d, lib)?;
-        let glare = self.glare.rebuilt(d, lib)?;
-        self.sky_objects.install(sky_objects);
-        self.stars.install(stars);
-        self.scene.install(scene);
-        self.glare.install(glare);
-        Ok(())
+    pub fn reload_shaders(&mut self, ctx: &GpuContext) -> RenderResult<()> {
+        let build = PassBuild { device: &ctx.device, globals_layout: &self.globals.layout, library: &self.library, color_format: self.color_format };
+        let result = self.passes.iter_mut().try_for_each(|p| p.stage_pipelines(&build));
+        for pass in &mut self.passes {
+            pass.commit_pipelines(result.is_ok());
+        }
+        result
     }
 
     /// Replaces the shader library (e.g. switch between embedded and on-disk sources).
@@ -132,105 +152,136 @@ impl SkyRenderer {
         &self.library
     }
 
+    /// Colour format of the pipelines.
+    pub fn color_format(&self) -> wgpu::TextureFormat {
+        self.color_format
+    }
+
+    /// Names and phases of the passes, in list order.
+    pub fn pass_names(&self) -> Vec<(&'static str, Phase)> {
+        self.passes.iter().map(|p| (p.name(), p.phase())).collect()
+    }
+
+    /// The pass of type `P`, if the renderer has one.
+    pub fn pass<P: Pass>(&self) -> Option<&P> {
+        self.passes.iter().find_map(|p| (p.as_ref() as &dyn std::any::Any).downcast_ref::<P>())
+    }
+
+    /// The pass of type `P`, mutable.
+    pub fn pass_mut<P: Pass>(&mut self) -> Option<&mut P> {
+        self.passes.iter_mut().find_map(|p| (p.as_mut() as &mut dyn std::any::Any).downcast_mut::<P>())
+    }
+
     /// Glare visibility and intensity, if the sky has glare.
-    pub fn glare_state(&self) -> Option<&GlareState> {
-        self.current.as_ref()?.glare.as_ref().map(|g| &g.state)
+    pub fn glare_state(&self) -> Option<&super::glare::GlareState> {
+        self.pass::<super::glare::GlarePass>()?.resources().map(|g| &g.state)
     }
 
     /// Phase of the glare's occlusion queries, if the sky has glare.
     pub fn glare_query_phase(&self) -> Option<super::glare::QueryPhase> {
-        self.current.as_ref()?.glare.as_ref().map(|g| g.query_phase().clone())
+        self.pass::<super::glare::GlarePass>()?.resources().map(|g| g.query_phase().clone())
     }
 
     /// Mutable glare state (freeze toggle).
-    pub fn glare_state_mut(&mut self) -> Option<&mut GlareState> {
-        self.current.as_mut()?.glare.as_mut().map(|g| &mut g.state)
+    pub fn glare_state_mut(&mut self) -> Option<&mut super::glare::GlareState> {
+        self.pass_mut::<super::glare::GlarePass>()?.resources_mut().map(|g| &mut g.state)
     }
 
-    /// Records one frame into `encoder`. Call [`Self::after_submit`] once it is submitted.
-    #[allow(clippy::too_many_arguments)]
-    pub fn render(
-        &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        color: &wgpu::TextureView,
-        depth: &wgpu::TextureView,
-        size: (u32, u32),
-        sky: &Sky,
-        frame: &FrameSky,
-        camera: &Camera,
-        options: &RenderOptions,
-        dt_s: f32,
-        game_hours: f64,
-    ) {
-        self.frame_number += 1;
-        let (w, h) = size;
-        let aspect = w as f32 / h.max(1) as f32;
-        let globals = Globals::new(frame, camera, w, h, sky.hours_per_day, game_hours);
-        ctx.queue.write_buffer(&self.globals.buffer, 0, bytemuck::bytes_of(&globals));
-        let Some(gpu) = self.current.as_mut() else { return };
-        gpu.draws.prepare(&ctx.queue, frame, camera);
-        let stars_visible = match (&gpu.stars, frame.stars) {
-            (Some((field, _)), Some(c)) => field.prepare(&ctx.queue, c),
-            _ => false,
-        };
-        if let Some(o) = &options.occluder {
-            self.scene.prepare_occluder(&ctx.queue, o);
-        }
+    /// Time step for the frames of a still until it settles, if a pass needs history to show
+    /// its steady state.
+    pub fn settle_dt_s(&self, options: &RenderOptions) -> Option<f32> {
+        self.passes.iter().filter_map(|p| p.settle_dt_s(options)).reduce(f32::max)
+    }
 
-        let mut stats = FrameStats {
-            objects_drawn: frame.objects.iter().filter(|o| o.passes.is_ok()).count() as u32,
-            objects_hidden: frame.objects.iter().filter(|o| o.passes.is_err()).count() as u32,
-            stars: gpu.stars.as_ref().map_or(0, |(f, _)| f.count()),
-            ..Default::default()
-        };
+    /// Whether the last frame showed every pass's steady state.
+    pub fn settled(&self) -> bool {
+        self.passes.iter().all(|p| p.settled())
+    }
+
+    /// Records one frame into `encoder`: every pass's per-frame step, then each phase in order.
+    /// Call [`Self::after_submit`] once the encoder is submitted.
+    pub fn render(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &RenderTarget<'_>, frame: &FrameSky, camera: &Camera, options: &RenderOptions) {
+        let (w, h) = target.size;
+        let globals = Globals::new(frame, camera, w, h);
+        ctx.queue.write_buffer(&self.globals.buffer, 0, bytemuck::bytes_of(&globals));
+        if !self.has_sky {
+            return;
+        }
+        let cx = FrameContext { device: &ctx.device, queue: &ctx.queue, frame, camera, options, size: target.size };
+        for pass in &mut self.passes {
+            pass.prepare(&cx);
+        }
+        let mut stats = FrameStats::default();
+        for pass in &self.passes {
+            pass.stats(&mut stats);
+        }
+        // Items per phase: (pass index, item), ordered.
+        let mut items: [Vec<(usize, DrawItem)>; Phase::ALL.len()] = Default::default();
+        let mut scratch = Vec::new();
+        for (i, pass) in self.passes.iter().enumerate() {
+            scratch.clear();
+            pass.items(&cx, &mut scratch);
+            items[pass.phase().index()].extend(scratch.iter().map(|it| (i, *it)));
+        }
+        // Sky objects and stars interleave by priority; list order among equals.
+        items[Phase::Sky.index()].sort_by_key(|(_, it)| it.priority);
+
         if let Some(t) = self.timer.as_mut() {
             t.begin_frame();
         }
         let (wf, hf) = (w as f32, h as f32);
-        {
-            // Scene pass: clears, and draws the main-scene stand-in first when the depth split is on.
-            let mut rpass = begin_pass(encoder, "SkyRenderer::scene_pass", color, depth, (wgpu::LoadOp::Clear(wgpu::Color::BLACK), wgpu::LoadOp::Clear(1.0)), self.timer.as_mut().and_then(|t| t.writes(0)), None);
-            rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-            if options.depth_split {
-                rpass.set_viewport(0.0, 0.0, wf, hf, SCENE_DEPTH.0, SCENE_DEPTH.1);
-                stats.draw_calls += self.scene.draw(&mut rpass, options.scene, options.occluder.is_some());
-            }
-        }
-        {
-            // Sky pass: objects by priority with the stars in between. With the split, sky fragments
-            // behind the scene fail the depth test; without it the sky covers the screen first.
-            let mut rpass = begin_pass(encoder, "SkyRenderer::sky_pass", color, depth, (wgpu::LoadOp::Load, wgpu::LoadOp::Load), self.timer.as_mut().and_then(|t| t.writes(1)), None);
-            rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-            let range = if options.depth_split { SKY_DEPTH } else { (0.0, 1.0) };
-            rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
-            let stars_priority = gpu.stars.as_ref().map_or(u8::MAX, |(_, p)| *p);
-            let below = |o: &crate::sky::ObjectFrame| sky.objects[o.index].priority <= stars_priority;
-            stats.draw_calls += gpu.draws.draw(&mut rpass, &self.sky_objects, frame, below);
-            if stars_visible {
-                if let Some((field, _)) = &gpu.stars {
-                    field.draw(&mut rpass, &self.stars);
-                    stats.draw_calls += 1;
+        let split = options.depth_split;
+        for phase in Phase::ALL {
+            let list = &items[phase.index()];
+            match phase {
+                Phase::Compute => {
+                    if list.is_empty() {
+                        continue;
+                    }
+                    let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("SkyRenderer::compute"),
+                        timestamp_writes: self.timer.as_mut().and_then(|t| t.compute_writes(phase)),
+                    });
+                    cpass.set_bind_group(0, &self.globals.bind_group, &[]);
+                    for (i, it) in list {
+                        self.passes[*i].dispatch(&mut cpass, it.key);
+                    }
+                }
+                _ => {
+                    // The scene phase always runs: it clears the target. Without the depth split its
+                    // draws move to the end of the sky phase, painted over an already shaded sky.
+                    let draws_here = phase != Phase::Scene || split;
+                    if list.is_empty() && phase != Phase::Scene && phase != Phase::Sky {
+                        continue;
+                    }
+                    let load = if phase == Phase::Scene { (wgpu::LoadOp::Clear(wgpu::Color::BLACK), wgpu::LoadOp::Clear(1.0)) } else { (wgpu::LoadOp::Load, wgpu::LoadOp::Load) };
+                    let queries = list.iter().find_map(|(i, _)| self.passes[*i].occlusion_query_set());
+                    let label = format!("SkyRenderer::{}", phase.name());
+                    let writes = self.timer.as_mut().and_then(|t| t.render_writes(phase));
+                    let mut rpass = begin_pass(encoder, &label, target, load, writes, queries);
+                    rpass.set_bind_group(0, &self.globals.bind_group, &[]);
+                    let range = match phase {
+                        Phase::Sky | Phase::Overlay if split || phase == Phase::Overlay => SKY_DEPTH,
+                        Phase::Scene | Phase::SceneAfterSky if split => SCENE_DEPTH,
+                        _ => (0.0, 1.0),
+                    };
+                    rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
+                    if draws_here {
+                        for (i, it) in list {
+                            stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key);
+                        }
+                    }
+                    if phase == Phase::Sky && !split {
+                        rpass.set_viewport(0.0, 0.0, wf, hf, 0.0, 1.0);
+                        for (i, it) in &items[Phase::Scene.index()] {
+                            stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key);
+                        }
+                    }
                 }
             }
-            stats.draw_calls += gpu.draws.draw(&mut rpass, &self.sky_objects, frame, |o| !below(o));
-            if !options.depth_split {
-                // Without the split the scene is painted over an already fully shaded sky.
-                rpass.set_viewport(0.0, 0.0, wf, hf, 0.0, 1.0);
-                stats.draw_calls += self.scene.draw(&mut rpass, options.scene, options.occluder.is_some());
-            }
         }
-
-        if let (Some(glare), Some(color_now), true) = (gpu.glare.as_mut(), frame.glare, options.glare) {
-            glare.prepare(&ctx.device, &ctx.queue, &GlareFrame { towards_sun: frame.towards_sun, color: color_now, dt_s, frame: self.frame_number }, camera, aspect);
-            let mut rpass = begin_pass(encoder, "SkyRenderer::glare_pass", color, depth, (wgpu::LoadOp::Load, wgpu::LoadOp::Load), self.timer.as_mut().and_then(|t| t.writes(2)), Some(glare.query_set()));
-            rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-            rpass.set_viewport(0.0, 0.0, wf, hf, SKY_DEPTH.0, SKY_DEPTH.1);
-            stats.draw_calls += glare.draw(&mut rpass, &self.glare);
-            drop(rpass);
-            glare.resolve(encoder);
-        } else if let Some(glare) = gpu.glare.as_mut() {
-            glare.state.drawn_last_frame = false;
+        for pass in &self.passes {
+            pass.resolve(encoder);
         }
         if let Some(t) = &self.timer {
             t.resolve(encoder);
@@ -238,7 +289,7 @@ impl SkyRenderer {
         self.stats = stats;
     }
 
-    /// GPU time of each pass of a recent frame, ms (empty without timestamp queries).
+    /// GPU time of each phase of a recent frame, ms (empty without timestamp queries).
     pub fn gpu_pass_ms(&self) -> &[(&'static str, f32)] {
         self.timer.as_ref().map_or(&[], |t| &t.last_ms)
     }
@@ -248,18 +299,17 @@ impl SkyRenderer {
         if let Some(t) = self.timer.as_mut() {
             t.after_submit();
         }
-        if let Some(g) = self.current.as_mut().and_then(|c| c.glare.as_mut()) {
-            g.after_submit();
+        for pass in &mut self.passes {
+            pass.after_submit();
         }
     }
 }
 
-/// Begins one of the renderer's passes on the shared colour and depth targets.
+/// Begins one phase's render pass on the shared colour and depth targets.
 fn begin_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     label: &str,
-    color: &wgpu::TextureView,
-    depth: &wgpu::TextureView,
+    target: &RenderTarget<'_>,
     (load_color, load_depth): (wgpu::LoadOp<wgpu::Color>, wgpu::LoadOp<f32>),
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     occlusion_query_set: Option<&wgpu::QuerySet>,
@@ -267,13 +317,13 @@ fn begin_pass<'e>(
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: color,
+            view: target.color,
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations { load: load_color, store: wgpu::StoreOp::Store },
         })],
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: depth,
+            view: target.depth,
             depth_ops: Some(wgpu::Operations { load: load_depth, store: wgpu::StoreOp::Store }),
             stencil_ops: None,
         }),

@@ -5,7 +5,9 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
-use super::shaders::{self, ShaderLibrary};
+use super::error::RenderResult;
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Staged};
+use super::shaders;
 
 /// Vertex of the stand-in scene. Keep in sync with `vs_main` in shaders/scene.wgsl.
 #[repr(C)]
@@ -45,7 +47,14 @@ fn scene_geometry() -> (Vec<SceneVertex>, Vec<u32>) {
         }
     }
     // Buildings: (azimuth deg, distance m, width m, height m).
-    for &(az, dist, w, h) in &[(150.0f32, 60.0f32, 14.0f32, 18.0f32), (200.0, 90.0, 20.0, 26.0), (95.0, 70.0, 12.0, 12.0), (265.0, 55.0, 16.0, 9.0), (20.0, 80.0, 22.0, 30.0), (320.0, 120.0, 18.0, 22.0)] {
+    for &(az, dist, w, h) in &[
+        (150.0f32, 60.0f32, 14.0f32, 18.0f32),
+        (200.0, 90.0, 20.0, 26.0),
+        (95.0, 70.0, 12.0, 12.0),
+        (265.0, 55.0, 16.0, 9.0),
+        (20.0, 80.0, 22.0, 30.0),
+        (320.0, 120.0, 18.0, 22.0),
+    ] {
         let c = crate::sky::eval::direction(az, 0.0) * dist;
         let (x0, x1, z0, z1, y0, y1) = (c.x - w / 2.0, c.x + w / 2.0, c.z - w / 2.0, c.z + w / 2.0, -1.0, h);
         let albedo = [0.55, 0.5, 0.45];
@@ -74,41 +83,53 @@ pub struct Occluder {
     pub max: [f32; 2],
 }
 
+/// The scene's pipelines: terrain and buildings, and the test occluder.
+struct Pipelines {
+    scene: wgpu::RenderPipeline,
+    occluder: wgpu::RenderPipeline,
+}
+
+/// Draw keys of the scene pass.
+const TERRAIN: usize = 0;
+const OCCLUDER: usize = 1;
+
 /// Pipelines and geometry of the stand-in scene.
 pub struct ScenePass {
     pipeline_layout: wgpu::PipelineLayout,
-    pipeline: wgpu::RenderPipeline,
-    occluder_pipeline: wgpu::RenderPipeline,
+    pipelines: Staged<Pipelines>,
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     index_count: u32,
     occluder: wgpu::Buffer,
-    color_format: wgpu::TextureFormat,
 }
 
 impl ScenePass {
     /// Builds pipelines and uploads the geometry.
-    pub fn new(device: &wgpu::Device, globals: &wgpu::BindGroupLayout, library: &ShaderLibrary, color_format: wgpu::TextureFormat) -> Result<Self, String> {
+    pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
+        let device = b.device;
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Scene::pipeline_layout"),
-            bind_group_layouts: &[Some(globals)],
+            bind_group_layouts: &[Some(b.globals_layout)],
             immediate_size: 0,
         });
-        let (pipeline, occluder_pipeline) = Self::build(device, &pipeline_layout, library, color_format)?;
+        let pipelines = Self::build(b, &pipeline_layout)?;
         let (v, i) = scene_geometry();
-        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("Scene::vertices"), contents: bytemuck::cast_slice(&v), usage: wgpu::BufferUsages::VERTEX });
-        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("Scene::indices"), contents: bytemuck::cast_slice(&i), usage: wgpu::BufferUsages::INDEX });
+        let vertices =
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("Scene::vertices"), contents: bytemuck::cast_slice(&v), usage: wgpu::BufferUsages::VERTEX });
+        let indices =
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("Scene::indices"), contents: bytemuck::cast_slice(&i), usage: wgpu::BufferUsages::INDEX });
         let occluder = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("Scene::occluder"),
             size: 6 * 8,
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Self { pipeline_layout, pipeline, occluder_pipeline, vertices, indices, index_count: i.len() as u32, occluder, color_format })
+        Ok(Self { pipeline_layout, pipelines: Staged::new(pipelines), vertices, indices, index_count: i.len() as u32, occluder })
     }
 
-    fn build(device: &wgpu::Device, layout: &wgpu::PipelineLayout, library: &ShaderLibrary, format: wgpu::TextureFormat) -> Result<(wgpu::RenderPipeline, wgpu::RenderPipeline), String> {
-        let module = shaders::module(device, library, "scene")?;
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<Pipelines> {
+        let (device, format) = (b.device, b.color_format);
+        let module = shaders::module(device, b.library, "scene")?;
         let depth = super::depth_state(true, wgpu::CompareFunction::Less);
         let make = |label: &'static str, vs: &'static str, fs: &'static str, buffer: wgpu::VertexBufferLayout<'_>| {
             shaders::validated(device, label, || {
@@ -146,43 +167,58 @@ impl ScenePass {
             "fs_occluder",
             wgpu::VertexBufferLayout { array_stride: 8, step_mode: wgpu::VertexStepMode::Vertex, attributes: &wgpu::vertex_attr_array![0 => Float32x2] },
         )?;
-        Ok((scene, occluder))
+        Ok(Pipelines { scene, occluder })
+    }
+}
+
+impl Pass for ScenePass {
+    fn name(&self) -> &'static str {
+        "scene"
     }
 
-    /// Builds new pipelines from the library with the existing layouts (for hot reload).
-    pub fn rebuilt(&self, device: &wgpu::Device, library: &ShaderLibrary) -> Result<(wgpu::RenderPipeline, wgpu::RenderPipeline), String> {
-        Self::build(device, &self.pipeline_layout, library, self.color_format)
+    fn phase(&self) -> Phase {
+        Phase::Scene
     }
 
-    /// Swaps in pipelines made by [`Self::rebuilt`].
-    pub fn install(&mut self, pipelines: (wgpu::RenderPipeline, wgpu::RenderPipeline)) {
-        (self.pipeline, self.occluder_pipeline) = pipelines;
+    fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
+        let p = Self::build(b, &self.pipeline_layout)?;
+        self.pipelines.stage(p);
+        Ok(())
     }
 
-    /// Uploads the test occluder rectangle.
-    pub fn prepare_occluder(&self, queue: &wgpu::Queue, o: &Occluder) {
-        let [x0, y0] = o.min;
-        let [x1, y1] = o.max;
-        let quad: [[f32; 2]; 6] = [[x0, y0], [x1, y0], [x1, y1], [x0, y0], [x1, y1], [x0, y1]];
-        queue.write_buffer(&self.occluder, 0, bytemuck::cast_slice(&quad));
+    fn commit_pipelines(&mut self, accept: bool) {
+        self.pipelines.commit(accept);
     }
 
-    /// Records the terrain and buildings (and the test occluder when asked). Returns draw calls.
-    pub fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, terrain: bool, occluder: bool) -> u32 {
-        let mut calls = 0;
-        if terrain {
-            rpass.set_pipeline(&self.pipeline);
+    fn prepare(&mut self, cx: &FrameContext<'_>) {
+        if let Some(o) = &cx.options.occluder {
+            let ([x0, y0], [x1, y1]) = (o.min, o.max);
+            let quad: [[f32; 2]; 6] = [[x0, y0], [x1, y0], [x1, y1], [x0, y0], [x1, y1], [x0, y1]];
+            cx.queue.write_buffer(&self.occluder, 0, bytemuck::cast_slice(&quad));
+        }
+    }
+
+    fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
+        if cx.options.scene {
+            out.push(DrawItem { priority: 0, key: TERRAIN });
+        }
+        if cx.options.occluder.is_some() {
+            out.push(DrawItem { priority: 0, key: OCCLUDER });
+        }
+    }
+
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize) -> u32 {
+        let p = &self.pipelines.current;
+        if key == TERRAIN {
+            rpass.set_pipeline(&p.scene);
             rpass.set_vertex_buffer(0, self.vertices.slice(..));
             rpass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
             rpass.draw_indexed(0..self.index_count, 0, 0..1);
-            calls += 1;
-        }
-        if occluder {
-            rpass.set_pipeline(&self.occluder_pipeline);
+        } else {
+            rpass.set_pipeline(&p.occluder);
             rpass.set_vertex_buffer(0, self.occluder.slice(..));
             rpass.draw(0..6, 0..1);
-            calls += 1;
         }
-        calls
+        1
     }
 }

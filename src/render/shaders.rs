@@ -1,18 +1,14 @@
-//! WGSL sources: embedded in the binary, or read from a folder for hot reload.
-//! Pipelines are rebuilt inside an error scope and swapped in only on success.
+//! WGSL sources: embedded in the binary (every `shaders/**/*.wgsl`, found by build.rs), or read
+//! from a folder for hot reload. Modules are created inside an error scope.
 
 use std::path::{Path, PathBuf};
 
-/// Names of the pass shaders (each `shaders/NAME.wgsl`); `globals.wgsl` is prepended to each.
-pub const PASSES: [&str; 4] = ["sky_objects", "stars", "scene", "glare"];
+use super::error::{RenderError, RenderResult};
 
-const EMBEDDED: [(&str, &str); 5] = [
-    ("globals", include_str!("../../shaders/globals.wgsl")),
-    ("sky_objects", include_str!("../../shaders/sky_objects.wgsl")),
-    ("stars", include_str!("../../shaders/stars.wgsl")),
-    ("scene", include_str!("../../shaders/scene.wgsl")),
-    ("glare", include_str!("../../shaders/glare.wgsl")),
-];
+include!(concat!(env!("OUT_DIR"), "/embedded_shaders.rs"));
+
+/// The file prepended to every module: bind group 0.
+pub const GLOBALS: &str = "globals";
 
 /// Where shader sources come from.
 #[derive(Debug, Clone, Default)]
@@ -33,34 +29,39 @@ impl ShaderLibrary {
         dir.join("globals.wgsl").is_file().then_some(dir)
     }
 
-    fn raw(&self, name: &str) -> Result<String, String> {
+    /// Names of the embedded modules other than the globals (`sky_objects`, `folder/file`, ...).
+    pub fn embedded_modules() -> impl Iterator<Item = &'static str> {
+        EMBEDDED.iter().map(|(n, _)| *n).filter(|n| *n != GLOBALS)
+    }
+
+    fn raw(&self, name: &str) -> RenderResult<String> {
         match &self.dir {
             Some(dir) => {
                 let path = dir.join(format!("{name}.wgsl"));
-                std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))
+                std::fs::read_to_string(&path).map_err(|source| RenderError::ShaderFile { path, source })
             }
-            None => EMBEDDED.iter().find(|(n, _)| *n == name).map(|(_, s)| s.to_string()).ok_or_else(|| format!("no shader named {name}")),
+            None => EMBEDDED.iter().find(|(n, _)| *n == name).map(|(_, s)| s.to_string()).ok_or_else(|| RenderError::UnknownShader(name.to_string())),
         }
     }
 
-    /// Full source of a pass: globals followed by the pass's own file.
-    pub fn source(&self, name: &str) -> Result<String, String> {
-        Ok(format!("{}\n{}", self.raw("globals")?, self.raw(name)?))
+    /// Full source of a module: globals followed by the module's own file.
+    pub fn source(&self, name: &str) -> RenderResult<String> {
+        Ok(format!("{}\n{}", self.raw(GLOBALS)?, self.raw(name)?))
     }
 }
 
 /// Runs `build` inside a validation error scope; returns its result only if wgpu reported nothing.
-pub fn validated<T>(device: &wgpu::Device, what: &str, build: impl FnOnce() -> T) -> Result<T, String> {
+pub fn validated<T>(device: &wgpu::Device, what: &str, build: impl FnOnce() -> T) -> RenderResult<T> {
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let out = build();
     match pollster::block_on(scope.pop()) {
         None => Ok(out),
-        Some(e) => Err(format!("{what}: {e}")),
+        Some(e) => Err(RenderError::Validation { what: what.to_string(), message: e.to_string() }),
     }
 }
 
-/// Creates a shader module from a pass's source, validated.
-pub fn module(device: &wgpu::Device, library: &ShaderLibrary, name: &str) -> Result<wgpu::ShaderModule, String> {
+/// Creates a shader module from `shaders/NAME.wgsl` (with the globals prepended), validated.
+pub fn module(device: &wgpu::Device, library: &ShaderLibrary, name: &str) -> RenderResult<wgpu::ShaderModule> {
     let source = library.source(name)?;
     validated(device, &format!("shaders/{name}.wgsl"), || {
         device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(name), source: wgpu::ShaderSource::Wgsl(source.into()) })

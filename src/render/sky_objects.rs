@@ -7,10 +7,13 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Quat, Vec3, Vec4};
 
 use super::camera::Camera;
+use super::error::RenderResult;
 use super::mesh::{shape_key, shape_mesh, GpuMesh, SkyVertex};
-use super::shaders::{self, ShaderLibrary};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SkyUpload, Staged};
+use super::renderer::FrameStats;
+use super::shaders;
 use super::textures::{self, TextureCache};
-use crate::sky::eval::{FrameSky, ObjectFrame, PassFrame};
+use crate::sky::eval::{FrameSky, VersionFrame};
 use crate::sky::resolved::{BlendMode, Lighting, Shape, Sky, StageOp, UvSource, Version, MAX_STAGES};
 
 /// One texture stage. Keep in sync with `Stage` in shaders/sky_objects.wgsl.
@@ -63,11 +66,7 @@ impl From<&Version> for DrawUniform {
                 StageOp::Add => 0,
                 StageOp::Modulate => 1,
             };
-            stages[k] = StageUniform {
-                scale_offset: [s.uv_scale[0], s.uv_scale[1], 0.0, 0.0],
-                params,
-                cfg: [op, mode, s.constant.map_or(4, |c| c as u32), 1],
-            };
+            stages[k] = StageUniform { scale_offset: [s.uv_scale[0], s.uv_scale[1], 0.0, 0.0], params, cfg: [op, mode, s.constant.map_or(4, |c| c as u32), 1] };
         }
         DrawUniform {
             object_from_local: Mat4::IDENTITY.to_cols_array_2d(),
@@ -81,7 +80,7 @@ impl From<&Version> for DrawUniform {
 
 impl DrawUniform {
     /// Applies a frame's colours, UV offsets and placement.
-    pub fn with_frame(mut self, pass: &PassFrame, shape: &Shape, placement: Option<(Vec3, f32)>, camera_up: Vec3) -> Self {
+    pub fn with_frame(mut self, pass: &VersionFrame, shape: &Shape, placement: Option<(Vec3, f32)>, camera_up: Vec3) -> Self {
         self.diffuse = pass.diffuse;
         self.constants = pass.constants;
         for (k, off) in pass.uv_offsets.iter().enumerate() {
@@ -100,19 +99,22 @@ impl DrawUniform {
             right = q * right;
             up = q * up;
             let half = (size_deg.get().to_radians() * 0.5).tan();
-            self.object_from_local =
-                Mat4::from_cols((right * half).extend(0.0), (up * half).extend(0.0), dir.extend(0.0), Vec4::W).to_cols_array_2d();
+            self.object_from_local = Mat4::from_cols((right * half).extend(0.0), (up * half).extend(0.0), dir.extend(0.0), Vec4::W).to_cols_array_2d();
         }
         self
     }
 }
 
-/// Pipelines of the pass (one per blend mode), built once and rebuilt on shader edits.
+/// The sky objects pass: pipelines (one per blend mode, built once and rebuilt on shader edits)
+/// and the current sky's per-object resources.
 pub struct SkyObjectsPass {
     bind_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    pipelines: [wgpu::RenderPipeline; 3],
-    color_format: wgpu::TextureFormat,
+    pipelines: Staged<[wgpu::RenderPipeline; 3]>,
+    draws: Staged<Option<SkyObjectDraws>>,
+    /// This frame's visible objects: (object index, versions to draw), in draw order.
+    visible: Vec<(usize, u8, Vec<usize>)>,
+    hidden: u32,
 }
 
 fn blend_index(b: BlendMode) -> usize {
@@ -123,15 +125,12 @@ fn blend_index(b: BlendMode) -> usize {
     }
 }
 
-const BLENDS: [Option<wgpu::BlendState>; 3] = [
-    None,
-    Some(wgpu::BlendState::ALPHA_BLENDING),
-    Some(super::ADDITIVE_ALPHA),
-];
+const BLENDS: [Option<wgpu::BlendState>; 3] = [None, Some(wgpu::BlendState::ALPHA_BLENDING), Some(super::ADDITIVE_ALPHA)];
 
 impl SkyObjectsPass {
     /// Builds the layouts and pipelines.
-    pub fn new(device: &wgpu::Device, globals: &wgpu::BindGroupLayout, library: &ShaderLibrary, color_format: wgpu::TextureFormat) -> Result<Self, String> {
+    pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
+        let (device, globals) = (b.device, b.globals_layout);
         let mut entries = vec![super::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)];
         entries.extend((0..4).map(|i| super::texture_entry(1 + i)));
         entries.extend((0..4).map(|i| super::sampler_entry(5 + i)));
@@ -141,12 +140,13 @@ impl SkyObjectsPass {
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipelines = Self::build(device, &pipeline_layout, library, color_format)?;
-        Ok(Self { bind_layout, pipeline_layout, pipelines, color_format })
+        let pipelines = Self::build(b, &pipeline_layout)?;
+        Ok(Self { bind_layout, pipeline_layout, pipelines: Staged::new(pipelines), draws: Staged::new(None), visible: Vec::new(), hidden: 0 })
     }
 
-    fn build(device: &wgpu::Device, layout: &wgpu::PipelineLayout, library: &ShaderLibrary, format: wgpu::TextureFormat) -> Result<[wgpu::RenderPipeline; 3], String> {
-        let module = shaders::module(device, library, "sky_objects")?;
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 3]> {
+        let (device, format) = (b.device, b.color_format);
+        let module = shaders::module(device, b.library, "sky_objects")?;
         let names = ["SkyObjects::pipeline_opaque", "SkyObjects::pipeline_alpha", "SkyObjects::pipeline_additive"];
         let build_one = |i: usize| {
             shaders::validated(device, names[i], || {
@@ -170,25 +170,74 @@ impl SkyObjectsPass {
         };
         Ok([build_one(0)?, build_one(1)?, build_one(2)?])
     }
+}
 
-    /// Builds new pipelines from the library with the existing layouts (for hot reload).
-    pub fn rebuilt(&self, device: &wgpu::Device, library: &ShaderLibrary) -> Result<[wgpu::RenderPipeline; 3], String> {
-        Self::build(device, &self.pipeline_layout, library, self.color_format)
+impl Pass for SkyObjectsPass {
+    fn name(&self) -> &'static str {
+        "sky_objects"
     }
 
-    /// Swaps in pipelines made by [`Self::rebuilt`].
-    pub fn install(&mut self, pipelines: [wgpu::RenderPipeline; 3]) {
-        self.pipelines = pipelines;
+    fn phase(&self) -> Phase {
+        Phase::Sky
     }
 
-    /// Colour format the pipelines render to.
-    pub fn color_format(&self) -> wgpu::TextureFormat {
-        self.color_format
+    fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
+        let p = Self::build(b, &self.pipeline_layout)?;
+        self.pipelines.stage(p);
+        Ok(())
+    }
+
+    fn commit_pipelines(&mut self, accept: bool) {
+        self.pipelines.commit(accept);
+    }
+
+    fn stage_sky(&mut self, up: &mut SkyUpload<'_>) {
+        let draws = SkyObjectDraws::new(up.device, up.queue, &self.bind_layout, up.textures, up.sky, self.draws.current.as_ref());
+        self.draws.stage(Some(draws));
+    }
+
+    fn commit_sky(&mut self, accept: bool) {
+        self.draws.commit(accept);
+    }
+
+    fn prepare(&mut self, cx: &FrameContext<'_>) {
+        self.visible.clear();
+        self.hidden = 0;
+        let Some(draws) = &self.draws.current else { return };
+        draws.prepare(cx.queue, cx.frame, cx.camera);
+        for of in &cx.frame.objects {
+            match &of.versions {
+                Ok(versions) => self.visible.push((of.index, of.priority, versions.iter().map(|v| v.version).collect())),
+                Err(_) => self.hidden += 1,
+            }
+        }
+    }
+
+    fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
+        out.extend(self.visible.iter().enumerate().map(|(key, (_, priority, _))| DrawItem { priority: *priority, key }));
+    }
+
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize) -> u32 {
+        let (Some(draws), Some((index, _, versions))) = (&self.draws.current, self.visible.get(key)) else { return 0 };
+        for &v in versions {
+            let d = &draws.objects[*index][v];
+            rpass.set_pipeline(&self.pipelines.current[blend_index(d.blend)]);
+            rpass.set_bind_group(1, &d.bind_group, &[]);
+            rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
+            rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+            rpass.draw_indexed(0..d.mesh.index_count, 0, 0..1);
+        }
+        versions.len() as u32
+    }
+
+    fn stats(&self, stats: &mut FrameStats) {
+        stats.objects_drawn = self.visible.len() as u32;
+        stats.objects_hidden = self.hidden;
     }
 }
 
-/// GPU resources of one version or fallback pass of an object.
-struct PassDraw {
+/// GPU resources of one version (standard or fallback pass) of an object.
+struct VersionDraw {
     uniform: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     mesh: Arc<GpuMesh>,
@@ -198,15 +247,18 @@ struct PassDraw {
     base: DrawUniform,
 }
 
-/// Per-sky GPU resources: one [`PassDraw`] per version of every object.
+/// Per-sky GPU resources: one [`VersionDraw`] per version of every object.
 pub struct SkyObjectDraws {
     /// objects[i][v]: object i (in draw order), version v (0 standard, 1.. fallback).
-    objects: Vec<Vec<PassDraw>>,
+    objects: Vec<Vec<VersionDraw>>,
+    /// Geometry by shape; a reload takes over the meshes of shapes that are still used.
+    meshes: HashMap<String, Arc<GpuMesh>>,
 }
 
 impl SkyObjectDraws {
-    /// Uploads every object of a sky.
-    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, pass: &SkyObjectsPass, cache: &mut TextureCache, sky: &Sky) -> Self {
+    /// Uploads every object of a sky, taking over the meshes of `previous` where shapes match.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, layout: &wgpu::BindGroupLayout, cache: &mut TextureCache, sky: &Sky, previous: Option<&SkyObjectDraws>) -> Self {
+        let old_meshes = previous.map(|p| &p.meshes);
         let mut meshes: HashMap<String, Arc<GpuMesh>> = HashMap::new();
         let objects = sky
             .objects
@@ -218,7 +270,13 @@ impl SkyObjectDraws {
                     .map(|(vi, v)| {
                         let label = format!("SkyObjects::{}[{vi}]", o.name);
                         let key = shape_key(&v.shape);
-                        let mesh = meshes.entry(key.clone()).or_insert_with(|| Arc::new(GpuMesh::new(device, &format!("SkyObjects::mesh {key}"), &shape_mesh(&v.shape)))).clone();
+                        let mesh = meshes
+                            .entry(key.clone())
+                            .or_insert_with(|| match old_meshes.and_then(|m| m.get(&key)) {
+                                Some(m) => m.clone(),
+                                None => Arc::new(GpuMesh::new(device, &format!("SkyObjects::mesh {key}"), &shape_mesh(&v.shape))),
+                            })
+                            .clone();
                         let gradient = v.gradients.as_ref().map(|g| {
                             let h = g.bitmaps[0].height;
                             (textures::upload(device, queue, &format!("{label}::gradient"), 1, h, &vec![255; (h * 4) as usize]), h)
@@ -249,20 +307,20 @@ impl SkyObjectDraws {
                         for (k, s) in samplers.iter().enumerate() {
                             entries.push(wgpu::BindGroupEntry { binding: 5 + k as u32, resource: wgpu::BindingResource::Sampler(s) });
                         }
-                        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&format!("{label}::bind_group")), layout: &pass.bind_layout, entries: &entries });
-                        PassDraw { uniform, bind_group, mesh, gradient, blend: v.blend, shape: v.shape, base: DrawUniform::from(v) }
+                        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&format!("{label}::bind_group")), layout, entries: &entries });
+                        VersionDraw { uniform, bind_group, mesh, gradient, blend: v.blend, shape: v.shape, base: DrawUniform::from(v) }
                     })
                     .collect()
             })
             .collect();
-        Self { objects }
+        Self { objects, meshes }
     }
 
     /// Writes this frame's uniforms and gradients.
     pub fn prepare(&self, queue: &wgpu::Queue, frame: &FrameSky, camera: &Camera) {
         for of in &frame.objects {
-            let Ok(passes) = &of.passes else { continue };
-            for p in passes {
+            let Ok(versions) = &of.versions else { continue };
+            for p in versions {
                 let d = &self.objects[of.index][p.version];
                 let u = d.base.with_frame(p, &d.shape, of.placement, camera.screen_up());
                 queue.write_buffer(&d.uniform, 0, bytemuck::bytes_of(&u));
@@ -272,23 +330,5 @@ impl SkyObjectDraws {
                 }
             }
         }
-    }
-
-    /// Records the draws of every visible object, in priority order; returns the draw-call count.
-    pub fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, pass: &SkyObjectsPass, frame: &FrameSky, filter: impl Fn(&ObjectFrame) -> bool) -> u32 {
-        let mut calls = 0;
-        for of in frame.objects.iter().filter(|o| filter(o)) {
-            let Ok(passes) = &of.passes else { continue };
-            for p in passes {
-                let d = &self.objects[of.index][p.version];
-                rpass.set_pipeline(&pass.pipelines[blend_index(d.blend)]);
-                rpass.set_bind_group(1, &d.bind_group, &[]);
-                rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
-                rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-                rpass.draw_indexed(0..d.mesh.index_count, 0, 0..1);
-                calls += 1;
-            }
-        }
-        calls
     }
 }

@@ -3,7 +3,10 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
-use super::shaders::{self, ShaderLibrary};
+use super::error::RenderResult;
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SkyUpload, Staged};
+use super::renderer::FrameStats;
+use super::shaders;
 use crate::sky::starfield;
 use crate::sky::{resolved::Stars, Rgba};
 
@@ -26,32 +29,34 @@ struct StarInstance {
     brightness: f32,
 }
 
-/// Pipeline of the stars pass.
+/// The stars pass: its pipeline and the current sky's star field.
 pub struct StarsPass {
     bind_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    pipeline: wgpu::RenderPipeline,
-    color_format: wgpu::TextureFormat,
+    pipeline: Staged<wgpu::RenderPipeline>,
+    field: Staged<Option<StarField>>,
+    /// Whether the stars show this frame.
+    visible: bool,
 }
 
 impl StarsPass {
     /// Builds the pipeline.
-    pub fn new(device: &wgpu::Device, globals: &wgpu::BindGroupLayout, library: &ShaderLibrary, color_format: wgpu::TextureFormat) -> Result<Self, String> {
-        let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("Stars::layout"),
-            entries: &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
-        });
+    pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
+        let (device, globals) = (b.device, b.globals_layout);
+        let bind_layout = device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("Stars::layout"), entries: &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)] });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Stars::pipeline_layout"),
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipeline = Self::build(device, &pipeline_layout, library, color_format)?;
-        Ok(Self { bind_layout, pipeline_layout, pipeline, color_format })
+        let pipeline = Self::build(b, &pipeline_layout)?;
+        Ok(Self { bind_layout, pipeline_layout, pipeline: Staged::new(pipeline), field: Staged::new(None), visible: false })
     }
 
-    fn build(device: &wgpu::Device, layout: &wgpu::PipelineLayout, library: &ShaderLibrary, format: wgpu::TextureFormat) -> Result<wgpu::RenderPipeline, String> {
-        let module = shaders::module(device, library, "stars")?;
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
+        let (device, format) = (b.device, b.color_format);
+        let module = shaders::module(device, b.library, "stars")?;
         shaders::validated(device, "Stars::pipeline", || {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("Stars::pipeline"),
@@ -72,11 +77,7 @@ impl StarsPass {
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
                     entry_point: Some("fs_main"),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format,
-                        blend: Some(super::ADDITIVE_ALPHA),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
+                    targets: &[Some(wgpu::ColorTargetState { format, blend: Some(super::ADDITIVE_ALPHA), write_mask: wgpu::ColorWrites::ALL })],
                     compilation_options: Default::default(),
                 }),
                 multiview_mask: None,
@@ -84,15 +85,60 @@ impl StarsPass {
             })
         })
     }
+}
 
-    /// Builds a new pipeline from the library with the existing layouts (for hot reload).
-    pub fn rebuilt(&self, device: &wgpu::Device, library: &ShaderLibrary) -> Result<wgpu::RenderPipeline, String> {
-        Self::build(device, &self.pipeline_layout, library, self.color_format)
+impl Pass for StarsPass {
+    fn name(&self) -> &'static str {
+        "stars"
     }
 
-    /// Swaps in a pipeline made by [`Self::rebuilt`].
-    pub fn install(&mut self, pipeline: wgpu::RenderPipeline) {
-        self.pipeline = pipeline;
+    fn phase(&self) -> Phase {
+        Phase::Sky
+    }
+
+    fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
+        let p = Self::build(b, &self.pipeline_layout)?;
+        self.pipeline.stage(p);
+        Ok(())
+    }
+
+    fn commit_pipelines(&mut self, accept: bool) {
+        self.pipeline.commit(accept);
+    }
+
+    fn stage_sky(&mut self, up: &mut SkyUpload<'_>) {
+        let field = up.sky.stars.as_ref().map(|s| StarField::new(up.device, &self.bind_layout, s));
+        self.field.stage(field);
+    }
+
+    fn commit_sky(&mut self, accept: bool) {
+        self.field.commit(accept);
+    }
+
+    fn prepare(&mut self, cx: &FrameContext<'_>) {
+        self.visible = match (&self.field.current, cx.frame.stars) {
+            (Some(field), Some(s)) => field.prepare(cx.queue, s.color),
+            _ => false,
+        };
+    }
+
+    fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
+        if let (true, Some(s)) = (self.visible, cx.frame.stars) {
+            out.push(DrawItem { priority: s.priority, key: 0 });
+        }
+    }
+
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize) -> u32 {
+        let Some(field) = &self.field.current else { return 0 };
+        rpass.set_pipeline(&self.pipeline.current);
+        rpass.set_bind_group(1, &field.bind_group, &[]);
+        rpass.set_vertex_buffer(0, field.instances.slice(..));
+        rpass.draw(0..4, 0..field.count);
+        1
+    }
+
+    fn stats(&self, stats: &mut FrameStats) {
+        stats.stars = self.field.current.as_ref().map_or(0, |f| f.count);
     }
 }
 
@@ -107,10 +153,9 @@ pub struct StarField {
 
 impl StarField {
     /// Generates and uploads the stars of a sky.
-    pub fn new(device: &wgpu::Device, pass: &StarsPass, stars: &Stars) -> Self {
+    pub fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, stars: &Stars) -> Self {
         let generated = starfield::generate(stars);
-        let data: Vec<StarInstance> =
-            generated.iter().map(|s| StarInstance { direction: s.direction.to_array(), brightness: s.brightness() }).collect();
+        let data: Vec<StarInstance> = generated.iter().map(|s| StarInstance { direction: s.direction.to_array(), brightness: s.brightness() }).collect();
         let placeholder = [StarInstance::zeroed()];
         let instances = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("Stars::instances"),
@@ -126,7 +171,7 @@ impl StarField {
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("Stars::bind_group"),
-            layout: &pass.bind_layout,
+            layout,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
         });
         Self { instances, count: data.len() as u32, uniform, bind_group, size_px: stars.size_px }
@@ -141,13 +186,5 @@ impl StarField {
     pub fn prepare(&self, queue: &wgpu::Queue, color: Rgba) -> bool {
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&StarsUniform { color, size: [self.size_px, 0.0, 0.0, 0.0] }));
         color[3] > 0.5 / 255.0 && self.count > 0
-    }
-
-    /// Records the draw.
-    pub fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, pass: &StarsPass) {
-        rpass.set_pipeline(&pass.pipeline);
-        rpass.set_bind_group(1, &self.bind_group, &[]);
-        rpass.set_vertex_buffer(0, self.instances.slice(..));
-        rpass.draw(0..4, 0..self.count);
     }
 }

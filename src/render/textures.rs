@@ -1,12 +1,26 @@
-//! Texture uploads shared by passes, keyed by source file, plus the common samplers.
+//! Texture uploads shared by passes, keyed by source file and content, plus the common samplers.
+//! A sky reload builds a successor cache that takes over every texture whose file did not change.
 
 use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
 
 use crate::sky::resolved::TextureImage;
 
+#[derive(Clone)]
+struct Entry {
+    content: u64,
+    view: wgpu::TextureView,
+}
+
 /// Uploaded textures and samplers.
 pub struct TextureCache {
-    views: HashMap<String, wgpu::TextureView>,
+    views: HashMap<String, Entry>,
+    /// The cache this one succeeds: textures with unchanged content are taken from it.
+    previous: HashMap<String, Entry>,
+    /// Textures uploaded since this cache was made.
+    pub uploaded: u32,
+    /// Textures taken over from the previous cache unchanged.
+    pub reused: u32,
     /// 1x1 opaque white, bound to unused stages.
     pub white: wgpu::TextureView,
     /// Linear, repeating.
@@ -62,19 +76,61 @@ impl TextureCache {
         let white = upload(device, queue, "TextureCache::white", 1, 1, &[255; 4]).create_view(&Default::default());
         Self {
             views: HashMap::new(),
+            previous: HashMap::new(),
+            uploaded: 0,
+            reused: 0,
             white,
             repeat: sampler(device, "TextureCache::repeat", wgpu::AddressMode::Repeat),
             clamp: sampler(device, "TextureCache::clamp", wgpu::AddressMode::ClampToEdge),
         }
     }
 
-    /// The view of an image, uploading it on first use.
-    pub fn get(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, image: &TextureImage) -> wgpu::TextureView {
-        self.views
-            .entry(image.key.clone())
-            .or_insert_with(|| {
-                upload(device, queue, &format!("texture {}", image.key), image.width, image.height, &image.rgba8).create_view(&Default::default())
-            })
-            .clone()
+    /// An empty cache for the next sky that can take over this one's textures; this one stays
+    /// valid until the next sky is committed.
+    pub fn successor(&self) -> Self {
+        Self { views: HashMap::new(), previous: self.views.clone(), uploaded: 0, reused: 0, white: self.white.clone(), repeat: self.repeat.clone(), clamp: self.clamp.clone() }
     }
+
+    /// Textures held.
+    pub fn len(&self) -> usize {
+        self.views.len()
+    }
+
+    /// Whether no texture is held.
+    pub fn is_empty(&self) -> bool {
+        self.views.is_empty()
+    }
+
+    /// The view of an image: the one already uploaded for the same file and content, else a new upload.
+    pub fn get(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, image: &TextureImage) -> wgpu::TextureView {
+        let content = content_hash(image);
+        if let Some(e) = self.views.get(&image.key).filter(|e| e.content == content) {
+            return e.view.clone();
+        }
+        let entry = match self.previous.remove(&image.key).filter(|e| e.content == content) {
+            Some(e) => {
+                self.reused += 1;
+                e
+            }
+            None => {
+                self.uploaded += 1;
+                let view = upload(device, queue, &format!("texture {}", image.key), image.width, image.height, &image.rgba8).create_view(&Default::default());
+                Entry { content, view }
+            }
+        };
+        self.views.insert(image.key.clone(), entry.clone());
+        entry.view
+    }
+
+    /// Drops the textures of the previous sky that the new one did not take over.
+    pub fn forget_previous(&mut self) {
+        self.previous.clear();
+    }
+}
+
+fn content_hash(image: &TextureImage) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    (image.width, image.height).hash(&mut h);
+    image.rgba8.hash(&mut h);
+    h.finish()
 }

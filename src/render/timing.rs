@@ -1,18 +1,20 @@
-//! GPU time per pass from timestamp queries, read back asynchronously (a frame never waits).
+//! GPU time per phase from timestamp queries, read back asynchronously (a frame never waits).
 
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::Arc;
 
-/// Passes timed, in order; each uses two timestamps (begin, end).
-pub const TIMED_PASSES: [&str; 3] = ["scene", "sky", "glare"];
-const QUERIES: u32 = TIMED_PASSES.len() as u32 * 2;
+use super::pass::Phase;
+
+/// Phases timed, in order; each uses two timestamps (begin, end).
+const TIMED: usize = Phase::ALL.len();
+const QUERIES: u32 = TIMED as u32 * 2;
 
 const IDLE: u8 = 0;
 const PENDING: u8 = 1;
 const DONE: u8 = 2;
 const FAILED: u8 = 3;
 
-/// Timestamp queries of the renderer's passes.
+/// Timestamp queries of the renderer's phases (compute and render passes alike).
 pub struct GpuTimer {
     set: wgpu::QuerySet,
     resolve: wgpu::Buffer,
@@ -21,10 +23,10 @@ pub struct GpuTimer {
     /// Whether this frame records timestamps (only when the readback buffer is free).
     recording: bool,
     /// Which passes wrote timestamps in the recorded frame.
-    written: [bool; TIMED_PASSES.len()],
-    pending_written: [bool; TIMED_PASSES.len()],
+    written: [bool; TIMED],
+    pending_written: [bool; TIMED],
     period_ns: f32,
-    /// Latest GPU time per pass, ms (passes not drawn in that frame are absent).
+    /// Latest GPU time per phase, ms (phases not recorded in that frame are absent).
     pub last_ms: Vec<(&'static str, f32)>,
 }
 
@@ -48,8 +50,8 @@ impl GpuTimer {
             }),
             state: Arc::new(AtomicU8::new(IDLE)),
             recording: false,
-            written: [false; TIMED_PASSES.len()],
-            pending_written: [false; TIMED_PASSES.len()],
+            written: [false; TIMED],
+            pending_written: [false; TIMED],
             period_ns: queue.get_timestamp_period(),
             last_ms: Vec::new(),
         }
@@ -61,11 +63,11 @@ impl GpuTimer {
             DONE => {
                 if let Ok(view) = self.readback.get_mapped_range(..) {
                     let ticks: Vec<u64> = view.chunks_exact(8).map(|c| u64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
-                    self.last_ms = TIMED_PASSES
+                    self.last_ms = Phase::ALL
                         .iter()
                         .enumerate()
                         .filter(|(i, _)| self.pending_written[*i])
-                        .map(|(i, name)| (*name, ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f32 * self.period_ns / 1e6))
+                        .map(|(i, phase)| (phase.name(), ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f32 * self.period_ns / 1e6))
                         .collect();
                 }
                 self.readback.unmap();
@@ -75,19 +77,32 @@ impl GpuTimer {
             _ => {}
         }
         self.recording = self.state.load(Ordering::Acquire) == IDLE;
-        self.written = [false; TIMED_PASSES.len()];
+        self.written = [false; TIMED];
     }
 
-    /// Timestamp writes for pass `index` of [`TIMED_PASSES`], if this frame records.
-    pub fn writes(&mut self, index: usize) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+    /// Marks `phase` as timed this frame; its (begin, end) query indices, if this frame records.
+    fn claim(&mut self, phase: Phase) -> Option<(u32, u32)> {
         if !self.recording {
             return None;
         }
-        self.written[index] = true;
-        Some(wgpu::RenderPassTimestampWrites { query_set: &self.set, beginning_of_pass_write_index: Some(2 * index as u32), end_of_pass_write_index: Some(2 * index as u32 + 1) })
+        let i = phase.index();
+        self.written[i] = true;
+        Some((2 * i as u32, 2 * i as u32 + 1))
     }
 
-    /// After the last pass: resolves the queries written this frame.
+    /// Timestamp writes for a render phase, if this frame records.
+    pub fn render_writes(&mut self, phase: Phase) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        let (begin, end) = self.claim(phase)?;
+        Some(wgpu::RenderPassTimestampWrites { query_set: &self.set, beginning_of_pass_write_index: Some(begin), end_of_pass_write_index: Some(end) })
+    }
+
+    /// Timestamp writes for a compute phase, if this frame records.
+    pub fn compute_writes(&mut self, phase: Phase) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        let (begin, end) = self.claim(phase)?;
+        Some(wgpu::ComputePassTimestampWrites { query_set: &self.set, beginning_of_pass_write_index: Some(begin), end_of_pass_write_index: Some(end) })
+    }
+
+    /// After the last phase: resolves the queries written this frame.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
         if self.recording && self.written.iter().any(|w| *w) {
             encoder.resolve_query_set(&self.set, 0..QUERIES, &self.resolve, 0);

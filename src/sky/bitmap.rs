@@ -19,10 +19,7 @@ impl ColorBitmap {
     /// Builds a bitmap from 8-bit RGBA rows.
     pub fn from_rgba8(width: u32, height: u32, bytes: &[u8]) -> Self {
         assert_eq!(bytes.len(), (width * height * 4) as usize, "RGBA8 size mismatch");
-        let texels = bytes
-            .chunks_exact(4)
-            .map(|c| [c[0] as f32 / 255.0, c[1] as f32 / 255.0, c[2] as f32 / 255.0, c[3] as f32 / 255.0])
-            .collect();
+        let texels = bytes.chunks_exact(4).map(|c| [c[0] as f32 / 255.0, c[1] as f32 / 255.0, c[2] as f32 / 255.0, c[3] as f32 / 255.0]).collect();
         Self { width, height, texels }
     }
 

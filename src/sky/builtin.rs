@@ -62,8 +62,7 @@ pub fn default_sky() -> Sky {
 pub fn write_sky_folder(dir: &Path, palette: &procedural::Palette, seed: u64) -> std::io::Result<PathBuf> {
     std::fs::create_dir_all(dir)?;
     for (name, bitmap) in procedural::all_images(palette, seed) {
-        let img = image::RgbaImage::from_raw(bitmap.width, bitmap.height, bitmap.to_rgba8())
-            .ok_or_else(|| std::io::Error::other("image size mismatch"))?;
+        let img = image::RgbaImage::from_raw(bitmap.width, bitmap.height, bitmap.to_rgba8()).ok_or_else(|| std::io::Error::other("image size mismatch"))?;
         img.save(dir.join(name)).map_err(std::io::Error::other)?;
     }
     let sky = dir.join("sky.toml");

@@ -48,12 +48,72 @@ pub struct FrameInput {
     pub env_map: bool,
     /// Objects switched off by name (UI toggles).
     pub disabled: Vec<String>,
+    /// Seconds since the previous frame, for systems that simulate (glare, particles).
+    pub dt_s: f32,
+    /// Frame number, counted by whoever drives the frames (see [`Clock`]).
+    pub frame: u64,
 }
 
 impl FrameInput {
-    /// A frame at (hour, weather) with the best tier.
+    /// A frame at (hour, weather) with the best tier, the first frame, no time elapsed.
     pub fn new(hour: f32, weather: f32) -> Self {
-        Self { hour, game_hours: hour as f64, weather, tier: Tier::FOUR, env_map: false, disabled: Vec::new() }
+        Self { hour, game_hours: hour as f64, weather, tier: Tier::FOUR, env_map: false, disabled: Vec::new(), dt_s: 0.0, frame: 0 }
+    }
+}
+
+/// How simulation time advances from frame to frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Stepping {
+    /// Wall-clock time between frames (the window), clamped to [`Clock::MAX_DT_S`].
+    RealTime,
+    /// The same step every frame: deterministic stills, tests and contact sheets.
+    Fixed {
+        /// Seconds per frame.
+        dt_s: f32,
+    },
+}
+
+/// Counts frames and measures the time step of each one.
+#[derive(Debug, Clone)]
+pub struct Clock {
+    /// How time advances.
+    pub stepping: Stepping,
+    frame: u64,
+    last: Option<std::time::Instant>,
+}
+
+impl Clock {
+    /// Longest real-time step: a stall (a drag of the window, a breakpoint) is not a jump in time.
+    pub const MAX_DT_S: f32 = 0.25;
+
+    /// A clock at frame 0.
+    pub fn new(stepping: Stepping) -> Self {
+        Self { stepping, frame: 0, last: None }
+    }
+
+    /// Frames ticked so far.
+    pub fn frames(&self) -> u64 {
+        self.frame
+    }
+
+    /// Advances one frame: returns (seconds since the previous tick, this frame's number).
+    pub fn tick(&mut self) -> (f32, u64) {
+        let dt_s = match self.stepping {
+            Stepping::Fixed { dt_s } => dt_s,
+            Stepping::RealTime => {
+                let now = std::time::Instant::now();
+                let dt = self.last.map_or(0.0, |l| now.duration_since(l).as_secs_f32().min(Self::MAX_DT_S));
+                self.last = Some(now);
+                dt
+            }
+        };
+        self.frame += 1;
+        (dt_s, self.frame)
+    }
+
+    /// Stamps `input` with the next frame's step and number.
+    pub fn advance(&mut self, input: &mut FrameInput) {
+        (input.dt_s, input.frame) = self.tick();
     }
 }
 
@@ -96,9 +156,10 @@ impl std::fmt::Display for Hidden {
     }
 }
 
-/// Evaluated state of one pass (a version or one fallback pass).
+/// Evaluated state of one version of an object: its standard version, or one of its fallback
+/// passes (NeL's term, kept in the sky format).
 #[derive(Debug, Clone, PartialEq)]
-pub struct PassFrame {
+pub struct VersionFrame {
     /// 0 = standard, 1.. = fallback pass number.
     pub version: usize,
     /// Diffuse colour.
@@ -116,8 +177,10 @@ pub struct PassFrame {
 pub struct ObjectFrame {
     /// Index into `Sky::objects`.
     pub index: usize,
-    /// Passes to draw, or why none are.
-    pub passes: Result<Vec<PassFrame>, Hidden>,
+    /// Transparency priority (0..63): the draw order of the sky phase.
+    pub priority: u8,
+    /// Versions to draw (the standard one, or the fallback passes that fit), or why none are.
+    pub versions: Result<Vec<VersionFrame>, Hidden>,
     /// Whether the fallback passes were chosen.
     pub fallback: bool,
     /// Fallback passes skipped because they need more stages than the tier has: (pass, stages needed).
@@ -126,13 +189,34 @@ pub struct ObjectFrame {
     pub placement: Option<(Vec3, f32)>,
 }
 
-/// Everything the renderer needs for one frame.
+/// The point stars of a frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StarsFrame {
+    /// Tint (rgb) and visibility (alpha).
+    pub color: Rgba,
+    /// Drawn after the objects of this priority or lower.
+    pub priority: u8,
+}
+
+/// Everything the renderer needs for one frame: the evaluated sky and the frame's clock.
 #[derive(Debug, Clone)]
 pub struct FrameSky {
-    /// Time of day used.
+    /// Time of day used, game hours (wrapped into the day).
     pub hour: f32,
-    /// Weather used.
+    /// Game hours in a day of this sky.
+    pub hours_per_day: f32,
+    /// Total elapsed game hours (panners).
+    pub game_hours: f64,
+    /// Weather used, 0..1.
     pub weather: f32,
+    /// Seconds since the previous frame.
+    pub dt_s: f32,
+    /// Frame number.
+    pub frame: u64,
+    /// GPU tier emulated.
+    pub tier: Tier,
+    /// Environment-map view instead of the main view.
+    pub env_map: bool,
     /// Fog colour of the main scene.
     pub fog_color: Rgba,
     /// Sun ambient light.
@@ -145,8 +229,8 @@ pub struct FrameSky {
     pub celestial_from_world: Quat,
     /// Objects in draw order.
     pub objects: Vec<ObjectFrame>,
-    /// Star colour (alpha scales visibility), if the sky has stars.
-    pub stars: Option<Rgba>,
+    /// Star colour and priority, if the sky has stars.
+    pub stars: Option<StarsFrame>,
     /// Glare colour, if the sky has glare.
     pub glare: Option<Rgba>,
 }
@@ -164,7 +248,7 @@ pub fn azimuth_elevation(d: Vec3) -> (f32, f32) {
 
 fn slerp(a: Vec3, b: Vec3, t: f32) -> Vec3 {
     let cos = a.dot(b).clamp(-1.0, 1.0);
-    if cos > 0.9995 || cos < -0.9995 {
+    if !(-0.9995..=0.9995).contains(&cos) {
         return a.lerp(b, t).try_normalize().unwrap_or(a);
     }
     let theta = cos.acos();
@@ -208,7 +292,7 @@ impl Sky {
                 ColorMode::BitmapTimesFog => c.bitmap.as_ref().map_or(fog, |b| bitmap::mul(b.sample(hour, hpd, weather), fog)),
             }
         };
-        let pass = |version: usize, v: &Version| -> PassFrame {
+        let version_frame = |version: usize, v: &Version| -> VersionFrame {
             let mut constants = [[1.0; 4]; 4];
             for (k, c) in v.constants.iter().enumerate() {
                 constants[k] = color(c);
@@ -224,7 +308,7 @@ impl Sky {
                 uv_offsets[k] = off;
             }
             let gradient = v.gradients.as_ref().map(|g| bitmap::weather_gradient(&g.bitmaps, hour, hpd, weather));
-            PassFrame { version, diffuse: color(&v.diffuse), constants, uv_offsets, gradient }
+            VersionFrame { version, diffuse: color(&v.diffuse), constants, uv_offsets, gradient }
         };
 
         let objects = self
@@ -240,10 +324,9 @@ impl Sky {
                     (o.fallback.iter().enumerate().map(|(i, v)| (i + 1, v)).collect(), true)
                 };
                 let tier = input.tier.stages();
-                let dropped: Vec<(usize, usize)> =
-                    versions.iter().filter(|(_, v)| v.stages.len() > tier).map(|(i, v)| (*i, v.stages.len())).collect();
+                let dropped: Vec<(usize, usize)> = versions.iter().filter(|(_, v)| v.stages.len() > tier).map(|(i, v)| (*i, v.stages.len())).collect();
                 let fitting: Vec<(usize, &Version)> = versions.iter().copied().filter(|(_, v)| v.stages.len() <= tier).collect();
-                let passes = if !in_view {
+                let versions = if !in_view {
                     Err(Hidden::NotInView)
                 } else if input.disabled.iter().any(|d| d == &o.name) {
                     Err(Hidden::Toggled)
@@ -251,8 +334,8 @@ impl Sky {
                     let needs = versions.iter().map(|(_, v)| v.stages.len()).min().unwrap_or(o.standard.stages.len());
                     Err(Hidden::Tier { needs, has: tier })
                 } else {
-                    let passes: Vec<PassFrame> = fitting.iter().map(|&(i, v)| pass(i, v)).collect();
-                    let first = &passes[0];
+                    let frames: Vec<VersionFrame> = fitting.iter().map(|&(i, v)| version_frame(i, v)).collect();
+                    let first = &frames[0];
                     let ref_alpha = match fitting[0].1.ref_color {
                         RefColor::None => 1.0,
                         RefColor::Diffuse => first.diffuse[3],
@@ -265,21 +348,27 @@ impl Sky {
                     if ref_alpha < 0.5 / 255.0 {
                         Err(Hidden::RefAlphaZero(fitting[0].1.ref_color))
                     } else {
-                        Ok(passes)
+                        Ok(frames)
                     }
                 };
-                ObjectFrame { index, passes, fallback, dropped, placement }
+                ObjectFrame { index, priority: o.priority, versions, fallback, dropped, placement }
             })
             .collect();
 
-        let stars = self.stars.as_ref().map(|s| color(&s.color));
+        let stars = self.stars.as_ref().map(|s| StarsFrame { color: color(&s.color), priority: s.priority });
         let pole = self.stars.as_ref().map_or(45.0, |s| s.pole_elevation_deg);
         let axis = direction(0.0, pole);
         // One turn of the celestial sphere per day, around the pole, westward as seen from the ground.
         let celestial_from_world = Quat::from_axis_angle(axis, -std::f32::consts::TAU * hour / hpd);
         FrameSky {
             hour,
+            hours_per_day: hpd,
+            game_hours: input.game_hours,
             weather,
+            dt_s: input.dt_s,
+            frame: input.frame,
+            tier: input.tier,
+            env_map: input.env_map,
             fog_color: fog,
             sun_ambient: self.sun_ambient.sample(hour, hpd, weather),
             sun_diffuse: self.sun_diffuse.sample(hour, hpd, weather),

@@ -338,13 +338,13 @@ impl Validator<'_> {
             return None;
         }
         // A follow chain must end on keyed paths.
-        for start in 0..out.len() {
+        for (start, def) in defs.iter().enumerate().take(out.len()) {
             let mut visited = vec![start];
             let mut cur = start;
             while let PathKind::Follow { target, .. } = out[cur].kind {
                 if visited.contains(&target) {
                     let chain: Vec<&str> = visited.iter().chain([&target]).map(|&i| out[i].name.as_str()).collect();
-                    let span = defs[start].follow.as_ref().map(|s| s.span()).unwrap_or(0..0);
+                    let span = def.follow.as_ref().map(|s| s.span()).unwrap_or(0..0);
                     self.err_at(span, &format!("path[{start}].follow"), format!("cyclic follow: {}", chain.join(" -> ")));
                     return None;
                 }
@@ -364,8 +364,7 @@ impl Validator<'_> {
         if o.fallback.len() > 2 {
             self.err_in(&format!("\"{}\"", o.name), "[[object.fallback]]", &format!("{field}.fallback"), format!("at most 2 fallback passes, found {}", o.fallback.len()));
         }
-        let fallback: Vec<Option<Version>> =
-            o.fallback.iter().enumerate().map(|(k, v)| self.version(v, &format!("{field}.fallback[{k}]"), &o.name, path.is_some())).collect();
+        let fallback: Vec<Option<Version>> = o.fallback.iter().enumerate().map(|(k, v)| self.version(v, &format!("{field}.fallback[{k}]"), &o.name, path.is_some())).collect();
         let fallback: Option<Vec<Version>> = fallback.into_iter().collect();
         Some(SkyObject {
             name: o.name.clone(),
@@ -420,7 +419,11 @@ impl Validator<'_> {
                         if let Some(first) = bitmaps.first() {
                             let first: &Arc<ColorBitmap> = first;
                             if bm.height != first.height {
-                                self.err_at(b.span(), &f, format!("gradient is {} texels high but the first one is {}; all weather steps must share a height", bm.height, first.height));
+                                self.err_at(
+                                    b.span(),
+                                    &f,
+                                    format!("gradient is {} texels high but the first one is {}; all weather steps must share a height", bm.height, first.height),
+                                );
                                 ok = false;
                             }
                         }
@@ -602,8 +605,5 @@ pub fn load_continent(path: &Path) -> Result<Continent, SkyErrors> {
 
 /// Whether a TOML file is a continent file (has a `[seasons]` table) rather than a sky file.
 pub fn is_continent_file(path: &Path) -> bool {
-    std::fs::read_to_string(path)
-        .ok()
-        .and_then(|t| t.parse::<toml::Table>().ok())
-        .is_some_and(|t| t.contains_key("seasons"))
+    std::fs::read_to_string(path).ok().and_then(|t| t.parse::<toml::Table>().ok()).is_some_and(|t| t.contains_key("seasons"))
 }

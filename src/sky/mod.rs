@@ -11,6 +11,6 @@ pub mod resolved;
 pub mod starfield;
 
 pub use bitmap::{ColorBitmap, Rgba};
-pub use eval::{FrameInput, FrameSky, Hidden, ObjectFrame, PassFrame, Tier};
+pub use eval::{Clock, FrameInput, FrameSky, Hidden, ObjectFrame, StarsFrame, Stepping, Tier, VersionFrame};
 pub use load::{load_sky, load_sky_file, AssetSource, FsSource, SkyError, SkyErrors};
 pub use resolved::Sky;

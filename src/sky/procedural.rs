@@ -191,57 +191,85 @@ impl Palette {
         };
         vec![
             ("fog.png", self.weather_bitmap(|h, w| rgba(self.sky_color(h, w, 2.0), 1.0))),
-            ("sun_ambient.png", self.weather_bitmap(|h, w| {
-                let c = mix3([0.05, 0.06, 0.12], [0.45, 0.48, 0.55], self.daylight(h));
-                rgba(c.map(|x| x * (1.0 - 0.3 * w)), 1.0)
-            })),
-            ("sun_diffuse.png", self.weather_bitmap(|h, w| {
-                let c = mix3([0.0, 0.0, 0.0], [1.0, 0.96, 0.88], self.daylight(h));
-                let c = mix3(c, [1.0, 0.55, 0.3], self.dusk(h) * 0.6);
-                rgba(c.map(|x| x * (1.0 - 0.7 * w)), 1.0)
-            })),
+            (
+                "sun_ambient.png",
+                self.weather_bitmap(|h, w| {
+                    let c = mix3([0.05, 0.06, 0.12], [0.45, 0.48, 0.55], self.daylight(h));
+                    rgba(c.map(|x| x * (1.0 - 0.3 * w)), 1.0)
+                }),
+            ),
+            (
+                "sun_diffuse.png",
+                self.weather_bitmap(|h, w| {
+                    let c = mix3([0.0, 0.0, 0.0], [1.0, 0.96, 0.88], self.daylight(h));
+                    let c = mix3(c, [1.0, 0.55, 0.3], self.dusk(h) * 0.6);
+                    rgba(c.map(|x| x * (1.0 - 0.7 * w)), 1.0)
+                }),
+            ),
             // Alpha 0 in daylight: the ref colour hides the stars object and saves its fill.
-            ("star_visibility.png", self.weather_bitmap(|h, w| {
-                let a = (1.0 - smoothstep(-14.0, -2.0, self.sun_elevation(h))) * (1.0 - w).powi(2);
-                let a = if a < 0.02 { 0.0 } else { a };
-                // Premultiplied: stages multiply by the constant's rgb, ref_color reads its alpha.
-                rgba([a, a, a], a)
-            })),
-            ("halo_visibility.png", self.weather_bitmap(|h, w| {
-                let e = self.sun_elevation(h);
-                let a = smoothstep(-6.0, 2.0, e) * (1.0 - w).powf(1.5);
-                rgba(mix3([1.0, 0.95, 0.8], [1.0, 0.6, 0.3], self.dusk(h)).map(|c| c * a), a)
-            })),
-            ("sun_color.png", self.weather_bitmap(|h, w| {
-                let a = smoothstep(-4.0, 0.5, self.sun_elevation(h)) * (1.0 - 0.85 * w);
-                rgba(mix3([1.0, 0.98, 0.9], [1.0, 0.55, 0.25], self.dusk(h)), if a < 0.01 { 0.0 } else { a })
-            })),
-            ("moon_color.png", self.weather_bitmap(|h, w| {
-                let a = (1.0 - 0.6 * self.daylight(h)) * (1.0 - 0.9 * w);
-                rgba([0.95, 0.95, 1.0], a)
-            })),
-            ("glare_color.png", self.weather_bitmap(|h, w| {
-                let a = smoothstep(-2.0, 4.0, self.sun_elevation(h)) * (1.0 - w).powi(2);
-                rgba(mix3([1.0, 0.95, 0.85], [1.0, 0.6, 0.35], self.dusk(h)), a)
-            })),
+            (
+                "star_visibility.png",
+                self.weather_bitmap(|h, w| {
+                    let a = (1.0 - smoothstep(-14.0, -2.0, self.sun_elevation(h))) * (1.0 - w).powi(2);
+                    let a = if a < 0.02 { 0.0 } else { a };
+                    // Premultiplied: stages multiply by the constant's rgb, ref_color reads its alpha.
+                    rgba([a, a, a], a)
+                }),
+            ),
+            (
+                "halo_visibility.png",
+                self.weather_bitmap(|h, w| {
+                    let e = self.sun_elevation(h);
+                    let a = smoothstep(-6.0, 2.0, e) * (1.0 - w).powf(1.5);
+                    rgba(mix3([1.0, 0.95, 0.8], [1.0, 0.6, 0.3], self.dusk(h)).map(|c| c * a), a)
+                }),
+            ),
+            (
+                "sun_color.png",
+                self.weather_bitmap(|h, w| {
+                    let a = smoothstep(-4.0, 0.5, self.sun_elevation(h)) * (1.0 - 0.85 * w);
+                    rgba(mix3([1.0, 0.98, 0.9], [1.0, 0.55, 0.25], self.dusk(h)), if a < 0.01 { 0.0 } else { a })
+                }),
+            ),
+            (
+                "moon_color.png",
+                self.weather_bitmap(|h, w| {
+                    let a = (1.0 - 0.6 * self.daylight(h)) * (1.0 - 0.9 * w);
+                    rgba([0.95, 0.95, 1.0], a)
+                }),
+            ),
+            (
+                "glare_color.png",
+                self.weather_bitmap(|h, w| {
+                    let a = smoothstep(-2.0, 4.0, self.sun_elevation(h)) * (1.0 - w).powi(2);
+                    rgba(mix3([1.0, 0.95, 0.85], [1.0, 0.6, 0.35], self.dusk(h)), a)
+                }),
+            ),
             // Cloud layers: rgb = lit colour, alpha = how much this weather shows the layer.
-            ("clouds_clear.png", self.weather_bitmap(move |h, w| {
-                rgba(clouds_rgb(h, w), p.clear_clouds * (1.0 - smoothstep(0.3, 0.7, w)) + 0.15 * (1.0 - w))
-            })),
-            ("clouds_cloudy.png", self.weather_bitmap(move |h, w| {
-                let a = smoothstep(0.15, 0.5, w) * (1.0 - 0.5 * smoothstep(0.7, 1.0, w));
-                rgba(clouds_rgb(h, w), if a < 0.01 { 0.0 } else { a })
-            })),
-            ("clouds_storm.png", self.weather_bitmap(move |h, w| {
-                let a = smoothstep(0.55, 0.95, w);
-                rgba(clouds_rgb(h, w).map(|c| c * 0.7), if a < 0.01 { 0.0 } else { a })
-            })),
+            ("clouds_clear.png", self.weather_bitmap(move |h, w| rgba(clouds_rgb(h, w), p.clear_clouds * (1.0 - smoothstep(0.3, 0.7, w)) + 0.15 * (1.0 - w)))),
+            (
+                "clouds_cloudy.png",
+                self.weather_bitmap(move |h, w| {
+                    let a = smoothstep(0.15, 0.5, w) * (1.0 - 0.5 * smoothstep(0.7, 1.0, w));
+                    rgba(clouds_rgb(h, w), if a < 0.01 { 0.0 } else { a })
+                }),
+            ),
+            (
+                "clouds_storm.png",
+                self.weather_bitmap(move |h, w| {
+                    let a = smoothstep(0.55, 0.95, w);
+                    rgba(clouds_rgb(h, w).map(|c| c * 0.7), if a < 0.01 { 0.0 } else { a })
+                }),
+            ),
             // Red/green 0.5 = no offset; lower green lifts the fog band (denser haze in bad weather).
-            ("fog_height.png", self.weather_bitmap(|h, w| {
-                let dawn = self.dusk(h);
-                let lift = (self.haze * 0.35 + 0.4 * w + 0.1 * dawn).min(0.49);
-                [0.5, 0.5 - lift, 0.5, 1.0]
-            })),
+            (
+                "fog_height.png",
+                self.weather_bitmap(|h, w| {
+                    let dawn = self.dusk(h);
+                    let lift = (self.haze * 0.35 + 0.4 * w + 0.1 * dawn).min(0.49);
+                    [0.5, 0.5 - lift, 0.5, 1.0]
+                }),
+            ),
         ]
     }
 }
@@ -318,65 +346,101 @@ pub fn textures(seed: u64) -> Vec<(&'static str, ColorBitmap)> {
             }
             img
         }),
-        ("star_mask.png", image_from_fn(64, 64, |u, v| {
-            let n = smoothstep(0.35, 0.75, fbm(u, v, 4, 4, seed + 2));
-            [n, n, n, 1.0]
-        })),
-        ("halo.png", image_from_fn(64, 64, |u, v| {
-            let r = radial(u, v);
-            let g = ((1.0 - r).max(0.0)).powf(2.2);
-            [g, g, g, 1.0]
-        })),
-        ("sun.png", image_from_fn(64, 64, |u, v| {
-            let r = radial(u, v);
-            let core = 1.0 - smoothstep(0.22, 0.28, r);
-            let glow = (1.0 - r).max(0.0).powi(3) * 0.5;
-            let g = (core + glow).min(1.0);
-            [1.0, 1.0, 0.95, g]
-        })),
-        ("moon.png", image_from_fn(64, 64, |u, v| {
-            let r = radial(u, v);
-            let n = fbm(u, v, 6, 4, seed + 3);
-            let g = 0.55 + 0.45 * smoothstep(0.3, 0.7, n);
-            [g, g, g * 1.02, 1.0 - smoothstep(0.94, 1.0, r)]
-        })),
-        ("planet.png", image_from_fn(16, 16, |u, v| {
-            let g = (1.0 - radial(u, v)).max(0.0).powi(2);
-            [1.0, 0.9, 0.8, g]
-        })),
-        ("galaxy.png", image_from_fn(256, 128, |u, v| {
-            let lat = (v - 0.5) * 2.0;
-            let band = (-(lat * 6.0).powi(2)).exp();
-            let n = fbm(u, v * 0.5, 8, 5, seed + 4);
-            let g = band * smoothstep(0.3, 0.8, n) * 0.35;
-            [g * 0.9, g * 0.9, g, 1.0]
-        })),
-        ("clouds_a.png", image_from_fn(128, 128, |u, v| {
-            let n = smoothstep(0.42, 0.72, fbm(u, v, 4, 5, seed + 5));
-            [1.0, 1.0, 1.0, n]
-        })),
-        ("clouds_b.png", image_from_fn(128, 128, |u, v| {
-            let n = 0.35 + 0.65 * smoothstep(0.3, 0.7, fbm(u, v, 8, 4, seed + 6));
-            [n, n, n, n]
-        })),
+        (
+            "star_mask.png",
+            image_from_fn(64, 64, |u, v| {
+                let n = smoothstep(0.35, 0.75, fbm(u, v, 4, 4, seed + 2));
+                [n, n, n, 1.0]
+            }),
+        ),
+        (
+            "halo.png",
+            image_from_fn(64, 64, |u, v| {
+                let r = radial(u, v);
+                let g = ((1.0 - r).max(0.0)).powf(2.2);
+                [g, g, g, 1.0]
+            }),
+        ),
+        (
+            "sun.png",
+            image_from_fn(64, 64, |u, v| {
+                let r = radial(u, v);
+                let core = 1.0 - smoothstep(0.22, 0.28, r);
+                let glow = (1.0 - r).max(0.0).powi(3) * 0.5;
+                let g = (core + glow).min(1.0);
+                [1.0, 1.0, 0.95, g]
+            }),
+        ),
+        (
+            "moon.png",
+            image_from_fn(64, 64, |u, v| {
+                let r = radial(u, v);
+                let n = fbm(u, v, 6, 4, seed + 3);
+                let g = 0.55 + 0.45 * smoothstep(0.3, 0.7, n);
+                [g, g, g * 1.02, 1.0 - smoothstep(0.94, 1.0, r)]
+            }),
+        ),
+        (
+            "planet.png",
+            image_from_fn(16, 16, |u, v| {
+                let g = (1.0 - radial(u, v)).max(0.0).powi(2);
+                [1.0, 0.9, 0.8, g]
+            }),
+        ),
+        (
+            "galaxy.png",
+            image_from_fn(256, 128, |u, v| {
+                let lat = (v - 0.5) * 2.0;
+                let band = (-(lat * 6.0).powi(2)).exp();
+                let n = fbm(u, v * 0.5, 8, 5, seed + 4);
+                let g = band * smoothstep(0.3, 0.8, n) * 0.35;
+                [g * 0.9, g * 0.9, g, 1.0]
+            }),
+        ),
+        (
+            "clouds_a.png",
+            image_from_fn(128, 128, |u, v| {
+                let n = smoothstep(0.42, 0.72, fbm(u, v, 4, 5, seed + 5));
+                [1.0, 1.0, 1.0, n]
+            }),
+        ),
+        (
+            "clouds_b.png",
+            image_from_fn(128, 128, |u, v| {
+                let n = 0.35 + 0.65 * smoothstep(0.3, 0.7, fbm(u, v, 8, 4, seed + 6));
+                [n, n, n, n]
+            }),
+        ),
         // White-to-black along the band: top transparent, horizon opaque.
-        ("fog_band.png", image_from_fn(4, 32, |_, v| {
-            let g = smoothstep(0.05, 0.95, v);
-            [g, g, g, g]
-        })),
-        ("glare_halo.png", image_from_fn(64, 64, |u, v| {
-            let g = (1.0 - radial(u, v)).max(0.0).powi(4);
-            [g, g, g, 1.0]
-        })),
-        ("flare_ring.png", image_from_fn(64, 64, |u, v| {
-            let r = radial(u, v);
-            let g = (-((r - 0.8) * 9.0).powi(2)).exp() * 0.6;
-            [g, g, g, 1.0]
-        })),
-        ("flare_disc.png", image_from_fn(32, 32, |u, v| {
-            let g = (1.0 - smoothstep(0.7, 1.0, radial(u, v))) * 0.35;
-            [g, g, g, 1.0]
-        })),
+        (
+            "fog_band.png",
+            image_from_fn(4, 32, |_, v| {
+                let g = smoothstep(0.05, 0.95, v);
+                [g, g, g, g]
+            }),
+        ),
+        (
+            "glare_halo.png",
+            image_from_fn(64, 64, |u, v| {
+                let g = (1.0 - radial(u, v)).max(0.0).powi(4);
+                [g, g, g, 1.0]
+            }),
+        ),
+        (
+            "flare_ring.png",
+            image_from_fn(64, 64, |u, v| {
+                let r = radial(u, v);
+                let g = (-((r - 0.8) * 9.0).powi(2)).exp() * 0.6;
+                [g, g, g, 1.0]
+            }),
+        ),
+        (
+            "flare_disc.png",
+            image_from_fn(32, 32, |u, v| {
+                let g = (1.0 - smoothstep(0.7, 1.0, radial(u, v))) * 0.35;
+                [g, g, g, 1.0]
+            }),
+        ),
     ]
 }
 

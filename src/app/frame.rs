@@ -1,0 +1,299 @@
+//! One redraw of the window, as a sequence of small steps, and what the user asked for through
+//! the keyboard and the panels.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, Context as _};
+use winit::event_loop::ActiveEventLoop;
+use winit::keyboard::{Key, NamedKey};
+
+use super::capture::{free_path, screenshot_name, ContactSheet};
+use super::ui::{self, UiAction, UiInfo};
+use super::window::UiPaint;
+use super::App;
+use crate::live::{ReloadEvent, SkySpec};
+use crate::sky::{FrameInput, FrameSky, Sky, Tier};
+
+/// Frame times kept for the stats graph.
+const FRAME_TIMES_KEPT: usize = 240;
+
+impl App {
+    /// One frame: reloads, the clock, evaluation, the panels, the surface, then the UI's actions.
+    pub(super) fn redraw(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
+        let t0 = Instant::now();
+        self.apply_reloads();
+        if let Err(e) = self.step_contact_sheet() {
+            self.sheet = None;
+            self.gpu_error = Some(format!("contact sheet failed: {e:#}"));
+        }
+        let sky = self.live.sky().clone();
+        let input = self.advance_clock(&sky);
+        let frame = sky.evaluate(&input);
+        let t_eval = t0.elapsed();
+        let Some((actions, paint)) = self.run_panels(&sky, &frame) else { return Ok(()) };
+        let t_ui = t0.elapsed();
+        let gpu = self.gpu.as_mut().ok_or_else(|| anyhow!("no GPU yet"))?;
+        gpu.present(&frame, &self.controls.camera, &self.controls.options, &paint);
+        let t_present = t0.elapsed();
+
+        let ms = |d: Duration| d.as_secs_f32() * 1000.0;
+        self.cpu_ms = vec![("reload + evaluate", ms(t_eval)), ("ui", ms(t_ui - t_eval)), ("record + submit + present", ms(t_present - t_ui))];
+        self.frame_times.push_back(input.dt_s * 1000.0);
+        if self.frame_times.len() > FRAME_TIMES_KEPT {
+            self.frame_times.pop_front();
+        }
+        for action in actions {
+            self.apply_action(action, &sky);
+        }
+        let frames = self.clock.frames();
+        if self.config.screenshot_and_exit && frames == 3 {
+            self.take_screenshot();
+            event_loop.exit();
+        }
+        if self.config.frames.is_some_and(|n| frames >= n) {
+            log::info!("rendered {frames} frames, exiting");
+            event_loop.exit();
+        }
+        Ok(())
+    }
+
+    /// Swaps in a sky the loader finished, and rebuilds pipelines after a shader edit.
+    fn apply_reloads(&mut self) {
+        if let Some(ReloadEvent::Reloaded) = self.live.poll() {
+            if let Some(gpu) = self.gpu.as_mut() {
+                match gpu.renderer.set_sky(&gpu.ctx, self.live.sky()) {
+                    Ok(()) => {
+                        self.gpu_error = None;
+                        gpu.window.set_title(&format!("skytune - {}", self.live.sky().name));
+                    }
+                    Err(e) => self.gpu_error = Some(format!("GPU upload failed, keeping the previous sky: {e}")),
+                }
+            }
+        }
+        if self.shaders_changed.swap(false, Ordering::AcqRel) {
+            self.reload_shaders();
+        }
+    }
+
+    /// Advances the clock (and time of day while playing); the frame's input.
+    fn advance_clock(&mut self, sky: &Sky) -> FrameInput {
+        let mut input = self.frame_input();
+        self.clock.advance(&mut input);
+        let c = &mut self.controls;
+        if c.playing {
+            c.hour = (c.hour + input.dt_s * c.speed).rem_euclid(sky.hours_per_day);
+            c.game_hours += (input.dt_s * c.speed) as f64;
+        }
+        (input.hour, input.game_hours) = (c.hour, c.game_hours);
+        input
+    }
+
+    /// The frame the controls describe (no clock yet).
+    fn frame_input(&self) -> FrameInput {
+        let c = &self.controls;
+        FrameInput { game_hours: c.game_hours, tier: c.tier, disabled: c.disabled.clone(), ..FrameInput::new(c.hour, c.weather) }
+    }
+
+    /// Every error to show, newest state of each source.
+    fn errors(&self) -> Vec<String> {
+        let mut errors = Vec::new();
+        if let Some(e) = &self.live.error {
+            errors.push(format!("sky reload failed; showing the last good sky:\n{e}"));
+        }
+        errors.extend(self.shader_error.iter().map(|e| format!("shader reload failed; previous pipelines kept:\n{e}")));
+        errors.extend(self.gpu_error.iter().cloned());
+        errors
+    }
+
+    /// Runs the panels; their actions and what to paint (None before the window exists).
+    fn run_panels(&mut self, sky: &Sky, frame: &FrameSky) -> Option<(Vec<UiAction>, UiPaint)> {
+        let errors = self.errors();
+        let spec = self.live.spec();
+        let gpu = self.gpu.as_mut()?;
+        // Bitmap inspector texture, rebuilt when the target changes.
+        let inspector_id = self.controls.inspect.as_ref().map(|t| {
+            let key = Arc::as_ptr(&t.bitmap) as usize;
+            if gpu.inspector.as_ref().is_none_or(|(k, _)| *k != key) {
+                let b = &t.bitmap;
+                let img = egui::ColorImage::from_rgba_unmultiplied([b.width as usize, b.height as usize], &b.to_rgba8());
+                let handle = gpu.egui_state.egui_ctx().load_texture("inspector", img, egui::TextureOptions::NEAREST);
+                gpu.inspector = Some((key, handle));
+            }
+            gpu.inspector.as_ref().expect("just set").1.id()
+        });
+        if let Some(g) = gpu.renderer.glare_state_mut() {
+            g.frozen = self.controls.freeze_glare;
+        }
+        let raw = gpu.egui_state.take_egui_input(&gpu.window);
+        let glare = gpu.renderer.glare_state().cloned();
+        let gpu_ms = gpu.renderer.gpu_pass_ms().to_vec();
+        let stats = gpu.renderer.stats.clone();
+        let adapter = gpu.ctx.adapter_line();
+        let info = UiInfo {
+            sky,
+            frame,
+            stats: &stats,
+            glare: glare.as_ref(),
+            errors: &errors,
+            adapter: &adapter,
+            source: &spec.display(),
+            continent: matches!(spec, SkySpec::Continent { .. }),
+            recent: &self.settings.recent,
+            frame_times_ms: &self.frame_times,
+            cpu_ms: &self.cpu_ms,
+            gpu_ms: &gpu_ms,
+            sheet_progress: self.sheet.as_ref().map(|s| (s.done, s.total())),
+            last_capture: &self.last_capture,
+        };
+        let mut actions = Vec::new();
+        let controls = &mut self.controls;
+        let full = gpu.egui_state.egui_ctx().clone().run_ui(raw, |ui| actions = ui::draw(ui, controls, &info, inspector_id));
+        gpu.egui_state.handle_platform_output(&gpu.window, full.platform_output);
+        let pixels_per_point = full.pixels_per_point;
+        let jobs = gpu.egui_state.egui_ctx().tessellate(full.shapes, pixels_per_point);
+        let frees = gpu.update_ui_textures(full.textures_delta);
+        Some((actions, UiPaint { jobs, frees, pixels_per_point }))
+    }
+
+    /// Carries out one action of the panels.
+    fn apply_action(&mut self, action: UiAction, sky: &Sky) {
+        match action {
+            UiAction::Open(p) => self.open_path(&p),
+            UiAction::OpenBuiltin => self.open(SkySpec::Builtin),
+            UiAction::Season(s) => {
+                if let SkySpec::Continent { path, .. } = self.live.spec() {
+                    self.open(SkySpec::Continent { path, season: s });
+                }
+            }
+            UiAction::Reload => self.live.request_reload(),
+            UiAction::ReloadShaders => self.reload_shaders(),
+            UiAction::Screenshot => self.take_screenshot(),
+            UiAction::ContactSheet => {
+                let (cols, rows) = self.controls.sheet_grid;
+                let dir = self.shots_dir();
+                let name = screenshot_name(&sky.name, 0.0, 0.0).replace("_00.00h_w0.00", "_contact_sheet");
+                match free_path(&dir, &name) {
+                    Ok(path) => self.sheet = Some(ContactSheet::new(sky.hours_per_day, cols, rows, (240, 135), path)),
+                    Err(e) => self.gpu_error = Some(format!("{e:#}")),
+                }
+            }
+        }
+    }
+
+    /// Carries out a key press outside the panels.
+    pub(super) fn handle_key(&mut self, key: &Key, event_loop: &ActiveEventLoop) {
+        let c = &mut self.controls;
+        let hpd = self.live.sky().hours_per_day;
+        match key {
+            Key::Named(NamedKey::Space) => c.playing = !c.playing,
+            Key::Named(NamedKey::F1) => c.show_help = !c.show_help,
+            Key::Named(NamedKey::F5) => self.live.request_reload(),
+            Key::Named(NamedKey::F6) => self.reload_shaders(),
+            Key::Named(NamedKey::F12) => self.take_screenshot(),
+            Key::Named(NamedKey::Escape) => event_loop.exit(),
+            Key::Character(s) => match s.as_str() {
+                "[" => c.hour = (c.hour - 0.25).rem_euclid(hpd),
+                "]" => c.hour = (c.hour + 0.25).rem_euclid(hpd),
+                "-" => c.weather = (c.weather - 0.05).max(0.0),
+                "=" | "+" => c.weather = (c.weather + 0.05).min(1.0),
+                "a" | "A" => c.camera.yaw_deg = (c.camera.yaw_deg - 5.0).rem_euclid(360.0),
+                "d" | "D" => c.camera.yaw_deg = (c.camera.yaw_deg + 5.0).rem_euclid(360.0),
+                "w" | "W" => c.camera.pitch_deg = (c.camera.pitch_deg + 5.0).min(89.0),
+                "s" | "S" => c.camera.pitch_deg = (c.camera.pitch_deg - 5.0).max(-89.0),
+                "z" | "Z" => c.camera.pitch_deg = 89.0,
+                "1" | "2" | "4" => c.tier = Tier::new(s.parse().unwrap_or(4)).unwrap_or_default(),
+                _ => {}
+            },
+            _ => {}
+        }
+    }
+
+    fn open(&mut self, spec: SkySpec) {
+        if let SkySpec::File(p) | SkySpec::Continent { path: p, .. } = &spec {
+            self.settings.opened(p.clone());
+        }
+        self.live.switch(spec);
+    }
+
+    pub(super) fn open_path(&mut self, path: &Path) {
+        match SkySpec::from_path(path, None) {
+            Ok(spec) => {
+                if let SkySpec::Continent { season, .. } = spec {
+                    self.controls.season = season;
+                }
+                self.open(spec);
+            }
+            Err(e) => self.gpu_error = Some(e.to_string()),
+        }
+    }
+
+    fn reload_shaders(&mut self) {
+        let Some(gpu) = self.gpu.as_mut() else { return };
+        match gpu.reload_shaders() {
+            Ok(()) => {
+                self.shader_error = None;
+                log::info!("shaders reloaded");
+            }
+            Err(e) => {
+                // Shown once in the panel and the log; the previous pipelines keep rendering.
+                let e = e.to_string();
+                if self.shader_error.as_deref() != Some(e.as_str()) {
+                    log::error!("shader reload failed, keeping the previous pipelines:\n{e}");
+                }
+                self.shader_error = Some(e);
+            }
+        }
+    }
+
+    fn shots_dir(&self) -> PathBuf {
+        self.config.shots.clone().unwrap_or_else(|| PathBuf::from("shots"))
+    }
+
+    /// Renders `input` offscreen at `size` through the headless still path.
+    fn capture_image(&mut self, input: &FrameInput, size: (u32, u32)) -> anyhow::Result<image::RgbaImage> {
+        let (generation, camera, options) = (self.live.generation, self.controls.camera, self.controls.options);
+        let gpu = self.gpu.as_mut().ok_or_else(|| anyhow!("no GPU yet"))?;
+        gpu.capture(self.live.sky(), generation, input, &camera, &options, size)
+    }
+
+    fn screenshot(&mut self) -> anyhow::Result<PathBuf> {
+        let input = self.frame_input();
+        let path = free_path(&self.shots_dir(), &screenshot_name(&self.live.sky().name, input.hour, input.weather))?;
+        let size = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU yet"))?.size();
+        let img = self.capture_image(&input, size)?;
+        img.save(&path).with_context(|| format!("writing {}", path.display()))?;
+        Ok(path)
+    }
+
+    fn take_screenshot(&mut self) {
+        match self.screenshot() {
+            Ok(p) => {
+                self.last_capture = format!("screenshot saved to {}", p.display());
+                println!("{}", self.last_capture);
+            }
+            Err(e) => self.gpu_error = Some(format!("screenshot failed: {e:#}")),
+        }
+    }
+
+    /// Renders the next cell of a contact sheet in progress (one per frame keeps the window responsive).
+    fn step_contact_sheet(&mut self) -> anyhow::Result<()> {
+        let Some(sheet) = self.sheet.as_mut() else { return Ok(()) };
+        let Some((hour, weather, col, row)) = sheet.next_cell() else {
+            let sheet = self.sheet.take().expect("present");
+            sheet.image.save(&sheet.path).with_context(|| format!("writing {}", sheet.path.display()))?;
+            self.last_capture = format!("contact sheet saved to {}", sheet.path.display());
+            println!("{}", self.last_capture);
+            return Ok(());
+        };
+        let cell = sheet.cell;
+        let input = FrameInput { hour, weather, game_hours: hour as f64, ..self.frame_input() };
+        let img = self.capture_image(&input, cell)?;
+        if let Some(sheet) = self.sheet.as_mut() {
+            sheet.put(col, row, &img);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,224 @@
+//! The frame as an ordered list of phases, and the interface every GPU pass implements.
+//!
+//! Words: a **phase** is one slot of the frame and one wgpu compute or render pass (one pair of
+//! GPU timestamps); a **pass** is one module here plus one `shaders/NAME.wgsl` (or a folder
+//! `shaders/NAME/`) that records its work into a phase. The sky file's NeL "fallback passes" are
+//! object versions (`crate::sky::VersionFrame`), not GPU passes.
+//!
+//! Adding a pass: write the module and its `.wgsl`, implement [`Pass`], add one line to [`PASSES`].
+
+use std::any::Any;
+
+use super::camera::Camera;
+use super::error::RenderResult;
+use super::renderer::{FrameStats, RenderOptions};
+use super::shaders::ShaderLibrary;
+use super::textures::TextureCache;
+use crate::sky::{FrameSky, Sky};
+
+/// The slots of a frame, in the order they run. Each is one wgpu pass.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Phase {
+    /// Compute work before any drawing: look-up tables, particle simulation.
+    Compute,
+    /// The main scene, drawn first in depth range [`super::SCENE_DEPTH`]; the phase clears the target.
+    Scene,
+    /// Sky objects and stars, merged by priority, in depth range [`super::SKY_DEPTH`].
+    Sky,
+    /// Things drawn in the scene's depth range after the sky, so the scene occludes them (particles).
+    SceneAfterSky,
+    /// Overlays on top of everything (glare).
+    Overlay,
+}
+
+impl Phase {
+    /// Every phase, in frame order.
+    pub const ALL: [Phase; 5] = [Phase::Compute, Phase::Scene, Phase::Sky, Phase::SceneAfterSky, Phase::Overlay];
+
+    /// Name used in GPU labels and timings.
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Compute => "compute",
+            Phase::Scene => "scene",
+            Phase::Sky => "sky",
+            Phase::SceneAfterSky => "scene_after_sky",
+            Phase::Overlay => "overlay",
+        }
+    }
+
+    /// Position in [`Phase::ALL`].
+    pub fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// What a pass builds its layouts and pipelines with.
+pub struct PassBuild<'a> {
+    /// The device.
+    pub device: &'a wgpu::Device,
+    /// Layout of bind group 0 (per-frame globals), shared by every pipeline.
+    pub globals_layout: &'a wgpu::BindGroupLayout,
+    /// Shader sources.
+    pub library: &'a ShaderLibrary,
+    /// Colour format of the target.
+    pub color_format: wgpu::TextureFormat,
+}
+
+/// What a pass uploads a sky with.
+pub struct SkyUpload<'a> {
+    /// The device.
+    pub device: &'a wgpu::Device,
+    /// Its queue.
+    pub queue: &'a wgpu::Queue,
+    /// The sky being uploaded.
+    pub sky: &'a Sky,
+    /// Textures shared between passes; files whose content did not change are not uploaded again.
+    pub textures: &'a mut TextureCache,
+}
+
+/// What a pass sees of a frame in its per-frame step.
+pub struct FrameContext<'a> {
+    /// The device (non-blocking polls of readbacks).
+    pub device: &'a wgpu::Device,
+    /// Its queue (uniform writes).
+    pub queue: &'a wgpu::Queue,
+    /// The evaluated sky and the frame's clock (`dt_s`, frame number).
+    pub frame: &'a FrameSky,
+    /// The viewer.
+    pub camera: &'a Camera,
+    /// What to draw besides the sky.
+    pub options: &'a RenderOptions,
+    /// Target size, pixels.
+    pub size: (u32, u32),
+}
+
+impl FrameContext<'_> {
+    /// Width / height of the target.
+    pub fn aspect(&self) -> f32 {
+        self.size.0 as f32 / self.size.1.max(1) as f32
+    }
+}
+
+/// One draw a pass wants in its phase. The sky phase orders the items of all its passes by
+/// `priority` (stable: list order among equals); other phases keep list order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DrawItem {
+    /// Transparency priority (sky phase only).
+    pub priority: u8,
+    /// The pass's own index of what to draw.
+    pub key: usize,
+}
+
+/// A GPU pass: its pipelines (built once, rebuilt on shader reload), its per-sky resources and
+/// its per-frame work. Staging and committing make pipeline rebuilds and sky uploads all or
+/// nothing across every pass.
+pub trait Pass: Any {
+    /// Name: GPU labels, and the shader `shaders/NAME.wgsl` (or folder `shaders/NAME/`).
+    fn name(&self) -> &'static str;
+
+    /// The phase the pass records into.
+    fn phase(&self) -> Phase;
+
+    /// Builds new pipelines from the library into a pending slot.
+    fn stage_pipelines(&mut self, build: &PassBuild<'_>) -> RenderResult<()>;
+
+    /// Swaps the pending pipelines in (`accept`) or drops them.
+    fn commit_pipelines(&mut self, accept: bool);
+
+    /// Uploads a sky's resources into a pending slot, reusing what did not change. wgpu
+    /// validation errors are caught by the caller's error scope.
+    fn stage_sky(&mut self, _upload: &mut SkyUpload<'_>) {}
+
+    /// Swaps the pending sky resources in (`accept`) or drops them. Simulation state of things
+    /// that still exist carries over.
+    fn commit_sky(&mut self, _accept: bool) {}
+
+    /// The per-frame step: simulation (with `frame.dt_s`), uniform writes, readbacks that arrived.
+    fn prepare(&mut self, _cx: &FrameContext<'_>) {}
+
+    /// Draws wanted this frame (none: the pass is idle).
+    fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>);
+
+    /// Records one item into the phase's render pass; returns draw calls.
+    fn draw(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize) -> u32 {
+        0
+    }
+
+    /// Records one item into the compute phase.
+    fn dispatch(&self, _cpass: &mut wgpu::ComputePass<'_>, _key: usize) {}
+
+    /// An occlusion query set the phase's render pass must carry (at most one pass per phase).
+    fn occlusion_query_set(&self) -> Option<&wgpu::QuerySet> {
+        None
+    }
+
+    /// After every phase was recorded: resolve queries, copy results.
+    fn resolve(&self, _encoder: &mut wgpu::CommandEncoder) {}
+
+    /// After the frame was submitted: start asynchronous readbacks.
+    fn after_submit(&mut self) {}
+
+    /// Adds this pass's counters to the frame's.
+    fn stats(&self, _stats: &mut FrameStats) {}
+
+    /// The time step a still should use while it settles, if this pass needs history to show
+    /// its steady state (glare: one persistence period per frame).
+    fn settle_dt_s(&self, _options: &RenderOptions) -> Option<f32> {
+        None
+    }
+
+    /// Whether the last frame showed the steady state (a still stops settling when all agree).
+    fn settled(&self) -> bool {
+        true
+    }
+}
+
+/// Creates a pass; its pipelines are built, its sky resources empty.
+pub type PassConstructor = fn(&PassBuild<'_>) -> RenderResult<Box<dyn Pass>>;
+
+/// Boxes a pass's constructor for [`PASSES`].
+pub fn boxed<P: Pass, F: Fn(&PassBuild<'_>) -> RenderResult<P>>(f: F, build: &PassBuild<'_>) -> RenderResult<Box<dyn Pass>> {
+    Ok(Box::new(f(build)?))
+}
+
+/// Every pass of the renderer, in recording order within its phase. The one list: pipelines,
+/// shader reloads, sky uploads, per-frame steps and GPU timings all follow it.
+pub const PASSES: &[(&str, PassConstructor)] = &[
+    ("scene", |b| boxed(super::scene::ScenePass::new, b)),
+    ("sky_objects", |b| boxed(super::sky_objects::SkyObjectsPass::new, b)),
+    ("stars", |b| boxed(super::stars::StarsPass::new, b)),
+    ("glare", |b| boxed(super::glare::GlarePass::new, b)),
+];
+
+/// A value in use and a replacement waiting for every other pass to succeed too.
+#[derive(Debug)]
+pub struct Staged<T> {
+    /// In use.
+    pub current: T,
+    pending: Option<T>,
+}
+
+impl<T> Staged<T> {
+    /// A value in use, nothing pending.
+    pub fn new(current: T) -> Self {
+        Self { current, pending: None }
+    }
+
+    /// Sets the replacement.
+    pub fn stage(&mut self, next: T) {
+        self.pending = Some(next);
+    }
+
+    /// The replacement, if one is staged.
+    pub fn pending(&self) -> Option<&T> {
+        self.pending.as_ref()
+    }
+
+    /// Swaps the replacement in (`accept`) or drops it; returns the value replaced, if any.
+    pub fn commit(&mut self, accept: bool) -> Option<T> {
+        match (self.pending.take(), accept) {
+            (Some(next), true) => Some(std::mem::replace(&mut self.current, next)),
+            _ => None,
+        }
+    }
+}
