@@ -7,7 +7,7 @@ mod common;
 use std::path::Path;
 
 use skytune::render::error::RenderResult;
-use skytune::render::pass::{DrawItem, FrameContext, Pass, PassBuild, PassConstructor, Phase, Staged};
+use skytune::render::pass::{DrawItem, FrameContext, Pass, PassBuild, PassConstructor, Phase, Pipelines};
 use skytune::render::{Camera, GpuContext, Headless, RenderOptions, ShaderLibrary, SkyRenderer, OFFSCREEN_FORMAT};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::{load_sky_file, Clock, FrameInput, Stepping};
@@ -21,8 +21,7 @@ fn camera() -> Camera {
 
 /// A compute pass: copies globals into a storage buffer and counts its dispatches.
 struct HourProbe {
-    pipeline: Staged<wgpu::ComputePipeline>,
-    layout: wgpu::PipelineLayout,
+    pipeline: Pipelines<wgpu::ComputePipeline>,
     bind_group: wgpu::BindGroup,
     storage: wgpu::Buffer,
     readback: wgpu::Buffer,
@@ -62,8 +61,7 @@ impl HourProbe {
             layout: &bind_layout,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: storage.as_entire_binding() }],
         });
-        let pipeline = Self::build(b, &layout)?;
-        Ok(Self { pipeline: Staged::new(pipeline), layout, bind_group, storage, readback })
+        Ok(Self { pipeline: Pipelines::new(b, layout, Self::build)?, bind_group, storage, readback })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::ComputePipeline> {
@@ -98,9 +96,7 @@ impl Pass for HourProbe {
         Phase::Compute
     }
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
-        let p = Self::build(b, &self.layout)?;
-        self.pipeline.stage(p);
-        Ok(())
+        self.pipeline.stage(b)
     }
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipeline.commit(accept);
@@ -109,7 +105,7 @@ impl Pass for HourProbe {
         out.push(DrawItem { priority: 0, key: 0 });
     }
     fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, _key: usize) {
-        cpass.set_pipeline(&self.pipeline.current);
+        cpass.set_pipeline(self.pipeline.get());
         cpass.set_bind_group(1, &self.bind_group, &[]);
         cpass.dispatch_workgroups(1, 1, 1);
     }
@@ -120,8 +116,7 @@ impl Pass for HourProbe {
 
 /// A pass drawn in the scene's depth range after the sky (where particles go).
 struct Tint {
-    pipeline: Staged<wgpu::RenderPipeline>,
-    layout: wgpu::PipelineLayout,
+    pipeline: Pipelines<wgpu::RenderPipeline>,
 }
 
 impl Tint {
@@ -131,8 +126,7 @@ impl Tint {
             bind_group_layouts: &[Some(b.globals_layout)],
             immediate_size: 0,
         });
-        let pipeline = Self::build(b, &layout)?;
-        Ok(Self { pipeline: Staged::new(pipeline), layout })
+        Ok(Self { pipeline: Pipelines::new(b, layout, Self::build)? })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
@@ -172,9 +166,7 @@ impl Pass for Tint {
         Phase::SceneAfterSky
     }
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
-        let p = Self::build(b, &self.layout)?;
-        self.pipeline.stage(p);
-        Ok(())
+        self.pipeline.stage(b)
     }
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipeline.commit(accept);
@@ -183,7 +175,7 @@ impl Pass for Tint {
         out.push(DrawItem { priority: 0, key: 0 });
     }
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize) -> u32 {
-        rpass.set_pipeline(&self.pipeline.current);
+        rpass.set_pipeline(self.pipeline.get());
         rpass.draw(0..3, 0..1);
         1
     }

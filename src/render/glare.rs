@@ -12,7 +12,7 @@ use glam::{Mat4, Vec3, Vec4};
 
 use super::camera::Camera;
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SkyUpload, Staged};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged};
 use super::renderer::RenderOptions;
 use super::shaders;
 use super::textures::TextureCache;
@@ -146,7 +146,7 @@ impl OcclusionQueries {
 }
 
 /// Pipelines of the glare pass.
-struct Pipelines {
+struct GlarePipelines {
     disc_visible: wgpu::RenderPipeline,
     disc_total: wgpu::RenderPipeline,
     sprite: wgpu::RenderPipeline,
@@ -155,8 +155,7 @@ struct Pipelines {
 /// The glare pass: pipelines, and the current sky's glare with its queries and state.
 pub struct GlarePass {
     bind_layout: wgpu::BindGroupLayout,
-    pipeline_layout: wgpu::PipelineLayout,
-    pipelines: Staged<Pipelines>,
+    pipelines: Pipelines<GlarePipelines>,
     resources: Staged<Option<GlareResources>>,
     /// Whether the glare takes part in this frame (the sky has glare, it is switched on).
     active: bool,
@@ -210,11 +209,11 @@ impl GlarePass {
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipelines = Self::build(b, &pipeline_layout)?;
-        Ok(Self { bind_layout, pipeline_layout, pipelines: Staged::new(pipelines), resources: Staged::new(None), active: false, settled: true })
+        let pipelines = Pipelines::new(b, pipeline_layout, Self::build)?;
+        Ok(Self { bind_layout, pipelines, resources: Staged::new(None), active: false, settled: true })
     }
 
-    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<Pipelines> {
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<GlarePipelines> {
         let (device, format) = (b.device, b.color_format);
         let module = shaders::module(device, b.library, "glare")?;
         let disc = |label: &'static str, compare: wgpu::CompareFunction| {
@@ -282,7 +281,7 @@ impl GlarePass {
                 cache: None,
             })
         })?;
-        Ok(Pipelines { disc_visible: visible, disc_total: total, sprite })
+        Ok(GlarePipelines { disc_visible: visible, disc_total: total, sprite })
     }
 
     /// The current sky's glare, if it has one.
@@ -306,9 +305,7 @@ impl Pass for GlarePass {
     }
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
-        let p = Self::build(b, &self.pipeline_layout)?;
-        self.pipelines.stage(p);
-        Ok(())
+        self.pipelines.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
@@ -356,7 +353,7 @@ impl Pass for GlarePass {
     }
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize) -> u32 {
-        self.resources.current.as_ref().map_or(0, |g| g.draw(rpass, &self.pipelines.current))
+        self.resources.current.as_ref().map_or(0, |g| g.draw(rpass, self.pipelines.get()))
     }
 
     fn occlusion_query_set(&self) -> Option<&wgpu::QuerySet> {
@@ -523,7 +520,7 @@ impl GlareResources {
 
     /// Records the occlusion queries (if one is due) and the sprites. Needs a pass created with
     /// this resource's query set. Returns draw calls.
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, pass: &Pipelines) -> u32 {
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, pass: &GlarePipelines) -> u32 {
         let mut calls = 0;
         if self.issue_this_frame {
             rpass.set_bind_group(1, &self.bind_groups[0], &[]);

@@ -222,3 +222,39 @@ impl<T> Staged<T> {
         }
     }
 }
+
+/// Builds a pass's pipelines with its layout.
+pub type PipelineBuilder<T> = fn(&PassBuild<'_>, &wgpu::PipelineLayout) -> RenderResult<T>;
+
+/// A pass's pipelines: its layout (built once), the pipelines in use, and a rebuilt set waiting
+/// for every other pass's rebuild to succeed.
+pub struct Pipelines<T> {
+    layout: wgpu::PipelineLayout,
+    build: PipelineBuilder<T>,
+    staged: Staged<T>,
+}
+
+impl<T> Pipelines<T> {
+    /// Builds the pipelines once with `layout`.
+    pub fn new(b: &PassBuild<'_>, layout: wgpu::PipelineLayout, build: PipelineBuilder<T>) -> RenderResult<Self> {
+        let current = build(b, &layout)?;
+        Ok(Self { layout, build, staged: Staged::new(current) })
+    }
+
+    /// Rebuilds from `b.library` into the pending slot ([`Pass::stage_pipelines`]).
+    pub fn stage(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
+        let next = (self.build)(b, &self.layout)?;
+        self.staged.stage(next);
+        Ok(())
+    }
+
+    /// Swaps the rebuilt pipelines in, or drops them ([`Pass::commit_pipelines`]).
+    pub fn commit(&mut self, accept: bool) {
+        self.staged.commit(accept);
+    }
+
+    /// The pipelines in use.
+    pub fn get(&self) -> &T {
+        &self.staged.current
+    }
+}

@@ -6,7 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Staged};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines};
 use super::shaders;
 
 /// Vertex of the stand-in scene. Keep in sync with `vs_main` in shaders/scene.wgsl.
@@ -84,7 +84,7 @@ pub struct Occluder {
 }
 
 /// The scene's pipelines: terrain and buildings, and the test occluder.
-struct Pipelines {
+struct ScenePipelines {
     scene: wgpu::RenderPipeline,
     occluder: wgpu::RenderPipeline,
 }
@@ -95,8 +95,7 @@ const OCCLUDER: usize = 1;
 
 /// Pipelines and geometry of the stand-in scene.
 pub struct ScenePass {
-    pipeline_layout: wgpu::PipelineLayout,
-    pipelines: Staged<Pipelines>,
+    pipelines: Pipelines<ScenePipelines>,
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     index_count: u32,
@@ -112,7 +111,7 @@ impl ScenePass {
             bind_group_layouts: &[Some(b.globals_layout)],
             immediate_size: 0,
         });
-        let pipelines = Self::build(b, &pipeline_layout)?;
+        let pipelines = Pipelines::new(b, pipeline_layout, Self::build)?;
         let (v, i) = scene_geometry();
         let vertices =
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("Scene::vertices"), contents: bytemuck::cast_slice(&v), usage: wgpu::BufferUsages::VERTEX });
@@ -124,10 +123,10 @@ impl ScenePass {
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Self { pipeline_layout, pipelines: Staged::new(pipelines), vertices, indices, index_count: i.len() as u32, occluder })
+        Ok(Self { pipelines, vertices, indices, index_count: i.len() as u32, occluder })
     }
 
-    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<Pipelines> {
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<ScenePipelines> {
         let (device, format) = (b.device, b.color_format);
         let module = shaders::module(device, b.library, "scene")?;
         let depth = super::depth_state(true, wgpu::CompareFunction::Less);
@@ -167,7 +166,7 @@ impl ScenePass {
             "fs_occluder",
             wgpu::VertexBufferLayout { array_stride: 8, step_mode: wgpu::VertexStepMode::Vertex, attributes: &wgpu::vertex_attr_array![0 => Float32x2] },
         )?;
-        Ok(Pipelines { scene, occluder })
+        Ok(ScenePipelines { scene, occluder })
     }
 }
 
@@ -181,9 +180,7 @@ impl Pass for ScenePass {
     }
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
-        let p = Self::build(b, &self.pipeline_layout)?;
-        self.pipelines.stage(p);
-        Ok(())
+        self.pipelines.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
@@ -208,7 +205,7 @@ impl Pass for ScenePass {
     }
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize) -> u32 {
-        let p = &self.pipelines.current;
+        let p = self.pipelines.get();
         if key == TERRAIN {
             rpass.set_pipeline(&p.scene);
             rpass.set_vertex_buffer(0, self.vertices.slice(..));

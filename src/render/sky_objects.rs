@@ -9,7 +9,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use super::camera::Camera;
 use super::error::RenderResult;
 use super::mesh::{shape_key, shape_mesh, GpuMesh, SkyVertex};
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SkyUpload, Staged};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged};
 use super::renderer::FrameStats;
 use super::shaders;
 use super::textures::{self, TextureCache};
@@ -109,8 +109,7 @@ impl DrawUniform {
 /// and the current sky's per-object resources.
 pub struct SkyObjectsPass {
     bind_layout: wgpu::BindGroupLayout,
-    pipeline_layout: wgpu::PipelineLayout,
-    pipelines: Staged<[wgpu::RenderPipeline; 3]>,
+    pipelines: Pipelines<[wgpu::RenderPipeline; 3]>,
     draws: Staged<Option<SkyObjectDraws>>,
     /// This frame's visible objects: (object index, versions to draw), in draw order.
     visible: Vec<(usize, u8, Vec<usize>)>,
@@ -140,8 +139,8 @@ impl SkyObjectsPass {
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipelines = Self::build(b, &pipeline_layout)?;
-        Ok(Self { bind_layout, pipeline_layout, pipelines: Staged::new(pipelines), draws: Staged::new(None), visible: Vec::new(), hidden: 0 })
+        let pipelines = Pipelines::new(b, pipeline_layout, Self::build)?;
+        Ok(Self { bind_layout, pipelines, draws: Staged::new(None), visible: Vec::new(), hidden: 0 })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 3]> {
@@ -182,9 +181,7 @@ impl Pass for SkyObjectsPass {
     }
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
-        let p = Self::build(b, &self.pipeline_layout)?;
-        self.pipelines.stage(p);
-        Ok(())
+        self.pipelines.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
@@ -221,7 +218,7 @@ impl Pass for SkyObjectsPass {
         let (Some(draws), Some((index, _, versions))) = (&self.draws.current, self.visible.get(key)) else { return 0 };
         for &v in versions {
             let d = &draws.objects[*index][v];
-            rpass.set_pipeline(&self.pipelines.current[blend_index(d.blend)]);
+            rpass.set_pipeline(&self.pipelines.get()[blend_index(d.blend)]);
             rpass.set_bind_group(1, &d.bind_group, &[]);
             rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
             rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);

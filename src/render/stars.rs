@@ -4,7 +4,7 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SkyUpload, Staged};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged};
 use super::renderer::FrameStats;
 use super::shaders;
 use crate::sky::starfield;
@@ -32,8 +32,7 @@ struct StarInstance {
 /// The stars pass: its pipeline and the current sky's star field.
 pub struct StarsPass {
     bind_layout: wgpu::BindGroupLayout,
-    pipeline_layout: wgpu::PipelineLayout,
-    pipeline: Staged<wgpu::RenderPipeline>,
+    pipeline: Pipelines<wgpu::RenderPipeline>,
     field: Staged<Option<StarField>>,
     /// Whether the stars show this frame.
     visible: bool,
@@ -50,8 +49,8 @@ impl StarsPass {
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipeline = Self::build(b, &pipeline_layout)?;
-        Ok(Self { bind_layout, pipeline_layout, pipeline: Staged::new(pipeline), field: Staged::new(None), visible: false })
+        let pipeline = Pipelines::new(b, pipeline_layout, Self::build)?;
+        Ok(Self { bind_layout, pipeline, field: Staged::new(None), visible: false })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
@@ -97,9 +96,7 @@ impl Pass for StarsPass {
     }
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
-        let p = Self::build(b, &self.pipeline_layout)?;
-        self.pipeline.stage(p);
-        Ok(())
+        self.pipeline.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
@@ -130,7 +127,7 @@ impl Pass for StarsPass {
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize) -> u32 {
         let Some(field) = &self.field.current else { return 0 };
-        rpass.set_pipeline(&self.pipeline.current);
+        rpass.set_pipeline(self.pipeline.get());
         rpass.set_bind_group(1, &field.bind_group, &[]);
         rpass.set_vertex_buffer(0, field.instances.slice(..));
         rpass.draw(0..4, 0..field.count);
