@@ -50,6 +50,38 @@ pub enum Command {
     },
     /// Measure the sky passes (depth split and tiers) and write a Markdown report.
     Bench(BenchArgs),
+    /// Sky radiance of a list of cases (CSV in, CSV out) from a physical sky model.
+    Radiance(RadianceArgs),
+}
+
+/// Physical sky models that `radiance` can evaluate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum RadianceModel {
+    /// The CPU double-precision reference (every order of scattering, ozone, ground albedo).
+    Reference,
+}
+
+/// `radiance` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct RadianceArgs {
+    /// Model to evaluate.
+    #[arg(long, value_enum, default_value = "reference")]
+    pub model: RadianceModel,
+    /// Input CSV: camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg.
+    #[arg(long)]
+    pub cases: PathBuf,
+    /// Output CSV: the input columns plus r,g,b in sr^-1 per unit of solar irradiance.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Highest order of scattering (1: single scattering).
+    #[arg(long, default_value_t = 24)]
+    pub max_order: u32,
+    /// Monte Carlo paths per case for orders >= 2 (the reference's noise falls as 1/sqrt).
+    #[arg(long, default_value_t = 8192)]
+    pub paths: u32,
+    /// Seed of the reference's paths.
+    #[arg(long, default_value_t = 0x5eed)]
+    pub seed: u64,
 }
 
 /// Which frame to render.

@@ -3,10 +3,12 @@
 //! - [`sky`]: the sky description file, validation, bitmap sampling and per-frame evaluation
 //!   (no GPU types).
 //! - [`render`]: the wgpu renderer (no UI types).
+//! - [`atmosphere`]: physical atmospheres and the double-precision reference (no GPU types).
 //! - [`live`]: hot reload of sky files.
 //! - [`watch`]: file watching, shared by sky and shader hot reload.
 
 pub mod app;
+pub mod atmosphere;
 pub mod live;
 pub mod render;
 pub mod sky;

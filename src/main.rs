@@ -1,4 +1,4 @@
-//! The `skytune` binary: window (default), `render`, `check`, `watch`, `new-sky`, `bench`.
+//! The `skytune` binary: window (default), `render`, `check`, `watch`, `new-sky`, `bench`, `radiance`.
 
 mod bench;
 mod cli;
@@ -45,7 +45,45 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             Ok(())
         }
         Some(Command::Bench(args)) => bench::run(&args),
+        Some(Command::Radiance(args)) => radiance(&args),
     }
+}
+
+/// `skytune radiance`: evaluates a model on every case of a CSV file.
+fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
+    use skytune::atmosphere::{cases, reference, Atmosphere};
+    anyhow::ensure!(args.max_order >= 1, "--max-order: expected at least 1, found {}", args.max_order);
+    let atm = Atmosphere::default();
+    let list = cases::read_cases(&args.cases, atm.thickness_km())?;
+    let settings = reference::ReferenceSettings { max_order: args.max_order, paths: args.paths, seed: args.seed, ..Default::default() };
+    let started = std::time::Instant::now();
+    let model = match args.model {
+        cli::RadianceModel::Reference => reference::Reference::new(atm, settings),
+    };
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).min(list.len().max(1));
+    let mut out = vec![[0.0; 3]; list.len()];
+    std::thread::scope(|scope| {
+        for (chunk_cases, chunk_out) in list.chunks(list.len().div_ceil(workers).max(1)).zip(out.chunks_mut(list.len().div_ceil(workers).max(1))) {
+            let (model, done, total) = (&model, &done, list.len());
+            scope.spawn(move || {
+                for (c, o) in chunk_cases.iter().zip(chunk_out.iter_mut()) {
+                    *o = model.radiance(c);
+                    let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    eprint!("\rradiance: {n}/{total} cases");
+                }
+            });
+        }
+    });
+    eprintln!();
+    let comment = format!(
+        "skytune radiance --model reference: sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere)\n\
+         default atmosphere (Hillaire 2020); max order {}, {} paths per case, seed {}; sun disc and ground surface excluded",
+        settings.max_order, settings.paths, settings.seed
+    );
+    cases::write_radiance(&args.out, &comment, &list, &out)?;
+    println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());
+    Ok(())
 }
 
 /// The sky a command names (or the built-in one).

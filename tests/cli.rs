@@ -140,3 +140,32 @@ fn every_committed_sky_is_valid() {
     let c = skytune::sky::load::load_continent(&skies.join("lakes/continent.toml")).unwrap();
     assert!(c.skies[3].ends_with("winter.toml"));
 }
+
+#[test]
+fn radiance_answers_every_case_and_locates_bad_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = dir.path().join("cases.csv");
+    std::fs::write(&cases, "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg\n0,0.3,30,90,0\n0.5,0,5,10,180\n1,0.1,-20,45,0\n").unwrap();
+    let out = dir.path().join("out.csv");
+    let o = skytune().args(["radiance", "--model", "reference", "--max-order", "1", "--cases"]).arg(&cases).arg("--out").arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let rows: Vec<Vec<f64>> = text.lines().filter(|l| !l.starts_with('#')).skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+    assert!(text.lines().any(|l| l == "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg,r,g,b"), "{text}");
+    assert!(text.starts_with("# ") && text.contains("sr^-1"), "the units are stated: {text}");
+    assert_eq!(rows.len(), 3);
+    // The input columns are repeated; a day sky is blue, the night sky is black.
+    assert_eq!(rows[1][..5], [0.5, 0.0, 5.0, 10.0, 180.0]);
+    assert!(rows[0][7] > rows[0][6] && rows[0][6] > rows[0][5] && rows[0][5] > 0.0, "{:?}", rows[0]);
+    assert!(rows[2][5..].iter().all(|x| *x < 1e-9), "{:?}", rows[2]);
+
+    // A bad value names the file, the line and the column.
+    std::fs::write(&cases, "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg\n0,0.3,30,90,0\n0,1.5,30,90,0\n").unwrap();
+    let o = skytune().args(["radiance", "--cases"]).arg(&cases).arg("--out").arg(&out).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("cases.csv:3: albedo: expected 0..1"), "{stderr}");
+    std::fs::write(&cases, "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg\n0,0.3,thirty,90,0\n").unwrap();
+    let o = skytune().args(["radiance", "--cases"]).arg(&cases).arg("--out").arg(&out).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("cases.csv:2: column 3:"), "{stderr}");
+}

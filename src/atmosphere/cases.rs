@@ -1,0 +1,134 @@
+//! Radiance cases as CSV: the interface of `skytune radiance`, the tests and the benchmarks.
+//!
+//! Input header: `camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg`; the output
+//! repeats those columns and adds `r,g,b` (sr^-1 per unit of solar irradiance).
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::reference::Case;
+use super::Rgb;
+
+/// One row of an input file.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+struct CaseRow {
+    camera_km: f64,
+    albedo: f64,
+    sun_elev_deg: f64,
+    view_elev_deg: f64,
+    rel_azimuth_deg: f64,
+}
+
+/// One row of an output file.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+struct RadianceRow {
+    camera_km: f64,
+    albedo: f64,
+    sun_elev_deg: f64,
+    view_elev_deg: f64,
+    rel_azimuth_deg: f64,
+    r: f64,
+    g: f64,
+    b: f64,
+}
+
+/// A bad cases file: where and why.
+#[derive(Debug, thiserror::Error)]
+pub enum CasesError {
+    /// The file could not be read or written.
+    #[error("{file}: {source}")]
+    Io {
+        /// The file.
+        file: String,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A row does not parse, or a value is out of its domain.
+    #[error("{file}:{line}: {field}: {message}")]
+    Row {
+        /// The file.
+        file: String,
+        /// 1-based line.
+        line: u64,
+        /// The column.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// Reads cases; every value must be finite, the camera inside the atmosphere of `top_km`
+/// thickness, the albedo in [0, 1] and elevations in [-90, 90].
+pub fn read_cases(path: &Path, top_km: f64) -> Result<Vec<Case>, CasesError> {
+    let file = path.display().to_string();
+    let mut reader = csv::ReaderBuilder::new().trim(csv::Trim::All).comment(Some(b'#')).from_path(path).map_err(|e| csv_error(&file, e))?;
+    let mut out = Vec::new();
+    for row in reader.deserialize::<CaseRow>() {
+        let row = row.map_err(|e| csv_error(&file, e))?;
+        let line = out.len() as u64 + 2;
+        let bad = |field: &str, message: String| CasesError::Row { file: file.clone(), line, field: field.into(), message };
+        for (field, v) in [
+            ("camera_km", row.camera_km),
+            ("albedo", row.albedo),
+            ("sun_elev_deg", row.sun_elev_deg),
+            ("view_elev_deg", row.view_elev_deg),
+            ("rel_azimuth_deg", row.rel_azimuth_deg),
+        ] {
+            if !v.is_finite() {
+                return Err(bad(field, format!("expected a finite number, found {v}")));
+            }
+        }
+        if !(0.0..top_km).contains(&row.camera_km) {
+            return Err(bad("camera_km", format!("expected 0 <= altitude < {top_km} km (inside the atmosphere), found {}", row.camera_km)));
+        }
+        if !(0.0..=1.0).contains(&row.albedo) {
+            return Err(bad("albedo", format!("expected 0..1, found {}", row.albedo)));
+        }
+        for (field, v) in [("sun_elev_deg", row.sun_elev_deg), ("view_elev_deg", row.view_elev_deg)] {
+            if !(-90.0..=90.0).contains(&v) {
+                return Err(bad(field, format!("expected -90..90 degrees, found {v}")));
+            }
+        }
+        out.push(Case { camera_km: row.camera_km, albedo: row.albedo, sun_elev_deg: row.sun_elev_deg, view_elev_deg: row.view_elev_deg, rel_azimuth_deg: row.rel_azimuth_deg });
+    }
+    Ok(out)
+}
+
+fn csv_error(file: &str, e: csv::Error) -> CasesError {
+    let line = e.position().map_or(0, |p| p.line());
+    match e.into_kind() {
+        csv::ErrorKind::Io(source) => CasesError::Io { file: file.into(), source },
+        csv::ErrorKind::Deserialize { err, .. } => {
+            CasesError::Row { file: file.into(), line, field: err.field().map_or_else(|| "row".into(), |f| format!("column {}", f + 1)), message: err.to_string() }
+        }
+        other => CasesError::Row { file: file.into(), line, field: "row".into(), message: format!("{other:?}") },
+    }
+}
+
+/// Writes cases and their radiance, with `comment` lines (`# ...`) first.
+pub fn write_radiance(path: &Path, comment: &str, cases: &[Case], radiance: &[Rgb]) -> Result<(), CasesError> {
+    let file = path.display().to_string();
+    let io = |source| CasesError::Io { file: file.clone(), source };
+    let mut text = String::new();
+    for line in comment.lines() {
+        text.push_str(&format!("# {line}\n"));
+    }
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    for (c, l) in cases.iter().zip(radiance) {
+        let row = RadianceRow {
+            camera_km: c.camera_km,
+            albedo: c.albedo,
+            sun_elev_deg: c.sun_elev_deg,
+            view_elev_deg: c.view_elev_deg,
+            rel_azimuth_deg: c.rel_azimuth_deg,
+            r: l[0],
+            g: l[1],
+            b: l[2],
+        };
+        writer.serialize(row).map_err(|e| io(std::io::Error::other(e.to_string())))?;
+    }
+    let body = writer.into_inner().map_err(|e| io(std::io::Error::other(e.to_string())))?;
+    text.push_str(&String::from_utf8_lossy(&body));
+    std::fs::write(path, text).map_err(io)
+}

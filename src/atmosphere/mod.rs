@@ -1,0 +1,202 @@
+//! Physical atmospheres: parameters in documented units, density profiles, phase functions, and
+//! the double-precision reference integrator ([`reference`]) that every sky model is judged by.
+//! No GPU types here.
+//!
+//! Units: lengths in km, coefficients in km^-1, angles in radians unless a name says `_deg`.
+//! Radiance is in sr^-1 relative to a solar irradiance of 1 per channel at the top of the atmosphere.
+
+pub mod cases;
+pub mod reference;
+
+use std::f64::consts::PI;
+
+use serde::Deserialize;
+
+/// RGB triple of f64 (per-channel coefficients or radiance).
+pub type Rgb = [f64; 3];
+
+/// An atmosphere. The default is the Earth of Hillaire 2020 ("A Scalable and Production Ready
+/// Sky and Atmosphere Rendering Technique"), the same as Bruneton's 2017 demo.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Atmosphere {
+    /// Planet radius, km.
+    pub ground_radius_km: f64,
+    /// Radius of the top of the atmosphere, km (nothing above it).
+    pub top_radius_km: f64,
+    /// Rayleigh scattering at sea level, km^-1 (no absorption).
+    pub rayleigh_scattering_per_km: Rgb,
+    /// Rayleigh density falls as exp(-altitude / this), km.
+    pub rayleigh_scale_height_km: f64,
+    /// Mie scattering at sea level, km^-1 (grey).
+    pub mie_scattering_per_km: f64,
+    /// Mie extinction at sea level, km^-1 (scattering + absorption, grey).
+    pub mie_extinction_per_km: f64,
+    /// Mie density falls as exp(-altitude / this), km.
+    pub mie_scale_height_km: f64,
+    /// Asymmetry of the Cornette-Shanks Mie phase function.
+    pub mie_g: f64,
+    /// Ozone absorption at the peak of its profile, km^-1 (no scattering).
+    pub ozone_absorption_per_km: Rgb,
+    /// Altitude of the ozone peak, km (tent profile).
+    pub ozone_center_km: f64,
+    /// Half width of the ozone tent, km: density 0 at center +- this.
+    pub ozone_half_width_km: f64,
+    /// Angular radius of the sun's disc, rad.
+    pub sun_angular_radius_rad: f64,
+}
+
+impl Default for Atmosphere {
+    fn default() -> Self {
+        Self {
+            ground_radius_km: 6360.0,
+            top_radius_km: 6460.0,
+            rayleigh_scattering_per_km: [5.802e-3, 13.558e-3, 33.1e-3],
+            rayleigh_scale_height_km: 8.0,
+            mie_scattering_per_km: 3.996e-3,
+            mie_extinction_per_km: 4.440e-3,
+            mie_scale_height_km: 1.2,
+            mie_g: 0.8,
+            ozone_absorption_per_km: [0.650e-3, 1.881e-3, 0.085e-3],
+            ozone_center_km: 25.0,
+            ozone_half_width_km: 15.0,
+            sun_angular_radius_rad: 0.004675,
+        }
+    }
+}
+
+/// A parameter out of its domain.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{field}: {message}")]
+pub struct AtmosphereError {
+    /// The field, as named in the sky file.
+    pub field: &'static str,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Scattering and extinction at one point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Medium {
+    /// Rayleigh scattering, km^-1.
+    pub rayleigh: Rgb,
+    /// Mie scattering, km^-1.
+    pub mie: f64,
+    /// Total extinction (scattering + absorption), km^-1.
+    pub extinction: Rgb,
+}
+
+impl Atmosphere {
+    /// Checks every parameter's domain; all problems at once.
+    pub fn validate(&self) -> Result<(), Vec<AtmosphereError>> {
+        let mut errors = Vec::new();
+        let mut check = |field: &'static str, ok: bool, message: String| {
+            if !ok {
+                errors.push(AtmosphereError { field, message });
+            }
+        };
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+        check("ground_radius_km", positive(self.ground_radius_km), format!("expected a positive number of km, found {}", self.ground_radius_km));
+        check(
+            "top_radius_km",
+            self.top_radius_km.is_finite() && self.top_radius_km > self.ground_radius_km,
+            format!("expected more than ground_radius_km ({}), found {}", self.ground_radius_km, self.top_radius_km),
+        );
+        for (field, v) in [("rayleigh_scattering_per_km", self.rayleigh_scattering_per_km), ("ozone_absorption_per_km", self.ozone_absorption_per_km)] {
+            check(field, v.iter().all(|c| non_negative(*c)), format!("expected three coefficients >= 0 km^-1, found {v:?}"));
+        }
+        check("mie_scattering_per_km", non_negative(self.mie_scattering_per_km), format!("expected >= 0 km^-1, found {}", self.mie_scattering_per_km));
+        check(
+            "mie_extinction_per_km",
+            self.mie_extinction_per_km.is_finite() && self.mie_extinction_per_km >= self.mie_scattering_per_km,
+            format!("expected at least mie_scattering_per_km ({}) km^-1, found {}", self.mie_scattering_per_km, self.mie_extinction_per_km),
+        );
+        for (field, v) in
+            [("rayleigh_scale_height_km", self.rayleigh_scale_height_km), ("mie_scale_height_km", self.mie_scale_height_km), ("ozone_half_width_km", self.ozone_half_width_km)]
+        {
+            check(field, positive(v), format!("expected a positive number of km, found {v}"));
+        }
+        check("ozone_center_km", self.ozone_center_km.is_finite(), format!("expected a finite altitude, found {}", self.ozone_center_km));
+        check("mie_g", self.mie_g.is_finite() && self.mie_g.abs() < 1.0, format!("expected -1 < g < 1, found {}", self.mie_g));
+        check(
+            "sun_angular_radius_rad",
+            self.sun_angular_radius_rad.is_finite() && self.sun_angular_radius_rad > 0.0 && self.sun_angular_radius_rad < 0.5,
+            format!("expected 0 < radius < 0.5 rad, found {}", self.sun_angular_radius_rad),
+        );
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            Err(errors)
+        }
+    }
+
+    /// Thickness of the atmosphere, km.
+    pub fn thickness_km(&self) -> f64 {
+        self.top_radius_km - self.ground_radius_km
+    }
+
+    /// Relative densities (Rayleigh, Mie, ozone) at an altitude, km.
+    pub fn densities(&self, altitude_km: f64) -> (f64, f64, f64) {
+        let h = altitude_km.max(0.0);
+        let ozone = (1.0 - (h - self.ozone_center_km).abs() / self.ozone_half_width_km).max(0.0);
+        ((-h / self.rayleigh_scale_height_km).exp(), (-h / self.mie_scale_height_km).exp(), ozone)
+    }
+
+    /// Scattering and extinction at an altitude, km.
+    pub fn medium(&self, altitude_km: f64) -> Medium {
+        let (r, m, o) = self.densities(altitude_km);
+        let rayleigh = self.rayleigh_scattering_per_km.map(|b| b * r);
+        let mie = self.mie_scattering_per_km * m;
+        let mie_ext = self.mie_extinction_per_km * m;
+        let extinction = std::array::from_fn(|c| rayleigh[c] + mie_ext + self.ozone_absorption_per_km[c] * o);
+        Medium { rayleigh, mie, extinction }
+    }
+
+    /// The same atmosphere with every coefficient multiplied by `k` (optically thin limits, turbidity).
+    pub fn scaled(&self, k: f64) -> Self {
+        Self {
+            rayleigh_scattering_per_km: self.rayleigh_scattering_per_km.map(|b| b * k),
+            mie_scattering_per_km: self.mie_scattering_per_km * k,
+            mie_extinction_per_km: self.mie_extinction_per_km * k,
+            ozone_absorption_per_km: self.ozone_absorption_per_km.map(|b| b * k),
+            ..*self
+        }
+    }
+
+    /// Optical depth of a vertical column from `altitude_km` to the top, per channel, in closed
+    /// form (the check of every numerical integrator).
+    pub fn vertical_optical_depth(&self, altitude_km: f64) -> Rgb {
+        let top = self.thickness_km();
+        let h = altitude_km.clamp(0.0, top);
+        let exp_column = |scale: f64| scale * ((-h / scale).exp() - (-top / scale).exp());
+        let r = exp_column(self.rayleigh_scale_height_km);
+        let m = exp_column(self.mie_scale_height_km);
+        // Integral of the tent from h to the top.
+        let tent = |x: f64| {
+            // Antiderivative of max(0, 1 - |x - c| / w), from -inf.
+            let (c, w) = (self.ozone_center_km, self.ozone_half_width_km);
+            let u = ((x - c) / w).clamp(-1.0, 1.0);
+            w * if u < 0.0 { 0.5 * (1.0 + u) * (1.0 + u) } else { 1.0 - 0.5 * (1.0 - u) * (1.0 - u) }
+        };
+        let o = tent(top) - tent(h);
+        std::array::from_fn(|c| self.rayleigh_scattering_per_km[c] * r + self.mie_extinction_per_km * m + self.ozone_absorption_per_km[c] * o)
+    }
+}
+
+/// Rayleigh phase function, sr^-1, of the cosine of the scattering angle.
+pub fn rayleigh_phase(cos_theta: f64) -> f64 {
+    3.0 / (16.0 * PI) * (1.0 + cos_theta * cos_theta)
+}
+
+/// Cornette-Shanks phase function (Mie), sr^-1.
+pub fn cornette_shanks_phase(cos_theta: f64, g: f64) -> f64 {
+    let g2 = g * g;
+    3.0 / (8.0 * PI) * (1.0 - g2) / (2.0 + g2) * (1.0 + cos_theta * cos_theta) / (1.0 + g2 - 2.0 * g * cos_theta).powf(1.5)
+}
+
+/// Henyey-Greenstein phase function, sr^-1 (used to importance-sample the Mie lobe).
+pub fn henyey_greenstein_phase(cos_theta: f64, g: f64) -> f64 {
+    let g2 = g * g;
+    (1.0 - g2) / (4.0 * PI * (1.0 + g2 - 2.0 * g * cos_theta).powf(1.5))
+}

@@ -1,0 +1,140 @@
+//! The double-precision reference against closed forms and its own invariants: transmittance to
+//! space at the zenith, the optically thin limit, azimuth symmetry, energy (all orders >= single
+//! scattering), and convergence with quadrature and orders.
+
+use skytune::atmosphere::reference::{Case, Reference, ReferenceSettings};
+use skytune::atmosphere::{cornette_shanks_phase, rayleigh_phase, Atmosphere};
+
+fn case(sun_elev_deg: f64, view_elev_deg: f64, rel_azimuth_deg: f64) -> Case {
+    Case { camera_km: 0.2, albedo: 0.3, sun_elev_deg, view_elev_deg, rel_azimuth_deg }
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(1e-300)
+}
+
+fn single_only() -> ReferenceSettings {
+    ReferenceSettings { max_order: 1, ..Default::default() }
+}
+
+#[test]
+fn zenith_transmittance_matches_the_closed_form() {
+    let atm = Atmosphere::default();
+    let r = Reference::new(atm, single_only());
+    for altitude in [0.0, 1.5, 12.0, 25.0, 60.0] {
+        let numeric = r.optical_depth(altitude, 90.0);
+        let exact = atm.vertical_optical_depth(altitude);
+        for c in 0..3 {
+            assert!(rel(numeric[c], exact[c]) < 1e-7, "altitude {altitude} km, channel {c}: {} vs {}", numeric[c], exact[c]);
+        }
+    }
+    // Ground-level values of the default atmosphere, by hand: Rayleigh 8 km x beta, Mie 1.2 km x
+    // 4.44e-3, ozone 15 km x beta (the tent's area).
+    let tau = atm.vertical_optical_depth(0.0);
+    let by_hand = [8.0 * 5.802e-3 + 1.2 * 4.44e-3 + 15.0 * 0.65e-3, 8.0 * 13.558e-3 + 1.2 * 4.44e-3 + 15.0 * 1.881e-3, 8.0 * 33.1e-3 + 1.2 * 4.44e-3 + 15.0 * 0.085e-3];
+    for c in 0..3 {
+        assert!(rel(tau[c], by_hand[c]) < 1e-4, "{tau:?} vs {by_hand:?}");
+    }
+    // Through the ground: opaque.
+    assert!(r.optical_depth(1.0, -30.0).iter().all(|t| t.is_infinite()));
+}
+
+#[test]
+fn optically_thin_limit_matches_analytic_single_scattering() {
+    let k = 1e-6;
+    let atm = Atmosphere::default();
+    let thin = atm.scaled(k);
+    let r = Reference::new(thin, single_only());
+    for sun_elev in [10.0f64, 30.0, 75.0] {
+        // Looking straight up from the ground: L = sum_i beta_i phase_i(cos) integral of density.
+        let l = r.radiance(&Case { camera_km: 0.0, albedo: 0.0, sun_elev_deg: sun_elev, view_elev_deg: 90.0, rel_azimuth_deg: 0.0 });
+        let cos = sun_elev.to_radians().sin();
+        let top = atm.thickness_km();
+        let column = |h: f64| h * (1.0 - (-top / h).exp());
+        for (c, (l, beta)) in l.iter().zip(atm.rayleigh_scattering_per_km).enumerate() {
+            let expected = beta * rayleigh_phase(cos) * column(atm.rayleigh_scale_height_km)
+                + atm.mie_scattering_per_km * cornette_shanks_phase(cos, atm.mie_g) * column(atm.mie_scale_height_km);
+            assert!(rel(l / k, expected) < 1e-4, "sun {sun_elev}, channel {c}: {} vs {expected}", l / k);
+        }
+    }
+}
+
+#[test]
+fn radiance_is_symmetric_in_azimuth() {
+    let exact = Reference::new(Atmosphere::default(), single_only());
+    let all = Reference::new(Atmosphere::default(), ReferenceSettings { paths: 4096, ..Default::default() });
+    for (sun, view, az) in [(20.0, 10.0, 40.0), (3.0, 2.0, 120.0), (45.0, 60.0, 170.0)] {
+        let (a, b, c) = (exact.radiance(&case(sun, view, az)), exact.radiance(&case(sun, view, -az)), exact.radiance(&case(sun, view, 360.0 - az)));
+        for ch in 0..3 {
+            assert!(rel(a[ch], b[ch]) < 1e-9 && rel(a[ch], c[ch]) < 1e-9, "single scattering {a:?} {b:?} {c:?}");
+        }
+        // All orders: equal within the Monte Carlo noise the reference reports (5 sigma).
+        let (a, b) = (all.estimate(&case(sun, view, az)), all.estimate(&case(sun, view, -az)));
+        for ch in 0..3 {
+            let sigma = (a.std_err[ch].powi(2) + b.std_err[ch].powi(2)).sqrt();
+            assert!((a.all[ch] - b.all[ch]).abs() < 5.0 * sigma + 1e-12, "all orders, sun {sun} view {view} az +-{az}: {a:?} vs {b:?}");
+            assert!(sigma < 0.1 * a.all[ch], "noise {sigma} too large for {:?}", a.all);
+        }
+    }
+}
+
+#[test]
+fn all_orders_are_at_least_single_scattering_and_converge() {
+    let r = Reference::new(Atmosphere::default(), ReferenceSettings { paths: 2048, ..Default::default() });
+    for sun in [-4.0, 0.0, 5.0, 30.0, 80.0] {
+        for view in [-10.0, 0.0, 2.0, 20.0, 90.0] {
+            let (single, all) = r.radiance_split(&case(sun, view, 60.0));
+            for c in 0..3 {
+                assert!(all[c] >= single[c] && all[c].is_finite() && single[c] >= 0.0, "sun {sun} view {view}: {single:?} {all:?}");
+            }
+        }
+    }
+    // Truncating at an order only drops terms (same seed): radiance never decreases, and what
+    // each order adds shrinks.
+    let c = case(20.0, 15.0, 90.0);
+    let by_order: Vec<[f64; 3]> =
+        (1..=8).map(|n| Reference::new(Atmosphere::default(), ReferenceSettings { max_order: n, paths: 2048, ..Default::default() }).radiance(&c)).collect();
+    for w in by_order.windows(2) {
+        assert!((0..3).all(|ch| w[1][ch] >= w[0][ch]), "{by_order:?}");
+    }
+    let added = |n: usize| by_order[n - 1][2] - by_order[n - 2][2];
+    assert!(added(2) > 0.0 && added(8) < 0.1 * added(2), "order 2 adds {}, order 8 adds {}", added(2), added(8));
+}
+
+#[test]
+fn quadrature_converges() {
+    let coarse = Reference::new(Atmosphere::default(), ReferenceSettings { tau_tolerance: 1e-5, max_panel_km: 4.0, ..single_only() });
+    let fine = Reference::new(Atmosphere::default(), ReferenceSettings { tau_tolerance: 1e-9, max_panel_km: 0.25, ..single_only() });
+    for (sun, view) in [(45.0, 30.0), (2.0, 1.0), (-2.0, 5.0), (10.0, -5.0)] {
+        let (a, b) = (coarse.radiance(&case(sun, view, 30.0)), fine.radiance(&case(sun, view, 30.0)));
+        for c in 0..3 {
+            assert!(rel(a[c], b[c]) < 2e-3, "sun {sun} view {view}: {a:?} vs {b:?}");
+        }
+    }
+}
+
+#[test]
+fn the_ground_and_the_sun_behave() {
+    let r = Reference::new(Atmosphere::default(), ReferenceSettings { paths: 2048, ..Default::default() });
+    let dark = Case { albedo: 0.0, ..case(30.0, 20.0, 90.0) };
+    let bright = Case { albedo: 0.8, ..dark };
+    let (l0, l1) = (r.radiance(&dark), r.radiance(&bright));
+    assert!((0..3).all(|c| l1[c] > l0[c]), "a brighter ground lights the sky: {l0:?} vs {l1:?}");
+    // Day sky is blue; the multiple-scattered share of the zenith's blue is plausible (10-50%).
+    let (single, all) = r.radiance_split(&case(45.0, 90.0, 0.0));
+    assert!(all[2] > all[1] && all[1] > all[0], "{all:?}");
+    let share = (all[2] - single[2]) / all[2];
+    assert!((0.1..0.5).contains(&share), "multiple scattering share of blue {share}");
+    // Deep night: no light.
+    let night = r.radiance(&case(-30.0, 45.0, 0.0));
+    assert!(night.iter().all(|x| *x < 1e-7), "{night:?}");
+}
+
+#[test]
+fn bad_atmospheres_name_the_field() {
+    let atm = Atmosphere { top_radius_km: 6000.0, rayleigh_scattering_per_km: [-1.0, 0.0, 0.0], mie_g: f64::NAN, ..Atmosphere::default() };
+    let errors = atm.validate().unwrap_err();
+    let fields: Vec<&str> = errors.iter().map(|e| e.field).collect();
+    assert_eq!(fields, ["top_radius_km", "rayleigh_scattering_per_km", "mie_g"], "{errors:?}");
+    assert!(Atmosphere::default().validate().is_ok());
+}
