@@ -59,6 +59,17 @@ pub enum Command {
 pub enum RadianceModel {
     /// The CPU double-precision reference (every order of scattering, ozone, ground albedo).
     Reference,
+    /// Single scattering ray-marched on the GPU, erf or numerical optical depth towards the sun.
+    Single,
+}
+
+/// Optical depth towards the sun of the `single` model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum OpticalDepthArg {
+    /// The analytic erf approximation.
+    Erf,
+    /// Numerical integration.
+    Numerical,
 }
 
 /// `radiance` arguments.
@@ -82,6 +93,18 @@ pub struct RadianceArgs {
     /// Seed of the reference's paths.
     #[arg(long, default_value_t = 0x5eed)]
     pub seed: u64,
+    /// `single`: samples along the view ray.
+    #[arg(long, default_value_t = 32)]
+    pub view_steps: u32,
+    /// `single`: samples towards the sun (numerical optical depth).
+    #[arg(long, default_value_t = 16)]
+    pub sun_steps: u32,
+    /// `single`: how the optical depth towards the sun is found.
+    #[arg(long, value_enum, default_value = "erf")]
+    pub optical_depth: OpticalDepthArg,
+    /// Force the software adapter (lavapipe) for GPU models.
+    #[arg(long)]
+    pub cpu: bool,
 }
 
 /// Which frame to render.

@@ -51,24 +51,56 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 
 /// `skytune radiance`: evaluates a model on every case of a CSV file.
 fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
-    use skytune::atmosphere::{cases, reference, Atmosphere};
+    use skytune::atmosphere::{cases, Atmosphere};
     anyhow::ensure!(args.max_order >= 1, "--max-order: expected at least 1, found {}", args.max_order);
+    anyhow::ensure!((1..=4096).contains(&args.view_steps) && (1..=4096).contains(&args.sun_steps), "--view-steps and --sun-steps: expected 1..=4096");
     let atm = Atmosphere::default();
     let list = cases::read_cases(&args.cases, atm.thickness_km())?;
-    let settings = reference::ReferenceSettings { max_order: args.max_order, paths: args.paths, seed: args.seed, ..Default::default() };
     let started = std::time::Instant::now();
-    let model = match args.model {
-        cli::RadianceModel::Reference => reference::Reference::new(atm, settings),
+    let units =
+        "sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); default atmosphere (Hillaire 2020); sun disc and ground surface excluded";
+    let (out, comment) = match args.model {
+        cli::RadianceModel::Reference => reference_radiance(args, atm, &list),
+        cli::RadianceModel::Single => {
+            let settings = skytune::atmosphere::SingleSettings {
+                view_steps: args.view_steps,
+                sun_steps: args.sun_steps,
+                optical_depth: match args.optical_depth {
+                    cli::OpticalDepthArg::Erf => skytune::atmosphere::OpticalDepth::Erf,
+                    cli::OpticalDepthArg::Numerical => skytune::atmosphere::OpticalDepth::Numerical,
+                },
+            };
+            let ctx = GpuContext::headless(adapter(args.cpu))?;
+            let probe = skytune::render::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
+            let out = probe.single(&ctx, &atm, &settings, &list)?;
+            let out = out.into_iter().map(|c| c.map(f64::from)).collect();
+            (out, format!("model single on {}: {settings:?}", ctx.adapter_line()))
+        }
     };
+    let name = match args.model {
+        cli::RadianceModel::Reference => "reference",
+        cli::RadianceModel::Single => "single",
+    };
+    cases::write_radiance(&args.out, &format!("skytune radiance --model {name}: {units}\n{comment}"), &list, &out)?;
+    println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// The reference's radiance for every case, on every core; with a line saying how it was computed.
+fn reference_radiance(args: &cli::RadianceArgs, atm: skytune::atmosphere::Atmosphere, list: &[skytune::atmosphere::reference::Case]) -> (Vec<[f64; 3]>, String) {
+    use skytune::atmosphere::reference::{Estimate, Reference, ReferenceSettings};
+    let settings = ReferenceSettings { max_order: args.max_order, paths: args.paths, seed: args.seed, ..Default::default() };
+    let model = Reference::new(atm, settings);
     let done = std::sync::atomic::AtomicUsize::new(0);
     let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).min(list.len().max(1));
-    let mut out = vec![[0.0; 3]; list.len()];
+    let chunk = list.len().div_ceil(workers).max(1);
+    let mut estimates = vec![Estimate { single: [0.0; 3], all: [0.0; 3], std_err: [0.0; 3] }; list.len()];
     std::thread::scope(|scope| {
-        for (chunk_cases, chunk_out) in list.chunks(list.len().div_ceil(workers).max(1)).zip(out.chunks_mut(list.len().div_ceil(workers).max(1))) {
+        for (cases, out) in list.chunks(chunk).zip(estimates.chunks_mut(chunk)) {
             let (model, done, total) = (&model, &done, list.len());
             scope.spawn(move || {
-                for (c, o) in chunk_cases.iter().zip(chunk_out.iter_mut()) {
-                    *o = model.radiance(c);
+                for (c, o) in cases.iter().zip(out.iter_mut()) {
+                    *o = model.estimate(c);
                     let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     eprint!("\rradiance: {n}/{total} cases");
                 }
@@ -76,14 +108,12 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
         }
     });
     eprintln!();
+    let worst = estimates.iter().flat_map(|e| (0..3).map(move |c| e.std_err[c] / e.all[c].max(1e-30))).fold(0.0, f64::max);
     let comment = format!(
-        "skytune radiance --model reference: sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere)\n\
-         default atmosphere (Hillaire 2020); max order {}, {} paths per case, seed {}; sun disc and ground surface excluded",
-        settings.max_order, settings.paths, settings.seed
+        "model reference: max order {}, {} paths per case, seed {}; largest relative standard error of a value {:.2e}",
+        settings.max_order, settings.paths, settings.seed, worst
     );
-    cases::write_radiance(&args.out, &comment, &list, &out)?;
-    println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());
-    Ok(())
+    (estimates.iter().map(|e| e.all).collect(), comment)
 }
 
 /// The sky a command names (or the built-in one).

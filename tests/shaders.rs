@@ -23,12 +23,13 @@ fn modules_on_disk(dir: &Path, prefix: &str, out: &mut Vec<(String, PathBuf)>) {
 #[test]
 fn every_wgsl_file_validates() {
     let dir = shader_dir();
-    let globals = std::fs::read_to_string(dir.join("globals.wgsl")).unwrap();
+    let library = skytune::render::ShaderLibrary { dir: Some(dir.clone()) };
     let mut modules = Vec::new();
     modules_on_disk(&dir, "", &mut modules);
     assert!(!modules.is_empty());
-    for (_, path) in &modules {
-        let source = format!("{globals}\n{}", std::fs::read_to_string(path).unwrap());
+    for (name, path) in &modules {
+        // As the renderer loads it: globals, the modules it requires, the file.
+        let source = library.source(name).unwrap();
         let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}: {}", path.display(), e.emit_to_string(&source)));
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
             .validate(&module)

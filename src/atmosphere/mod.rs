@@ -200,3 +200,33 @@ pub fn henyey_greenstein_phase(cos_theta: f64, g: f64) -> f64 {
     let g2 = g * g;
     (1.0 - g2) / (4.0 * PI * (1.0 + g2 - 2.0 * g * cos_theta).powf(1.5))
 }
+
+/// How the `single` model finds the optical depth towards the sun.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OpticalDepth {
+    /// The analytic erf approximation of the procedural-sky text (both regimes, and through the
+    /// ray's lowest point when it goes down).
+    #[default]
+    Erf,
+    /// Numerical integration (midpoint rule), for comparison.
+    Numerical,
+}
+
+/// Settings of the `single` model: the accuracy axis of the benchmark.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SingleSettings {
+    /// Samples along the view ray.
+    pub view_steps: u32,
+    /// Samples towards the sun (numerical optical depth only).
+    pub sun_steps: u32,
+    /// How the optical depth towards the sun is found.
+    pub optical_depth: OpticalDepth,
+}
+
+impl Default for SingleSettings {
+    fn default() -> Self {
+        Self { view_steps: 32, sun_steps: 16, optical_depth: OpticalDepth::Erf }
+    }
+}

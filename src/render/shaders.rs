@@ -44,10 +44,44 @@ impl ShaderLibrary {
         }
     }
 
-    /// Full source of a module: globals followed by the module's own file.
+    /// Full source of a module: globals, then the modules it requires (`//! requires: a, b` lines,
+    /// resolved depth first, each once), then the module's own file.
     pub fn source(&self, name: &str) -> RenderResult<String> {
-        Ok(format!("{}\n{}", self.raw(GLOBALS)?, self.raw(name)?))
+        let mut order = Vec::new();
+        self.resolve(name, &mut Vec::new(), &mut order)?;
+        let mut out = self.raw(GLOBALS)?;
+        for (_, text) in order {
+            out.push('\n');
+            out.push_str(&text);
+        }
+        Ok(out)
     }
+
+    /// Appends `name` after everything it requires; `stack` catches cycles.
+    fn resolve(&self, name: &str, stack: &mut Vec<String>, order: &mut Vec<(String, String)>) -> RenderResult<()> {
+        if order.iter().any(|(n, _)| n == name) {
+            return Ok(());
+        }
+        if stack.iter().any(|n| n == name) {
+            return Err(RenderError::Validation { what: format!("shaders/{name}.wgsl"), message: format!("requires itself through {}", stack.join(" -> ")) });
+        }
+        let text = self.raw(name)?;
+        stack.push(name.to_string());
+        for dep in requires(&text) {
+            self.resolve(&dep, stack, order)?;
+        }
+        stack.pop();
+        order.push((name.to_string(), text));
+        Ok(())
+    }
+}
+
+/// Modules a shader file requires, from its `//! requires: a, b` lines.
+pub fn requires(text: &str) -> Vec<String> {
+    text.lines()
+        .filter_map(|l| l.trim().strip_prefix("//! requires:"))
+        .flat_map(|list| list.split(',').map(|n| n.trim().to_string()).filter(|n| !n.is_empty()).collect::<Vec<_>>())
+        .collect()
 }
 
 /// Runs `build` inside a validation error scope; returns its result only if wgpu reported nothing.

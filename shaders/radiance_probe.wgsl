@@ -1,0 +1,25 @@
+//! requires: sky_model/single
+// Evaluates a sky model for a list of radiance cases (`skytune radiance`, tests, benchmarks).
+// Keep in sync with src/render/radiance_probe.rs.
+@group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
+@group(1) @binding(1) var<uniform> single_settings: SingleSettings;
+// Per case: camera_km, sun_elev_deg, view_elev_deg, rel_azimuth_deg.
+@group(1) @binding(2) var<storage, read> cases: array<vec4<f32>>;
+@group(1) @binding(3) var<storage, read_write> radiance: array<vec4<f32>>;
+
+fn direction(elevation_deg: f32, azimuth_deg: f32) -> vec3<f32> {
+    let e = radians(elevation_deg);
+    let a = radians(azimuth_deg);
+    return vec3<f32>(cos(e) * cos(a), sin(e), cos(e) * sin(a));
+}
+
+@compute @workgroup_size(64)
+fn cs_single(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= arrayLength(&cases)) {
+        return;
+    }
+    let c = cases[id.x];
+    let sun = direction(c.y, 0.0);
+    let view = direction(c.z, c.w);
+    radiance[id.x] = vec4<f32>(single_scattering(atmosphere, single_settings, c.x, view, sun), 1.0);
+}

@@ -1,0 +1,138 @@
+// Atmosphere parameters, density profiles, phase functions and optical depths shared by the
+// physical sky models. Units: km, km^-1, radians. Keep in sync with `AtmosphereUniform` in
+// src/render/sky_model.rs.
+struct Atmosphere {
+    rayleigh: vec4<f32>, // scattering rgb (km^-1), scale height (km)
+    mie: vec4<f32>,      // scattering, extinction (km^-1), scale height (km), g
+    ozone: vec4<f32>,    // absorption rgb (km^-1), tent centre (km)
+    shape: vec4<f32>,    // ground radius, top radius (km), ozone tent half width (km), sun angular radius (rad)
+};
+
+const PI: f32 = 3.14159265358979;
+
+fn rayleigh_phase(cos_theta: f32) -> f32 {
+    return 3.0 / (16.0 * PI) * (1.0 + cos_theta * cos_theta);
+}
+
+fn cornette_shanks_phase(cos_theta: f32, g: f32) -> f32 {
+    let g2 = g * g;
+    return 3.0 / (8.0 * PI) * (1.0 - g2) / (2.0 + g2) * (1.0 + cos_theta * cos_theta) / pow(1.0 + g2 - 2.0 * g * cos_theta, 1.5);
+}
+
+fn ozone_density(atm: Atmosphere, altitude_km: f32) -> f32 {
+    return max(0.0, 1.0 - abs(altitude_km - atm.ozone.w) / atm.shape.z);
+}
+
+// Extinction at an altitude, km^-1.
+fn extinction_at(atm: Atmosphere, altitude_km: f32) -> vec3<f32> {
+    let h = max(altitude_km, 0.0);
+    return atm.rayleigh.xyz * exp(-h / atm.rayleigh.w) + vec3<f32>(atm.mie.y * exp(-h / atm.mie.z)) + atm.ozone.xyz * ozone_density(atm, h);
+}
+
+// Altitude of p + t d for a point at radius r with direction cosine mu (to the local vertical),
+// without the cancellation of length(p) - R in f32.
+fn altitude_along(atm: Atmosphere, r: f32, mu: f32, t: f32) -> f32 {
+    let r2 = r * r + t * (t + 2.0 * r * mu);
+    return (r2 - atm.shape.x * atm.shape.x) / (sqrt(max(r2, 0.0)) + atm.shape.x);
+}
+
+// Distance to the top of the atmosphere from radius r along cosine mu (r inside).
+fn distance_to_top(atm: Atmosphere, r: f32, mu: f32) -> f32 {
+    let top = atm.shape.y;
+    let disc = r * r * (mu * mu - 1.0) + top * top;
+    return max(0.0, -r * mu + sqrt(max(disc, 0.0)));
+}
+
+// Distance to the ground along cosine mu, or -1 when the ray misses it.
+fn distance_to_ground(atm: Atmosphere, r: f32, mu: f32) -> f32 {
+    let ground = atm.shape.x;
+    // r^2 (mu^2 - 1) + R^2, written to keep precision for r close to R.
+    let disc = r * r * mu * mu - (r - ground) * (r + ground);
+    if (mu >= 0.0 || disc < 0.0) {
+        return -1.0;
+    }
+    return max(0.0, -r * mu - sqrt(disc));
+}
+
+// Integral from 0 to infinity of exp(-(a x^2 + b x)) dx for b >= 0, with the two regimes of
+// the procedural-sky text: the asymptotic series when b > 7 sqrt(a), else a rational fit of
+// erfc (Abramowitz and Stegun 7.1.25).
+fn erf_column(a: f32, b: f32) -> f32 {
+    let sa = sqrt(a);
+    if (b > 7.0 * sa) {
+        let b2 = b * b;
+        return (1.0 / b) * (1.0 - 2.0 * a / b2 + 12.0 * a * a / (b2 * b2));
+    }
+    let p = 2.0 * sa / (2.0 * sa + 0.47047 * b);
+    return sqrt(PI) / (2.0 * sa) * (0.3480242 * p - 0.0958798 * p * p + 0.7478556 * p * p * p);
+}
+
+// Optical-depth integral of exp(-altitude / scale) from altitude h (radius r) along cosine mu to
+// infinity, in km, by the erf approximation; a negative value means the ray hits the ground.
+fn erf_optical_length(atm: Atmosphere, r: f32, h: f32, mu: f32, scale: f32) -> f32 {
+    let ground = atm.shape.x;
+    if (mu >= 0.0) {
+        let a = (1.0 - mu * mu) / (2.0 * r * scale);
+        return exp(-h / scale) * erf_column(a, mu / scale);
+    }
+    // Downwards: through the ray's lowest point, unless that is below the ground.
+    let r_min = r * sqrt(max(1.0 - mu * mu, 0.0));
+    let h_min = r_min - ground;
+    if (h_min < 0.0) {
+        return -1.0;
+    }
+    let to_lowest = -mu * r;
+    let before = 0.5 * to_lowest * (exp(-h / scale) + exp(-h_min / scale));
+    let a = 1.0 / (2.0 * r_min * scale);
+    return before + exp(-h_min / scale) * erf_column(a, 0.0);
+}
+
+// Ozone tent column above an altitude, km (closed form).
+fn ozone_column_above(atm: Atmosphere, h: f32) -> f32 {
+    let w = atm.shape.z;
+    let u = clamp((h - atm.ozone.w) / w, -1.0, 1.0);
+    var below: f32;
+    if (u < 0.0) {
+        below = 0.5 * (1.0 + u) * (1.0 + u);
+    } else {
+        below = 1.0 - 0.5 * (1.0 - u) * (1.0 - u);
+    }
+    return w * (1.0 - below);
+}
+
+// Optical depth to the sun by the erf approximation (Rayleigh, Mie); ozone by its vertical column
+// times the slant factor at the tent's centre (an approximation: the text has no ozone).
+// Returns -1 when the ground blocks the sun.
+fn erf_optical_depth(atm: Atmosphere, r: f32, h: f32, mu: f32) -> vec3<f32> {
+    let lr = erf_optical_length(atm, r, h, mu, atm.rayleigh.w);
+    if (lr < 0.0) {
+        return vec3<f32>(-1.0);
+    }
+    let lm = erf_optical_length(atm, r, h, mu, atm.mie.z);
+    let rc = atm.shape.x + atm.ozone.w;
+    let s = clamp(r / rc, 0.0, 1.0) * sqrt(max(1.0 - mu * mu, 0.0));
+    let slant = 1.0 / sqrt(max(1.0 - s * s, 1e-4));
+    var column = ozone_column_above(atm, h);
+    if (mu < 0.0) {
+        // Down through the lowest point and up again.
+        let h_min = r * sqrt(max(1.0 - mu * mu, 0.0)) - atm.shape.x;
+        column = 2.0 * ozone_column_above(atm, h_min) - column;
+    }
+    return atm.rayleigh.xyz * lr + vec3<f32>(atm.mie.y * lm) + atm.ozone.xyz * column * slant;
+}
+
+// Optical depth to the top of the atmosphere by the midpoint rule with `steps` samples;
+// -1 when the ground blocks the ray.
+fn numeric_optical_depth(atm: Atmosphere, r: f32, mu: f32, steps: u32) -> vec3<f32> {
+    if (distance_to_ground(atm, r, mu) >= 0.0) {
+        return vec3<f32>(-1.0);
+    }
+    let ray_length = distance_to_top(atm, r, mu);
+    let dt = ray_length / f32(steps);
+    var tau = vec3<f32>(0.0);
+    for (var i = 0u; i < steps; i++) {
+        let t = (f32(i) + 0.5) * dt;
+        tau += extinction_at(atm, altitude_along(atm, r, mu, t)) * dt;
+    }
+    return tau;
+}

@@ -1,0 +1,57 @@
+//! requires: sky_model/atmosphere
+// Single scattering by ray marching (the `single` sky model). Radiance in sr^-1 per unit of solar
+// irradiance. Keep `SingleSettings` in sync with `SingleUniform` in src/render/sky_model.rs.
+struct SingleSettings {
+    view_steps: u32,    // samples along the view ray
+    sun_steps: u32,     // samples towards the sun (numerical optical depth only)
+    numeric: u32,       // 0: erf optical depth towards the sun, 1: numerical integration
+    _pad: u32,
+};
+
+fn sun_optical_depth(atm: Atmosphere, s: SingleSettings, r: f32, h: f32, mu_s: f32) -> vec3<f32> {
+    if (s.numeric != 0u) {
+        return numeric_optical_depth(atm, r, mu_s, s.sun_steps);
+    }
+    return erf_optical_depth(atm, r, h, mu_s);
+}
+
+// Sky radiance seen from `camera_km` along the unit `view` (y up), sun along the unit `sun`.
+fn single_scattering(atm: Atmosphere, s: SingleSettings, camera_km: f32, view: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
+    let r = atm.shape.x + camera_km;
+    let mu = view.y;
+    let ground = distance_to_ground(atm, r, mu);
+    var ray_length = distance_to_top(atm, r, mu);
+    if (ground >= 0.0) {
+        ray_length = ground;
+    }
+    let nu = dot(view, sun);
+    let phase_r = rayleigh_phase(nu);
+    let phase_m = cornette_shanks_phase(nu, atm.mie.w);
+    // Samples crowd near the camera, where the air is densest: t = length (i / n)^2.
+    let n = f32(max(s.view_steps, 1u));
+    var tau = vec3<f32>(0.0);
+    var sum = vec3<f32>(0.0);
+    var t_prev = 0.0;
+    for (var i = 0u; i < max(s.view_steps, 1u); i++) {
+        let t_next = ray_length * ((f32(i) + 1.0) / n) * ((f32(i) + 1.0) / n);
+        let dt = t_next - t_prev;
+        let t = t_prev + 0.5 * dt;
+        t_prev = t_next;
+        let h = altitude_along(atm, r, mu, t);
+        let e = extinction_at(atm, h);
+        let tau_mid = tau + e * (0.5 * dt);
+        tau += e * dt;
+        // The sample's own frame: radius and the sun's cosine to its vertical.
+        let p = vec3<f32>(0.0, r, 0.0) + view * t;
+        let r_p = atm.shape.x + h;
+        let mu_s = dot(p, sun) / max(length(p), 1e-3);
+        let tau_sun = sun_optical_depth(atm, s, r_p, h, mu_s);
+        if (tau_sun.x < 0.0) {
+            continue;
+        }
+        let hh = max(h, 0.0);
+        let scattering = atm.rayleigh.xyz * exp(-hh / atm.rayleigh.w) * phase_r + vec3<f32>(atm.mie.x * exp(-hh / atm.mie.z) * phase_m);
+        sum += scattering * exp(-(tau_mid + tau_sun)) * dt;
+    }
+    return sum;
+}

@@ -1,0 +1,69 @@
+//! GPU sky models against the double-precision reference, evaluated on lavapipe through the
+//! radiance probe (the same path as `skytune radiance`). Thresholds per model and regime are
+//! documented in docs/sky-models.md.
+
+use skytune::atmosphere::reference::{Case, Reference, ReferenceSettings};
+use skytune::atmosphere::{Atmosphere, OpticalDepth, SingleSettings};
+use skytune::render::radiance_probe::RadianceProbe;
+use skytune::render::{AdapterChoice, GpuContext, ShaderLibrary};
+
+/// Sun elevations (fine near the horizon), view elevations and relative azimuths.
+fn grid() -> Vec<Case> {
+    let mut cases = Vec::new();
+    for sun in [-6.0, -2.0, 0.0, 1.0, 3.0, 6.0, 10.0, 20.0, 45.0, 80.0] {
+        for view in [-10.0, -1.0, 0.5, 2.0, 5.0, 15.0, 40.0, 90.0] {
+            for az in [0.0, 60.0, 180.0] {
+                cases.push(Case { camera_km: 0.2, albedo: 0.0, sun_elev_deg: sun, view_elev_deg: view, rel_azimuth_deg: az });
+            }
+        }
+    }
+    cases
+}
+
+/// Worst relative error per regime (day: sun >= 10 deg; low sun: 0..10; twilight: below 0), over
+/// values above 1% of the brightest value of the same sun elevation (darker ones are judged in
+/// absolute terms by that 1%).
+fn worst_errors(cases: &[Case], model: &[[f32; 3]], reference: &[[f64; 3]]) -> [f64; 3] {
+    let mut worst = [0.0f64; 3];
+    for (i, c) in cases.iter().enumerate() {
+        let peak = cases.iter().zip(reference).filter(|(d, _)| d.sun_elev_deg == c.sun_elev_deg).flat_map(|(_, r)| r.iter().copied()).fold(0.0, f64::max);
+        let regime = if c.sun_elev_deg >= 10.0 {
+            0
+        } else if c.sun_elev_deg >= 0.0 {
+            1
+        } else {
+            2
+        };
+        for ch in 0..3 {
+            let (m, r) = (model[i][ch] as f64, reference[i][ch]);
+            let err = (m - r).abs() / r.max(0.01 * peak).max(1e-30);
+            worst[regime] = worst[regime].max(err);
+        }
+    }
+    worst
+}
+
+#[test]
+fn single_scattering_on_the_gpu_matches_the_reference() {
+    let atm = Atmosphere::default();
+    let cases = grid();
+    let reference = Reference::new(atm, ReferenceSettings { max_order: 1, ..Default::default() });
+    let exact: Vec<[f64; 3]> = cases.iter().map(|c| reference.radiance(c)).collect();
+    let ctx = GpuContext::headless(AdapterChoice::Cpu).unwrap();
+    let probe = RadianceProbe::new(&ctx, &ShaderLibrary::embedded()).unwrap();
+    // Thresholds (day, low sun, twilight): see docs/sky-models.md.
+    let runs = [
+        ("erf, 32 view steps", SingleSettings { view_steps: 32, sun_steps: 16, optical_depth: OpticalDepth::Erf }, [0.03, 0.15, 0.6]),
+        ("numerical, 32 x 32 steps", SingleSettings { view_steps: 32, sun_steps: 32, optical_depth: OpticalDepth::Numerical }, [0.015, 0.02, 0.03]),
+        ("numerical, 128 x 128 steps", SingleSettings { view_steps: 128, sun_steps: 128, optical_depth: OpticalDepth::Numerical }, [0.002, 0.006, 0.008]),
+    ];
+    for (name, settings, limits) in runs {
+        let gpu = probe.single(&ctx, &atm, &settings, &cases).unwrap();
+        assert!(gpu.iter().flatten().all(|x| x.is_finite() && *x >= 0.0), "{name}: NaN or negative radiance");
+        let worst = worst_errors(&cases, &gpu, &exact);
+        eprintln!("single ({name}): worst relative error day {:.4}, low sun {:.4}, twilight {:.4}", worst[0], worst[1], worst[2]);
+        for (regime, (w, limit)) in ["day", "low sun", "twilight"].iter().zip(worst.iter().zip(limits)) {
+            assert!(*w <= limit, "single ({name}), {regime}: worst relative error {w:.4} > {limit}");
+        }
+    }
+}
