@@ -13,3 +13,4 @@ struct Globals {
     camera_position: vec4<f32>,        // world position of the main-scene camera, m
 };
 @group(0) @binding(0) var<uniform> globals: Globals;
+const PI: f32 = 3.14159265358979;

@@ -1,3 +1,4 @@
+//! requires: sky_model/sky_view_map
 // Sky objects: procedural shapes with a NeL-style material of up to 4 texture stages.
 // The material is a sum of terms: an `add` stage starts a term (texture x constant), a
 // `modulate` stage multiplies the current term; the result times the diffuse colour.
@@ -18,7 +19,7 @@ struct Draw {
     diffuse: vec4<f32>,
     constants: array<vec4<f32>, 4>,
     stages: array<Stage, 4>,
-    misc: vec4<u32>,         // stage count, lighting (0 flat, 1 moon)
+    misc: vec4<u32>,         // stage count, lighting (0 flat, 1 moon), stage fed by the sky-view map (4 = none)
 };
 
 @group(1) @binding(0) var<uniform> draw: Draw;
@@ -30,12 +31,14 @@ struct Draw {
 @group(1) @binding(6) var samp1: sampler;
 @group(1) @binding(7) var samp2: sampler;
 @group(1) @binding(8) var samp3: sampler;
+// A physical sky model's colour by direction (sky_view.wgsl), replacing the gradient stage.
+@group(1) @binding(9) var sky_view: texture_2d<f32>;
+@group(1) @binding(10) var sky_view_sampler: sampler;
 
 const UV_MESH: u32 = 0u;
 const UV_SUN: u32 = 1u;
 const UV_CELESTIAL: u32 = 2u;
 const UV_QUAKE: u32 = 3u;
-const PI: f32 = 3.14159265;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -97,6 +100,9 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         textureSample(tex2, samp2, uv2),
         textureSample(tex3, samp3, uv3),
     );
+    if draw.misc.z < 4u {
+        samples[draw.misc.z] = textureSample(sky_view, sky_view_sampler, sky_view_uv(normalize(in.world_dir)));
+    }
 
     var sum = vec4<f32>(0.0);
     var term = vec4<f32>(0.0);

@@ -140,6 +140,12 @@ pub struct FrameArgs {
     /// Render what the environment map sees (objects with visible_in_env_map).
     #[arg(long)]
     pub env_map: bool,
+    /// Colour source of the skydome instead of the sky file's: bitmap, single.
+    #[arg(long)]
+    pub sky_model: Option<String>,
+    /// Exposure of physical sky models, stops (default: the sky file's).
+    #[arg(long)]
+    pub exposure_ev: Option<f32>,
     /// Force the software adapter (lavapipe).
     #[arg(long)]
     pub cpu: bool,

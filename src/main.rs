@@ -12,6 +12,7 @@ use clap::Parser;
 use cli::{Cli, Command, FrameArgs, RenderArgs};
 use skytune::live::{LiveSky, ReloadEvent, SkySpec};
 use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions};
+use skytune::sky::resolved::SkyModelKind;
 use skytune::sky::{procedural, FrameInput, Sky, Tier};
 
 fn main() {
@@ -155,6 +156,21 @@ fn adapter(cpu: bool) -> AdapterChoice {
 fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyhow::Result<()> {
     let (input, camera) = frame_from_args(&args.frame)?;
     let options = RenderOptions { scene: !args.frame.no_scene, ..Default::default() };
+    let mut input = input;
+    if args.frame.sky_model.is_some() || args.frame.exposure_ev.is_some() {
+        let mut model = sky.model;
+        if let Some(name) = &args.frame.sky_model {
+            model.kind = SkyModelKind::ALL
+                .into_iter()
+                .find(|k| k.name() == name)
+                .ok_or_else(|| anyhow!("--sky-model: unknown model \"{name}\"; expected one of {}", SkyModelKind::ALL.map(|k| k.name()).join(", ")))?;
+        }
+        if let Some(ev) = args.frame.exposure_ev {
+            anyhow::ensure!(ev.is_finite(), "--exposure-ev: expected a finite number of stops");
+            model.exposure_ev = ev;
+        }
+        input.sky_model = Some(model);
+    }
     let frame = sky.evaluate(&input);
     for o in &frame.objects {
         if let Err(why) = &o.versions {

@@ -168,3 +168,47 @@ fn bitmap_mode_without_bitmap_points_at_the_owner() {
     let (e, line, file) = broken("diffuse = { mode = \"bitmap\", bitmap = \"clouds_storm.png\" }", "diffuse = { mode = \"bitmap\" }");
     assert_error(&e, &file, line, "object[8].standard.diffuse", "needs a `bitmap`");
 }
+
+/// The default sky with `extra` appended; the errors (or the sky), the file and its text.
+fn with_sections(extra: &str) -> (Result<skytune::sky::Sky, SkyErrors>, String, String) {
+    let (dir, sky) = common::default_sky_folder();
+    let text = format!("{DEFAULT_SKY_TOML}\n{extra}");
+    std::fs::write(&sky, &text).unwrap();
+    let result = load_sky_file(&sky);
+    let file = sky.display().to_string();
+    drop(dir);
+    (result, file, text)
+}
+
+fn line_of(text: &str, needle: &str) -> usize {
+    text[..text.rfind(needle).unwrap()].matches('\n').count() + 1
+}
+
+#[test]
+fn sky_model_and_atmosphere_sections_load() {
+    let (sky, _, _) = with_sections("[sky_model]\nkind = \"single\"\nexposure_ev = 4.5\ntone_mapper = \"neutral\"\noptical_depth = \"numerical\"\nview_steps = 48\n\n[atmosphere]\nmie_scattering_per_km = 0.02\nmie_extinction_per_km = 0.022\n");
+    let sky = sky.unwrap();
+    assert_eq!(sky.model.kind, skytune::sky::resolved::SkyModelKind::Single);
+    assert_eq!((sky.model.exposure_ev, sky.model.single.view_steps), (4.5, 48));
+    assert_eq!(sky.model.single.optical_depth, skytune::atmosphere::OpticalDepth::Numerical);
+    assert!((sky.atmosphere.mie_scattering_per_km - 0.02).abs() < 1e-9 && sky.atmosphere.rayleigh_scale_height_km == 8.0);
+    // Without the sections: the NeL bitmaps and Earth.
+    assert_eq!(default_sky().model, skytune::sky::resolved::SkyModel::default());
+}
+
+#[test]
+fn bad_sky_model_and_atmosphere_values_are_located() {
+    for (extra, needle, field, message) in [
+        ("[sky_model]\nkind = \"single\"\nview_steps = 0\n", "view_steps = 0", "sky_model.view_steps", "expected a sample count in 1..=1024, found 0"),
+        ("[sky_model]\nview_steps = 1000000\n", "view_steps = 1000000", "sky_model.view_steps", "found 1000000"),
+        ("[sky_model]\nkind = \"hosek\"\n", "kind = \"hosek\"", "sky_model.kind", "unknown variant"),
+        ("[atmosphere]\nrayleigh_scale_height_km = nan\n", "rayleigh_scale_height_km = nan", "atmosphere.rayleigh_scale_height_km", "expected a finite number > 0"),
+        ("[atmosphere]\nmie_scattering_per_km = -1\n", "mie_scattering_per_km = -1", "atmosphere.mie_scattering_per_km", "expected a finite number >= 0"),
+        ("[atmosphere]\ntop_radius_km = 6000\n", "top_radius_km = 6000", "atmosphere.top_radius_km", "expected more than ground_radius_km"),
+        ("[atmosphere]\nmie_extinction_per_km = 0.001\n", "mie_extinction_per_km = 0.001", "atmosphere.mie_extinction_per_km", "expected at least mie_scattering_per_km"),
+    ] {
+        let (result, file, text) = with_sections(extra);
+        let errors = result.expect_err(extra);
+        assert_error(&errors, &file, line_of(&text, needle), field, message);
+    }
+}

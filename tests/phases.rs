@@ -187,14 +187,10 @@ const EXTRA: &[(&str, PassConstructor)] = &[("hour_probe", |b| skytune::render::
 /// The checkout's shaders plus the test passes' files, in one folder.
 fn library_with_test_passes() -> (tempfile::TempDir, ShaderLibrary) {
     let dir = tempfile::tempdir().unwrap();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    for src in [root.join("shaders"), root.join("tests/passes")] {
-        for e in std::fs::read_dir(src).unwrap() {
-            let p = e.unwrap().path();
-            if p.extension().is_some_and(|x| x == "wgsl") {
-                std::fs::copy(&p, dir.path().join(p.file_name().unwrap())).unwrap();
-            }
-        }
+    common::copy_shaders(dir.path());
+    for e in std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/passes")).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, dir.path().join(p.file_name().unwrap())).unwrap();
     }
     let lib = ShaderLibrary { dir: Some(dir.path().to_path_buf()) };
     (dir, lib)

@@ -166,11 +166,7 @@ fn gpu_pass_times_arrive_without_blocking() {
 fn broken_shader_edit_keeps_the_old_pipelines() {
     let sky = default_sky();
     let dir = tempfile::tempdir().unwrap();
-    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
-    for e in std::fs::read_dir(&src).unwrap() {
-        let p = e.unwrap().path();
-        std::fs::copy(&p, dir.path().join(p.file_name().unwrap())).unwrap();
-    }
+    common::copy_shaders(dir.path());
     let mut h = common::headless(W, H);
     h.set_sky(&sky).unwrap();
     h.renderer.set_library(skytune::render::ShaderLibrary { dir: Some(dir.path().to_path_buf()) });
@@ -191,4 +187,54 @@ fn broken_shader_edit_keeps_the_old_pipelines() {
     h.renderer.reload_shaders(&h.ctx).unwrap();
     let red = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
     assert_eq!(red.get_pixel(W / 2, 5).0, [255, 0, 0, 255]);
+}
+
+fn single_model(sky: &skytune::sky::Sky) -> skytune::sky::resolved::SkyModel {
+    skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Single, ..sky.model }
+}
+
+fn render_single(name: &str, hour: f32, weather: f32) {
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    let input = FrameInput { sky_model: Some(single_model(&sky)), ..FrameInput::new(hour, weather) };
+    let img = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+    common::check_reference(name, &img);
+}
+
+#[test]
+fn single_model_day() {
+    render_single("single_day", 13.0, 0.0);
+}
+
+#[test]
+fn single_model_sunset() {
+    render_single("single_sunset", 18.0, 0.1);
+}
+
+#[test]
+fn switching_the_sky_model_live_leaves_the_bitmap_path_exact() {
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    let opts = RenderOptions { glare: false, ..Default::default() };
+    let bitmap = FrameInput::new(13.0, 0.0);
+    let before = h.render(&sky, &bitmap, &camera(), &opts).unwrap();
+    let single = h.render(&sky, &FrameInput { sky_model: Some(single_model(&sky)), ..bitmap.clone() }, &camera(), &opts).unwrap();
+    let after = h.render(&sky, &bitmap, &camera(), &opts).unwrap();
+    assert_eq!(common::diff(&before, &after, 0).0.differing, 0.0, "back on the bitmaps, the image is exactly today's");
+    let (d, _) = common::diff(&single, &before, 10);
+    assert!(d.differing > 0.2, "the physical model colours the skydome: {d:?}");
+    // The sky-view map is recomputed only when something it depends on changes.
+    let maps = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::sky_view::SkyViewPass>().unwrap().maps_computed;
+    let single_input = FrameInput { sky_model: Some(single_model(&sky)), ..bitmap.clone() };
+    let n = maps(&h);
+    h.frame(&sky, &single_input, &camera(), &opts, 0.0);
+    h.frame(&sky, &single_input, &camera(), &opts, 0.0);
+    assert_eq!(maps(&h), n, "an unchanged sun, model and atmosphere reuse the map");
+    h.frame(&sky, &FrameInput { hour: 14.0, ..single_input.clone() }, &camera(), &opts, 0.0);
+    assert_eq!(maps(&h), n + 1, "the sun moved: the map is recomputed");
+    h.frame(&sky, &FrameInput { sky_model: Some(skytune::sky::resolved::SkyModel { exposure_ev: 3.0, ..single_model(&sky) }), ..single_input }, &camera(), &opts, 0.0);
+    assert_eq!(maps(&h), n + 2, "the exposure changed: the map is recomputed");
+    h.ctx.wait_idle().unwrap();
 }

@@ -8,7 +8,6 @@ struct Atmosphere {
     shape: vec4<f32>,    // ground radius, top radius (km), ozone tent half width (km), sun angular radius (rad)
 };
 
-const PI: f32 = 3.14159265358979;
 
 fn rayleigh_phase(cos_theta: f32) -> f32 {
     return 3.0 / (16.0 * PI) * (1.0 + cos_theta * cos_theta);

@@ -46,12 +46,12 @@ fn single_scattering(atm: Atmosphere, s: SingleSettings, camera_km: f32, view: v
         let r_p = atm.shape.x + h;
         let mu_s = dot(p, sun) / max(length(p), 1e-3);
         let tau_sun = sun_optical_depth(atm, s, r_p, h, mu_s);
-        if (tau_sun.x < 0.0) {
-            continue;
+        // A negative optical depth means the ground hides the sun from this sample.
+        if (tau_sun.x >= 0.0) {
+            let hh = max(h, 0.0);
+            let scattering = atm.rayleigh.xyz * exp(-hh / atm.rayleigh.w) * phase_r + vec3<f32>(atm.mie.x * exp(-hh / atm.mie.z) * phase_m);
+            sum += scattering * exp(-(tau_mid + tau_sun)) * dt;
         }
-        let hh = max(h, 0.0);
-        let scattering = atm.rayleigh.xyz * exp(-hh / atm.rayleigh.w) * phase_r + vec3<f32>(atm.mie.x * exp(-hh / atm.mie.z) * phase_m);
-        sum += scattering * exp(-(tau_mid + tau_sun)) * dt;
     }
     return sum;
 }

@@ -94,7 +94,7 @@ impl App {
     /// The frame the controls describe (no clock yet).
     fn frame_input(&self) -> FrameInput {
         let c = &self.controls;
-        FrameInput { game_hours: c.game_hours, tier: c.tier, disabled: c.disabled.clone(), ..FrameInput::new(c.hour, c.weather) }
+        FrameInput { game_hours: c.game_hours, tier: c.tier, disabled: c.disabled.clone(), sky_model: c.sky_model, ..FrameInput::new(c.hour, c.weather) }
     }
 
     /// Every error to show, newest state of each source.

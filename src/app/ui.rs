@@ -7,13 +7,14 @@ use std::sync::Arc;
 
 use egui::{Color32, RichText};
 
+use crate::atmosphere::OpticalDepth;
 use crate::render::camera::PRESETS;
 use crate::render::glare::GlareState;
 use crate::render::{Camera, FrameStats, RenderOptions};
 use crate::sky::bitmap::ColorBitmap;
 use crate::sky::eval::{FrameSky, Tier};
 use crate::sky::load::SEASONS;
-use crate::sky::resolved::ColorMode;
+use crate::sky::resolved::{ColorMode, SkyModel, SkyModelKind, ToneMapper};
 use crate::sky::{Rgba, Sky};
 
 /// Everything the user controls from the panels and the keyboard.
@@ -49,6 +50,8 @@ pub struct Controls {
     pub sheet_grid: (u32, u32),
     /// Keep the glare's measured visibility as it is.
     pub freeze_glare: bool,
+    /// Skydome colour source chosen in the panel instead of the sky file's (None: the file's).
+    pub sky_model: Option<SkyModel>,
 }
 
 impl Default for Controls {
@@ -69,6 +72,7 @@ impl Default for Controls {
             path_input: String::new(),
             sheet_grid: (8, 4),
             freeze_glare: false,
+            sky_model: None,
         }
     }
 }
@@ -228,9 +232,7 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
                     ui.radio_value(&mut c.tier, t, if t.stages() == 1 { "1 stage".to_string() } else { format!("{} stages", t.stages()) });
                 }
             });
-            egui::ComboBox::from_label("sky model").selected_text("NeL bitmaps").show_ui(ui, |ui| {
-                let _ = ui.selectable_label(true, "NeL bitmaps");
-            });
+            sky_model_controls(ui, c, info.sky);
 
             ui.collapsing("View", |ui| {
                 ui.add(egui::Slider::new(&mut c.camera.fov_y_deg, 10.0..=120.0).text("fov"));
@@ -360,6 +362,49 @@ fn stats(ui: &mut egui::Ui, info: &UiInfo<'_>) {
     ui.label(format!("draw calls {}, objects drawn {}, hidden {}, stars {}", s.draw_calls, s.objects_drawn, s.objects_hidden, s.stars));
     if let Some(g) = info.glare {
         ui.label(format!("sun visibility {:.3}, glare intensity {:.3}", g.ratio, g.intensity));
+    }
+}
+
+/// Label of a sky model in the selector.
+fn model_label(kind: SkyModelKind) -> &'static str {
+    match kind {
+        SkyModelKind::Bitmap => "NeL bitmaps",
+        SkyModelKind::Single => "single scattering",
+    }
+}
+
+/// The skydome colour source: every model, switchable live, and the physical models' settings.
+fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
+    let mut model = c.sky_model.unwrap_or(sky.model);
+    let before = model;
+    egui::ComboBox::from_label("sky model").selected_text(model_label(model.kind)).show_ui(ui, |ui| {
+        for kind in SkyModelKind::ALL {
+            ui.selectable_value(&mut model.kind, kind, model_label(kind));
+        }
+    });
+    if model.kind.is_physical() {
+        ui.add(egui::Slider::new(&mut model.exposure_ev, -4.0..=12.0).text("exposure (EV)"));
+        ui.horizontal(|ui| {
+            ui.label("tone mapper:");
+            for t in ToneMapper::ALL {
+                ui.radio_value(&mut model.tone_mapper, t, t.name());
+            }
+        });
+        ui.horizontal(|ui| {
+            ui.label("optical depth:");
+            ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Erf, "erf");
+            ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Numerical, "numerical");
+        });
+        ui.add(egui::Slider::new(&mut model.single.view_steps, 1..=256).text("view steps"));
+        if model.single.optical_depth == OpticalDepth::Numerical {
+            ui.add(egui::Slider::new(&mut model.single.sun_steps, 1..=256).text("sun steps"));
+        }
+    }
+    if model != before {
+        c.sky_model = Some(model);
+    }
+    if c.sky_model.is_some() && ui.small_button("use the sky file's model").clicked() {
+        c.sky_model = None;
     }
 }
 

@@ -15,6 +15,7 @@ pub mod scene;
 pub mod shaders;
 pub mod sky_model;
 pub mod sky_objects;
+pub mod sky_view;
 pub mod stars;
 pub mod textures;
 pub mod timing;

@@ -62,6 +62,49 @@ pub struct PassBuild<'a> {
     pub library: &'a ShaderLibrary,
     /// Colour format of the target.
     pub color_format: wgpu::TextureFormat,
+    /// Textures one pass writes and others read.
+    pub shared: &'a SharedTextures,
+}
+
+/// Textures shared between passes, made once by the renderer.
+pub struct SharedTextures {
+    /// The sky-view map: a physical model's display colour by direction (`sky_view` writes it in
+    /// the compute phase, `sky_objects` samples it in the gradient stage).
+    pub sky_view: wgpu::Texture,
+    /// Its view.
+    pub sky_view_view: wgpu::TextureView,
+    /// Its sampler: azimuth wraps, elevation clamps.
+    pub sky_view_sampler: wgpu::Sampler,
+}
+
+impl SharedTextures {
+    /// Size of the sky-view map, texels (Hillaire 2020's sky-view LUT size).
+    pub const SKY_VIEW_SIZE: (u32, u32) = (192, 108);
+
+    /// Creates the shared textures.
+    pub fn new(device: &wgpu::Device) -> Self {
+        let (width, height) = Self::SKY_VIEW_SIZE;
+        let sky_view = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("SkyView::map"),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba16Float,
+            usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let sky_view_view = sky_view.create_view(&Default::default());
+        let sky_view_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("SkyView::sampler"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::ClampToEdge,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        Self { sky_view, sky_view_view, sky_view_sampler }
+    }
 }
 
 /// What a pass uploads a sky with.
@@ -152,6 +195,10 @@ pub trait Pass: Any {
         None
     }
 
+    /// Right after the pass's phase ended, if the pass had items in it: copies that later phases
+    /// of the same frame need.
+    fn after_phase(&self, _encoder: &mut wgpu::CommandEncoder) {}
+
     /// After every phase was recorded: resolve queries, copy results.
     fn resolve(&self, _encoder: &mut wgpu::CommandEncoder) {}
 
@@ -184,6 +231,7 @@ pub fn boxed<P: Pass, F: Fn(&PassBuild<'_>) -> RenderResult<P>>(f: F, build: &Pa
 /// Every pass of the renderer, in recording order within its phase. The one list: pipelines,
 /// shader reloads, sky uploads, per-frame steps and GPU timings all follow it.
 pub const PASSES: &[(&str, PassConstructor)] = &[
+    ("sky_view", |b| boxed(super::sky_view::SkyViewPass::new, b)),
     ("scene", |b| boxed(super::scene::ScenePass::new, b)),
     ("sky_objects", |b| boxed(super::sky_objects::SkyObjectsPass::new, b)),
     ("stars", |b| boxed(super::stars::StarsPass::new, b)),

@@ -5,7 +5,7 @@
 use super::camera::Camera;
 use super::error::RenderResult;
 use super::globals::{Globals, GlobalsBinding};
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SkyUpload, PASSES};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SharedTextures, SkyUpload, PASSES};
 use super::shaders::{self, ShaderLibrary};
 use super::textures::TextureCache;
 use super::timing::GpuTimer;
@@ -75,6 +75,7 @@ pub struct SkyRenderer {
     library: ShaderLibrary,
     color_format: wgpu::TextureFormat,
     textures: TextureCache,
+    shared: SharedTextures,
     passes: Vec<Box<dyn Pass>>,
     has_sky: bool,
     timer: Option<GpuTimer>,
@@ -95,10 +96,12 @@ impl SkyRenderer {
     pub fn with_passes(ctx: &GpuContext, color_format: wgpu::TextureFormat, library: ShaderLibrary, extra: &[(&str, super::pass::PassConstructor)]) -> RenderResult<Self> {
         let device = &ctx.device;
         let globals = GlobalsBinding::new(device);
-        let build = PassBuild { device, globals_layout: &globals.layout, library: &library, color_format };
+        let shared = SharedTextures::new(device);
+        let build = PassBuild { device, globals_layout: &globals.layout, library: &library, color_format, shared: &shared };
         let passes = PASSES.iter().chain(extra).map(|(_, new)| new(&build)).collect::<RenderResult<Vec<_>>>()?;
         Ok(Self {
             textures: TextureCache::new(device, &ctx.queue),
+            shared,
             globals,
             library,
             color_format,
@@ -134,7 +137,7 @@ impl SkyRenderer {
     /// Rebuilds every pipeline from the shader library (hot reload). All or nothing: on any error
     /// every pass keeps its previous pipelines and the error is returned.
     pub fn reload_shaders(&mut self, ctx: &GpuContext) -> RenderResult<()> {
-        let build = PassBuild { device: &ctx.device, globals_layout: &self.globals.layout, library: &self.library, color_format: self.color_format };
+        let build = PassBuild { device: &ctx.device, globals_layout: &self.globals.layout, library: &self.library, color_format: self.color_format, shared: &self.shared };
         let result = self.passes.iter_mut().try_for_each(|p| p.stage_pipelines(&build));
         for pass in &mut self.passes {
             pass.commit_pipelines(result.is_ok());
@@ -246,6 +249,8 @@ impl SkyRenderer {
                     for (i, it) in list {
                         self.passes[*i].dispatch(&mut cpass, it.key);
                     }
+                    drop(cpass);
+                    self.after_phase(encoder, list);
                 }
                 _ => {
                     // The scene phase always runs: it clears the target. Without the depth split its
@@ -277,6 +282,8 @@ impl SkyRenderer {
                             stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key);
                         }
                     }
+                    drop(rpass);
+                    self.after_phase(encoder, list);
                 }
             }
         }
@@ -287,6 +294,17 @@ impl SkyRenderer {
             t.resolve(encoder);
         }
         self.stats = stats;
+    }
+
+    /// Calls `after_phase` once for each pass that had items in a phase that just ended.
+    fn after_phase(&self, encoder: &mut wgpu::CommandEncoder, list: &[(usize, DrawItem)]) {
+        let mut done: Vec<usize> = Vec::new();
+        for (i, _) in list {
+            if !done.contains(i) {
+                done.push(*i);
+                self.passes[*i].after_phase(encoder);
+            }
+        }
     }
 
     /// GPU time of each phase of a recent frame, ms (empty without timestamp queries).

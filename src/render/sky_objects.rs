@@ -40,11 +40,14 @@ pub struct DrawUniform {
     pub constants: [[f32; 4]; 4],
     /// Stages.
     pub stages: [StageUniform; 4],
-    /// Stage count, lighting (0 flat, 1 moon).
+    /// Stage count, lighting (0 flat, 1 moon), stage fed by the sky-view map (4 = none).
     pub misc: [u32; 4],
 }
 const _: () = assert!(std::mem::size_of::<StageUniform>() == 48);
 const _: () = assert!(std::mem::size_of::<DrawUniform>() == 64 + 16 + 64 + 4 * 48 + 16);
+
+/// "No stage" in stage-index fields shared with the shader.
+const NO_STAGE: u32 = 4;
 
 /// UV mode numbers shared with the shader.
 fn uv_mode(uv: &UvSource) -> (u32, [f32; 4]) {
@@ -73,14 +76,16 @@ impl From<&Version> for DrawUniform {
             diffuse: [1.0; 4],
             constants: [[1.0; 4]; 4],
             stages,
-            misc: [v.stages.len() as u32, matches!(v.lighting, Lighting::Moon) as u32, 0, 0],
+            misc: [v.stages.len() as u32, matches!(v.lighting, Lighting::Moon) as u32, NO_STAGE, 0],
         }
     }
 }
 
 impl DrawUniform {
-    /// Applies a frame's colours, UV offsets and placement.
-    pub fn with_frame(mut self, pass: &VersionFrame, shape: &Shape, placement: Option<(Vec3, f32)>, camera_up: Vec3) -> Self {
+    /// Applies a frame's colours, UV offsets and placement; `sky_view_stage` is the gradient
+    /// stage when a physical sky model colours it.
+    pub fn with_frame(mut self, pass: &VersionFrame, shape: &Shape, placement: Option<(Vec3, f32)>, camera_up: Vec3, sky_view_stage: Option<usize>) -> Self {
+        self.misc[2] = sky_view_stage.map_or(NO_STAGE, |k| k as u32);
         self.diffuse = pass.diffuse;
         self.constants = pass.constants;
         for (k, off) in pass.uv_offsets.iter().enumerate() {
@@ -111,6 +116,8 @@ pub struct SkyObjectsPass {
     bind_layout: wgpu::BindGroupLayout,
     pipelines: Pipelines<[wgpu::RenderPipeline; 3]>,
     draws: Staged<Option<SkyObjectDraws>>,
+    /// The shared sky-view map and its sampler, bound to every draw.
+    sky_view: (wgpu::TextureView, wgpu::Sampler),
     /// This frame's visible objects: (object index, versions to draw), in draw order.
     visible: Vec<(usize, u8, Vec<usize>)>,
     hidden: u32,
@@ -133,6 +140,7 @@ impl SkyObjectsPass {
         let mut entries = vec![super::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)];
         entries.extend((0..4).map(|i| super::texture_entry(1 + i)));
         entries.extend((0..4).map(|i| super::sampler_entry(5 + i)));
+        entries.extend([super::texture_entry(9), super::sampler_entry(10)]);
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("SkyObjects::draw_layout"), entries: &entries });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("SkyObjects::pipeline_layout"),
@@ -140,7 +148,8 @@ impl SkyObjectsPass {
             immediate_size: 0,
         });
         let pipelines = Pipelines::new(b, pipeline_layout, Self::build)?;
-        Ok(Self { bind_layout, pipelines, draws: Staged::new(None), visible: Vec::new(), hidden: 0 })
+        let sky_view = (b.shared.sky_view_view.clone(), b.shared.sky_view_sampler.clone());
+        Ok(Self { bind_layout, pipelines, draws: Staged::new(None), sky_view, visible: Vec::new(), hidden: 0 })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 3]> {
@@ -189,7 +198,7 @@ impl Pass for SkyObjectsPass {
     }
 
     fn stage_sky(&mut self, up: &mut SkyUpload<'_>) {
-        let draws = SkyObjectDraws::new(up.device, up.queue, &self.bind_layout, up.textures, up.sky, self.draws.current.as_ref());
+        let draws = SkyObjectDraws::new(up.device, up.queue, (&self.bind_layout, &self.sky_view), up.textures, up.sky, self.draws.current.as_ref());
         self.draws.stage(Some(draws));
     }
 
@@ -239,6 +248,8 @@ struct VersionDraw {
     bind_group: wgpu::BindGroup,
     mesh: Arc<GpuMesh>,
     gradient: Option<(wgpu::Texture, u32)>,
+    /// The stage the gradient feeds (and a physical sky model replaces).
+    gradient_stage: Option<usize>,
     blend: BlendMode,
     shape: Shape,
     base: DrawUniform,
@@ -254,7 +265,14 @@ pub struct SkyObjectDraws {
 
 impl SkyObjectDraws {
     /// Uploads every object of a sky, taking over the meshes of `previous` where shapes match.
-    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, layout: &wgpu::BindGroupLayout, cache: &mut TextureCache, sky: &Sky, previous: Option<&SkyObjectDraws>) -> Self {
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        (layout, sky_view): (&wgpu::BindGroupLayout, &(wgpu::TextureView, wgpu::Sampler)),
+        cache: &mut TextureCache,
+        sky: &Sky,
+        previous: Option<&SkyObjectDraws>,
+    ) -> Self {
         let old_meshes = previous.map(|p| &p.meshes);
         let mut meshes: HashMap<String, Arc<GpuMesh>> = HashMap::new();
         let objects = sky
@@ -304,8 +322,11 @@ impl SkyObjectDraws {
                         for (k, s) in samplers.iter().enumerate() {
                             entries.push(wgpu::BindGroupEntry { binding: 5 + k as u32, resource: wgpu::BindingResource::Sampler(s) });
                         }
+                        entries.push(wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(&sky_view.0) });
+                        entries.push(wgpu::BindGroupEntry { binding: 10, resource: wgpu::BindingResource::Sampler(&sky_view.1) });
                         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&format!("{label}::bind_group")), layout, entries: &entries });
-                        VersionDraw { uniform, bind_group, mesh, gradient, blend: v.blend, shape: v.shape, base: DrawUniform::from(v) }
+                        let gradient_stage = v.gradients.as_ref().map(|g| g.stage);
+                        VersionDraw { uniform, bind_group, mesh, gradient, gradient_stage, blend: v.blend, shape: v.shape, base: DrawUniform::from(v) }
                     })
                     .collect()
             })
@@ -319,7 +340,8 @@ impl SkyObjectDraws {
             let Ok(versions) = &of.versions else { continue };
             for p in versions {
                 let d = &self.objects[of.index][p.version];
-                let u = d.base.with_frame(p, &d.shape, of.placement, camera.screen_up());
+                let sky_view_stage = d.gradient_stage.filter(|_| frame.sky_model.kind.is_physical());
+                let u = d.base.with_frame(p, &d.shape, of.placement, camera.screen_up(), sky_view_stage);
                 queue.write_buffer(&d.uniform, 0, bytemuck::bytes_of(&u));
                 if let (Some((tex, h)), Some(g)) = (&d.gradient, &p.gradient) {
                     let bytes: Vec<u8> = g.iter().flat_map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)).collect();

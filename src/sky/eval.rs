@@ -52,12 +52,14 @@ pub struct FrameInput {
     pub dt_s: f32,
     /// Frame number, counted by whoever drives the frames (see [`Clock`]).
     pub frame: u64,
+    /// Colour source of the skydome instead of the sky file's (the app's selector).
+    pub sky_model: Option<SkyModel>,
 }
 
 impl FrameInput {
     /// A frame at (hour, weather) with the best tier, the first frame, no time elapsed.
     pub fn new(hour: f32, weather: f32) -> Self {
-        Self { hour, game_hours: hour as f64, weather, tier: Tier::FOUR, env_map: false, disabled: Vec::new(), dt_s: 0.0, frame: 0 }
+        Self { hour, game_hours: hour as f64, weather, tier: Tier::FOUR, env_map: false, disabled: Vec::new(), dt_s: 0.0, frame: 0, sky_model: None }
     }
 }
 
@@ -217,6 +219,10 @@ pub struct FrameSky {
     pub tier: Tier,
     /// Environment-map view instead of the main view.
     pub env_map: bool,
+    /// Colour source of the skydome's gradient stage.
+    pub sky_model: SkyModel,
+    /// Atmosphere of the physical models.
+    pub atmosphere: crate::atmosphere::Atmosphere,
     /// Fog colour of the main scene.
     pub fog_color: Rgba,
     /// Sun ambient light.
@@ -369,6 +375,8 @@ impl Sky {
             frame: input.frame,
             tier: input.tier,
             env_map: input.env_map,
+            sky_model: input.sky_model.unwrap_or(self.model),
+            atmosphere: self.atmosphere,
             fog_color: fog,
             sun_ambient: self.sun_ambient.sample(hour, hpd, weather),
             sun_diffuse: self.sun_diffuse.sample(hour, hpd, weather),

@@ -250,6 +250,22 @@ impl Validator<'_> {
             })
         });
         let glare = f.glare.as_ref().and_then(|g| self.glare(g));
+        let model = f.sky_model.as_ref().map_or_else(SkyModel::default, |m| SkyModel {
+            kind: m.kind,
+            single: crate::atmosphere::SingleSettings { view_steps: m.view_steps.0, sun_steps: m.sun_steps.0, optical_depth: m.optical_depth },
+            exposure_ev: m.exposure_ev.get(),
+            tone_mapper: m.tone_mapper,
+            camera_km: m.camera_km.get(),
+        });
+        let atmosphere = f.atmosphere.as_ref().map_or_else(crate::atmosphere::Atmosphere::default, |a| a.apply(crate::atmosphere::Atmosphere::default()));
+        if let Err(errors) = atmosphere.validate() {
+            for e in errors {
+                self.err_in("[atmosphere]", e.field, &format!("atmosphere.{}", e.field), e.message);
+            }
+        }
+        if model.camera_km as f64 >= atmosphere.thickness_km() {
+            self.err_in("[sky_model]", "camera_km", "sky_model.camera_km", format!("expected an altitude below the top of the atmosphere ({} km)", atmosphere.thickness_km()));
+        }
 
         let paths = paths?;
         let watched = {
@@ -271,6 +287,8 @@ impl Validator<'_> {
             stars,
             glare,
             watched_files: watched,
+            model,
+            atmosphere,
         })
     }
 

@@ -42,6 +42,175 @@ pub struct SkyFile {
     /// Optional sun glare (occlusion-query driven halo and lens flare).
     #[serde(default)]
     pub glare: Option<GlareDef>,
+    /// Where the skydome's colour comes from (default: the NeL gradient bitmaps).
+    #[serde(default)]
+    pub sky_model: Option<SkyModelDef>,
+    /// Overrides of the physical models' atmosphere (default: Earth as in Hillaire 2020).
+    #[serde(default)]
+    pub atmosphere: Option<AtmosphereDef>,
+}
+
+/// The skydome's colour source.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SkyModelKind {
+    /// The NeL gradient bitmaps, indexed by (time of day, weather).
+    #[default]
+    Bitmap,
+    /// Physical single scattering, ray-marched on the GPU (see docs/sky-models.md).
+    Single,
+}
+
+impl SkyModelKind {
+    /// Every model, in the order the app lists them.
+    pub const ALL: [SkyModelKind; 2] = [SkyModelKind::Bitmap, SkyModelKind::Single];
+
+    /// Name in the sky file and the CLI.
+    pub fn name(self) -> &'static str {
+        match self {
+            SkyModelKind::Bitmap => "bitmap",
+            SkyModelKind::Single => "single",
+        }
+    }
+
+    /// Whether the model produces radiance (and so needs exposure and a tone mapper).
+    pub fn is_physical(self) -> bool {
+        self != SkyModelKind::Bitmap
+    }
+}
+
+/// Curve from exposed radiance to display values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ToneMapper {
+    /// Stephen Hill's fit of the ACES reference rendering and output transforms.
+    #[default]
+    Aces,
+    /// Khronos PBR Neutral: colours below 0.76 pass unchanged, highlights compress and desaturate.
+    Neutral,
+}
+
+impl ToneMapper {
+    /// Every tone mapper.
+    pub const ALL: [ToneMapper; 2] = [ToneMapper::Aces, ToneMapper::Neutral];
+
+    /// Name in the sky file.
+    pub fn name(self) -> &'static str {
+        match self {
+            ToneMapper::Aces => "aces",
+            ToneMapper::Neutral => "neutral",
+        }
+    }
+}
+
+/// `[sky_model]`: which model colours the skydome's gradient stage, and its settings.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SkyModelDef {
+    /// `bitmap` (NeL gradients) or `single`.
+    #[serde(default)]
+    pub kind: SkyModelKind,
+    /// Exposure in stops: display = tone_map(radiance x 2^exposure_ev), radiance in sr^-1 per unit
+    /// of solar irradiance.
+    #[serde(default = "default_exposure_ev")]
+    pub exposure_ev: Finite,
+    /// Tone mapper of physical models.
+    #[serde(default)]
+    pub tone_mapper: ToneMapper,
+    /// `single`: samples along the view ray.
+    #[serde(default = "default_view_steps")]
+    pub view_steps: StepCount,
+    /// `single`: samples towards the sun (numerical optical depth only).
+    #[serde(default = "default_sun_steps")]
+    pub sun_steps: StepCount,
+    /// `single`: `erf` (analytic approximation) or `numerical` optical depth towards the sun.
+    #[serde(default)]
+    pub optical_depth: crate::atmosphere::OpticalDepth,
+    /// Altitude of the viewer above the ground, km.
+    #[serde(default)]
+    pub camera_km: NonNegative,
+}
+
+fn default_exposure_ev() -> Finite {
+    Finite(5.0)
+}
+
+fn default_view_steps() -> StepCount {
+    StepCount(32)
+}
+
+fn default_sun_steps() -> StepCount {
+    StepCount(16)
+}
+
+/// `[atmosphere]`: any of the default atmosphere's parameters (km, km^-1, rad); the rest keep
+/// Hillaire 2020's Earth values. Cross-field rules (top above ground, Mie extinction >= Mie
+/// scattering) are checked after loading.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AtmosphereDef {
+    /// Planet radius, km.
+    pub ground_radius_km: Option<Positive>,
+    /// Radius of the top of the atmosphere, km.
+    pub top_radius_km: Option<Positive>,
+    /// Rayleigh scattering at sea level, km^-1 (r, g, b).
+    pub rayleigh_scattering_per_km: Option<[NonNegative; 3]>,
+    /// Rayleigh scale height, km.
+    pub rayleigh_scale_height_km: Option<Positive>,
+    /// Mie scattering at sea level, km^-1.
+    pub mie_scattering_per_km: Option<NonNegative>,
+    /// Mie extinction at sea level, km^-1.
+    pub mie_extinction_per_km: Option<NonNegative>,
+    /// Mie scale height, km.
+    pub mie_scale_height_km: Option<Positive>,
+    /// Mie asymmetry, (-1, 1).
+    pub mie_g: Option<Asymmetry>,
+    /// Ozone absorption at its peak, km^-1 (r, g, b).
+    pub ozone_absorption_per_km: Option<[NonNegative; 3]>,
+    /// Altitude of the ozone peak, km.
+    pub ozone_center_km: Option<Finite>,
+    /// Half width of the ozone tent, km.
+    pub ozone_half_width_km: Option<Positive>,
+    /// Sun's angular radius, rad.
+    pub sun_angular_radius_rad: Option<Positive>,
+}
+
+impl AtmosphereDef {
+    /// The default atmosphere with these overrides.
+    pub fn apply(&self, base: crate::atmosphere::Atmosphere) -> crate::atmosphere::Atmosphere {
+        let f = |v: Option<Positive>, d: f64| v.map_or(d, |x| x.get() as f64);
+        let n = |v: Option<NonNegative>, d: f64| v.map_or(d, |x| x.get() as f64);
+        let rgb = |v: Option<[NonNegative; 3]>, d: [f64; 3]| v.map_or(d, |x| x.map(|c| c.get() as f64));
+        crate::atmosphere::Atmosphere {
+            ground_radius_km: f(self.ground_radius_km, base.ground_radius_km),
+            top_radius_km: f(self.top_radius_km, base.top_radius_km),
+            rayleigh_scattering_per_km: rgb(self.rayleigh_scattering_per_km, base.rayleigh_scattering_per_km),
+            rayleigh_scale_height_km: f(self.rayleigh_scale_height_km, base.rayleigh_scale_height_km),
+            mie_scattering_per_km: n(self.mie_scattering_per_km, base.mie_scattering_per_km),
+            mie_extinction_per_km: n(self.mie_extinction_per_km, base.mie_extinction_per_km),
+            mie_scale_height_km: f(self.mie_scale_height_km, base.mie_scale_height_km),
+            mie_g: self.mie_g.map_or(base.mie_g, |g| g.get() as f64),
+            ozone_absorption_per_km: rgb(self.ozone_absorption_per_km, base.ozone_absorption_per_km),
+            ozone_center_km: self.ozone_center_km.map_or(base.ozone_center_km, |x| x.get() as f64),
+            ozone_half_width_km: f(self.ozone_half_width_km, base.ozone_half_width_km),
+            sun_angular_radius_rad: f(self.sun_angular_radius_rad, base.sun_angular_radius_rad),
+        }
+    }
+}
+
+/// A sample count of a physical model, 1..=1024.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StepCount(pub u32);
+
+impl<'de> Deserialize<'de> for StepCount {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = i64::deserialize(d)?;
+        if (1..=1024).contains(&v) {
+            Ok(StepCount(v as u32))
+        } else {
+            Err(serde::de::Error::custom(format!("expected a sample count in 1..=1024, found {v}")))
+        }
+    }
 }
 
 fn default_hours() -> Positive {
@@ -524,6 +693,9 @@ checked_f32!(
 checked_f32!(
     /// A number in [0, 1].
     Unit, |v| (0.0..=1.0).contains(&v), "a number in [0, 1]");
+checked_f32!(
+    /// A phase-function asymmetry, strictly between -1 and 1.
+    Asymmetry, |v| v > -1.0 && v < 1.0, "a number strictly between -1 and 1");
 checked_f32!(
     /// An elevation in degrees, [-90, 90].
     Elevation, |v| (-90.0..=90.0).contains(&v), "an elevation in degrees within [-90, 90]");

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use super::bitmap::{ColorBitmap, Rgba};
-pub use super::model::{BlendMode, ColorMode, Lighting, RefColor, Shape, StageOp, UvSource};
+pub use super::model::{BlendMode, ColorMode, Lighting, RefColor, Shape, SkyModelKind, StageOp, ToneMapper, UvSource};
 
 /// Most texture stages a material may use (the best GPU tier).
 pub const MAX_STAGES: usize = 4;
@@ -53,6 +53,31 @@ pub struct Sky {
     pub glare: Option<Glare>,
     /// Every file on disk the sky was built from, except the sky file itself.
     pub watched_files: Vec<PathBuf>,
+    /// Colour source of the skydome's gradient stage.
+    pub model: SkyModel,
+    /// Atmosphere of the physical models.
+    pub atmosphere: crate::atmosphere::Atmosphere,
+}
+
+/// A skydome colour source and its settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SkyModel {
+    /// Which model.
+    pub kind: SkyModelKind,
+    /// `single` settings.
+    pub single: crate::atmosphere::SingleSettings,
+    /// Exposure of physical models, stops.
+    pub exposure_ev: f32,
+    /// Tone mapper of physical models.
+    pub tone_mapper: ToneMapper,
+    /// Viewer altitude, km.
+    pub camera_km: f32,
+}
+
+impl Default for SkyModel {
+    fn default() -> Self {
+        Self { kind: SkyModelKind::Bitmap, single: Default::default(), exposure_ev: 5.0, tone_mapper: ToneMapper::Aces, camera_km: 0.0 }
+    }
 }
 
 /// A named path over the day.

@@ -99,3 +99,20 @@ pub fn default_sky_folder() -> (tempfile::TempDir, PathBuf) {
     let sky = skytune::sky::builtin::write_sky_folder(dir.path(), palette, 7).expect("writing the default sky");
     (dir, sky)
 }
+
+/// Copies the checkout's shaders/ (with its folders) into `dst`.
+pub fn copy_shaders(dst: &Path) {
+    fn copy(src: &Path, dst: &Path) {
+        std::fs::create_dir_all(dst).expect("creating the shader folder");
+        for e in std::fs::read_dir(src).expect("reading shaders/") {
+            let p = e.expect("a folder entry").path();
+            let to = dst.join(p.file_name().expect("a file name"));
+            if p.is_dir() {
+                copy(&p, &to);
+            } else {
+                std::fs::copy(&p, &to).expect("copying a shader");
+            }
+        }
+    }
+    copy(&Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders"), dst);
+}

@@ -1,0 +1,31 @@
+//! requires: sky_model/single, sky_model/tone, sky_model/sky_view_map
+// Sky-view pass (compute phase): the current physical model rendered into the sky-view map,
+// exposed, tone-mapped and display-encoded, for the skydome's gradient stage to sample.
+// Keep `SkyViewParams` in sync with src/render/sky_view.rs.
+struct SkyViewParams {
+    towards_sun: vec4<f32>, // xyz unit vector, w: camera altitude (km)
+    exposure: vec4<f32>,    // x: radiance scale (2^EV), y: tone mapper as f32 (0 ACES, 1 neutral), zw: map size (texels)
+};
+
+@group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
+@group(1) @binding(1) var<uniform> single_settings: SingleSettings;
+// Read-only storage rather than uniform: Mesa 22 lavapipe crashes when the camera altitude is a
+// uniform-buffer value here (it runs fine as a storage value, as in radiance_probe.wgsl).
+@group(1) @binding(2) var<storage, read> params: SkyViewParams;
+// Texels as rgba16float (two u32 each), copied into the sky-view texture after the phase, so
+// the compute phase only writes buffers (as radiance_probe.wgsl does).
+@group(1) @binding(3) var<storage, read_write> sky_view_out: array<vec2<u32>>;
+
+@compute @workgroup_size(64)
+fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = vec2<u32>(params.exposure.zw);
+    if (gid.x >= size.x * size.y) {
+        return;
+    }
+    let id = vec2<u32>(gid.x % size.x, gid.x / size.x);
+    let uv = (vec2<f32>(id) + 0.5) / vec2<f32>(size);
+    let dir = sky_view_direction(uv);
+    let radiance = single_scattering(atmosphere, single_settings, params.towards_sun.w, dir, params.towards_sun.xyz);
+    let color = display_from_radiance(radiance, params.exposure.x, u32(params.exposure.y));
+    sky_view_out[id.y * size.x + id.x] = vec2<u32>(pack2x16float(color.rg), pack2x16float(vec2<f32>(color.b, 1.0)));
+}

@@ -1,0 +1,198 @@
+//! Sky-view pass (compute phase): renders the frame's physical sky model into the shared sky-view
+//! map, exposed and tone-mapped, which the skydome's gradient stage then samples. Idle with the
+//! NeL bitmap model; recomputed only when the sun, the model or the atmosphere changes.
+
+use bytemuck::{Pod, Zeroable};
+
+use super::error::RenderResult;
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SharedTextures};
+use super::shaders;
+use super::sky_model::{AtmosphereUniform, SingleUniform};
+use crate::sky::resolved::{SkyModel, ToneMapper};
+
+/// Keep in sync with `SkyViewParams` in shaders/sky_view.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct SkyViewParams {
+    /// Unit vector towards the sun (xyz), viewer altitude in km (w).
+    pub towards_sun: [f32; 4],
+    /// Radiance scale 2^EV (x), tone mapper (y: 0 ACES, 1 neutral), map size in texels (zw).
+    pub exposure: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<SkyViewParams>() == 32);
+
+impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
+    fn from((model, towards_sun): (&SkyModel, glam::Vec3)) -> Self {
+        let tone = match model.tone_mapper {
+            ToneMapper::Aces => 0.0,
+            ToneMapper::Neutral => 1.0,
+        };
+        let (w, h) = SharedTextures::SKY_VIEW_SIZE;
+        Self { towards_sun: towards_sun.extend(model.camera_km).to_array(), exposure: [model.exposure_ev.exp2(), tone, w as f32, h as f32] }
+    }
+}
+
+/// Everything the map depends on: it is recomputed when this changes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Key {
+    atmosphere: AtmosphereUniform,
+    single: SingleUniform,
+    params: SkyViewParams,
+}
+
+/// The sky-view pass.
+pub struct SkyViewPass {
+    pipeline: Pipelines<wgpu::ComputePipeline>,
+    atmosphere: wgpu::Buffer,
+    single: wgpu::Buffer,
+    params: wgpu::Buffer,
+    /// The map's texels (rgba16float), copied into the shared texture after the dispatch.
+    texels: wgpu::Buffer,
+    map: wgpu::Texture,
+    bind_group: wgpu::BindGroup,
+    /// What the map holds now.
+    computed: Option<Key>,
+    /// Whether this frame recomputes the map.
+    dirty: bool,
+    /// Maps computed so far (the stats panel and tests).
+    pub maps_computed: u64,
+}
+
+fn uniform(device: &wgpu::Device, label: &str, size: usize) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+impl SkyViewPass {
+    /// Builds the pipeline and binds the shared sky-view map.
+    pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
+        let device = b.device;
+        let mut entries: Vec<wgpu::BindGroupLayoutEntry> = (0..2).map(|i| super::uniform_entry(i, wgpu::ShaderStages::COMPUTE)).collect();
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 2,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: true }, has_dynamic_offset: false, min_binding_size: None },
+            count: None,
+        });
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 3,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: false }, has_dynamic_offset: false, min_binding_size: None },
+            count: None,
+        });
+        let (w, h) = SharedTextures::SKY_VIEW_SIZE;
+        let texels = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("SkyView::texels"),
+            size: (w * h * 8) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("SkyView::layout"), entries: &entries });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("SkyView::pipeline_layout"),
+            bind_group_layouts: &[Some(b.globals_layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let atmosphere = uniform(device, "SkyView::atmosphere", std::mem::size_of::<AtmosphereUniform>());
+        let single = uniform(device, "SkyView::single", std::mem::size_of::<SingleUniform>());
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("SkyView::params"),
+            size: std::mem::size_of::<SkyViewParams>() as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("SkyView::bind_group"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: atmosphere.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: single.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: texels.as_entire_binding() },
+            ],
+        });
+        let map = b.shared.sky_view.clone();
+        Ok(Self { pipeline: Pipelines::new(b, pipeline_layout, Self::build)?, atmosphere, single, params, texels, map, bind_group, computed: None, dirty: false, maps_computed: 0 })
+    }
+
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::ComputePipeline> {
+        let module = shaders::module(b.device, b.library, "sky_view")?;
+        shaders::validated(b.device, "SkyView::pipeline", || {
+            b.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("SkyView::pipeline"),
+                layout: Some(layout),
+                module: &module,
+                entry_point: Some("cs_main"),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        })
+    }
+}
+
+impl Pass for SkyViewPass {
+    fn name(&self) -> &'static str {
+        "sky_view"
+    }
+
+    fn phase(&self) -> Phase {
+        Phase::Compute
+    }
+
+    fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
+        self.pipeline.stage(b)
+    }
+
+    fn commit_pipelines(&mut self, accept: bool) {
+        self.pipeline.commit(accept);
+        // New shaders may compute a different map.
+        self.computed = None;
+    }
+
+    fn prepare(&mut self, cx: &FrameContext<'_>) {
+        let model = &cx.frame.sky_model;
+        self.dirty = false;
+        if !model.kind.is_physical() {
+            return;
+        }
+        let key = Key { atmosphere: (&cx.frame.atmosphere).into(), single: (&model.single).into(), params: (model, cx.frame.towards_sun).into() };
+        if self.computed == Some(key) {
+            return;
+        }
+        cx.queue.write_buffer(&self.atmosphere, 0, bytemuck::bytes_of(&key.atmosphere));
+        cx.queue.write_buffer(&self.single, 0, bytemuck::bytes_of(&key.single));
+        cx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&key.params));
+        self.computed = Some(key);
+        self.dirty = true;
+        self.maps_computed += 1;
+    }
+
+    fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
+        if self.dirty {
+            out.push(DrawItem { priority: 0, key: 0 });
+        }
+    }
+
+    fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, _key: usize) {
+        let (w, h) = SharedTextures::SKY_VIEW_SIZE;
+        cpass.set_pipeline(self.pipeline.get());
+        cpass.set_bind_group(1, &self.bind_group, &[]);
+        cpass.dispatch_workgroups((w * h).div_ceil(64), 1, 1);
+    }
+
+    fn after_phase(&self, encoder: &mut wgpu::CommandEncoder) {
+        // Between the compute phase and the sky phase, so this frame samples this frame's map.
+        if self.dirty {
+            let (w, h) = SharedTextures::SKY_VIEW_SIZE;
+            encoder.copy_buffer_to_texture(
+                wgpu::TexelCopyBufferInfo { buffer: &self.texels, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * 8), rows_per_image: Some(h) } },
+                self.map.as_image_copy(),
+                wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+            );
+        }
+    }
+}
