@@ -12,9 +12,10 @@ struct SkyViewParams {
 // Read-only storage rather than uniform: Mesa 22 lavapipe crashes when the camera altitude is a
 // uniform-buffer value here (it runs fine as a storage value, as in radiance_probe.wgsl).
 @group(1) @binding(2) var<storage, read> params: SkyViewParams;
-// Texels as rgba16float (two u32 each), copied into the sky-view texture after the phase, so
-// the compute phase only writes buffers (as radiance_probe.wgsl does).
-@group(1) @binding(3) var<storage, read_write> sky_view_out: array<vec2<u32>>;
+// Texels as rgba8unorm (one u32 each; the colours are display-encoded, like the frame they end
+// up in), copied into the sky-view texture after the phase, so the compute phase only writes
+// buffers (as radiance_probe.wgsl does).
+@group(1) @binding(3) var<storage, read_write> sky_view_out: array<u32>;
 
 @compute @workgroup_size(64)
 fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -27,5 +28,5 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let dir = sky_view_direction(uv);
     let radiance = single_scattering(atmosphere, single_settings, params.towards_sun.w, dir, params.towards_sun.xyz);
     let color = display_from_radiance(radiance, params.exposure.x, u32(params.exposure.y));
-    sky_view_out[id.y * size.x + id.x] = vec2<u32>(pack2x16float(color.rg), pack2x16float(vec2<f32>(color.b, 1.0)));
+    sky_view_out[id.y * size.x + id.x] = pack4x8unorm(vec4<f32>(color, 1.0));
 }

@@ -11,6 +11,7 @@ use anyhow::{anyhow, Context as _};
 use crate::cli::{self, BenchArgs};
 use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions};
 use skytune::sky::builtin::default_sky;
+use skytune::sky::resolved::{SkyModel, SkyModelKind};
 use skytune::sky::{FrameInput, Sky, Tier};
 
 struct Config {
@@ -18,9 +19,13 @@ struct Config {
     camera: Camera,
     depth_split: bool,
     tier: Tier,
+    /// Skydome colour source; with `sun_moves`, the sun moves every frame (the map is recomputed).
+    model: SkyModelKind,
+    sun_moves: bool,
     wall_ms: Vec<f32>,
     scene_ms: Vec<f32>,
     sky_ms: Vec<f32>,
+    compute_ms: Vec<f32>,
 }
 
 fn median(v: &[f32]) -> f32 {
@@ -65,10 +70,14 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         camera,
         depth_split,
         tier: Tier::new(tier).expect("valid tier"),
+        model: SkyModelKind::Bitmap,
+        sun_moves: false,
         wall_ms: Vec::new(),
         scene_ms: Vec::new(),
         sky_ms: Vec::new(),
+        compute_ms: Vec::new(),
     };
+    let with_model = |c: Config, sun_moves: bool| Config { model: SkyModelKind::Single, sun_moves, ..c };
     let mut configs = vec![
         mk("scene covers the screen, depth split", down, true, 4),
         mk("scene covers the screen, no split", down, false, 4),
@@ -76,15 +85,21 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         mk("sky fills the screen, no split", up, false, 4),
         mk("sky fills the screen, tier 2 (fallbacks)", up, true, 2),
         mk("sky fills the screen, tier 1", up, true, 1),
+        with_model(mk("sky fills the screen, single model, sun still (map reused)", up, true, 4), false),
+        with_model(mk("sky fills the screen, single model, sun moving (map every frame)", up, true, 4), true),
     ];
     let per_round = args.frames.div_ceil(ROUNDS).max(1);
     for round in 0..ROUNDS {
         for c in configs.iter_mut() {
             let mut input = FrameInput::new(HOUR, WEATHER);
             input.tier = c.tier;
+            input.sky_model = Some(SkyModel { kind: c.model, ..sky.model });
             let options = RenderOptions { depth_split: c.depth_split, glare: false, ..Default::default() };
             // Two warm-up frames: pipelines, caches and the timestamp readback of this configuration.
             for i in 0..per_round + 2 {
+                if c.sun_moves {
+                    input.hour = HOUR + 0.01 * i as f32;
+                }
                 let t = Instant::now();
                 hl.frame(&sky, &input, &c.camera, &options, 0.0);
                 hl.ctx.wait_idle()?;
@@ -96,6 +111,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                         match *pass {
                             "scene" => c.scene_ms.push(*ms),
                             "sky" => c.sky_ms.push(*ms),
+                            "compute" => c.compute_ms.push(*ms),
                             _ => {}
                         }
                     }
@@ -124,10 +140,11 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     );
     let _ =
         writeln!(md, "- scene coverage (fraction of pixels covered by the main-scene stand-in): looking down {:.1}%, looking up {:.1}%\n", cover_down * 100.0, cover_up * 100.0);
-    let _ = writeln!(md, "| configuration | frame wall ms (median) | scene pass GPU ms | sky pass GPU ms | frames |");
-    let _ = writeln!(md, "|---|---:|---:|---:|---:|");
+    let _ = writeln!(md, "| configuration | frame wall ms (median) | compute phase GPU ms | scene phase GPU ms | sky phase GPU ms | frames |");
+    let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|");
     for c in &configs {
-        let _ = writeln!(md, "| {} | {:.2} | {:.2} | {:.2} | {} |", c.name, median(&c.wall_ms), median(&c.scene_ms), median(&c.sky_ms), c.wall_ms.len());
+        let compute = if c.compute_ms.is_empty() { "-".to_string() } else { format!("{:.2}", median(&c.compute_ms)) };
+        let _ = writeln!(md, "| {} | {:.2} | {compute} | {:.2} | {:.2} | {} |", c.name, median(&c.wall_ms), median(&c.scene_ms), median(&c.sky_ms), c.wall_ms.len());
     }
     let ratio = |a: usize, b: usize| median(&configs[a].wall_ms) / median(&configs[b].wall_ms);
     let sky_ratio = |a: usize, b: usize| median(&configs[a].sky_ms) / median(&configs[b].sky_ms);
@@ -143,6 +160,13 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let _ = writeln!(md, "- Sky pass with the split, scene covering {:.0}% vs {:.0}% of the screen: {:.2}x.", cover_down * 100.0, cover_up * 100.0, sky_ratio(0, 2));
     let _ = writeln!(md, "- With the sky filling the screen (almost nothing for the split to reject): split / no split = {:.2}x.", ratio(2, 3));
     let _ = writeln!(md, "- Tier 2 fallbacks vs tier 4, sky pass: {:.2}x; tier 1 vs tier 4: {:.2}x.", sky_ratio(4, 2), sky_ratio(5, 2));
+    let _ = writeln!(
+        md,
+        "- The `single` sky model with the sky filling the screen: {:.2}x the bitmap frame while the sun stands still (the sky-view map is reused), {:.2}x when the sun moves every frame (compute phase {:.2} ms per map).",
+        ratio(6, 2),
+        ratio(7, 2),
+        median(&configs[7].compute_ms)
+    );
     std::fs::write(&args.out, &md).with_context(|| format!("writing {}", args.out.display()))?;
     print!("{md}");
     println!("\nwrote {}", args.out.display());

@@ -46,7 +46,7 @@ pub struct SkyViewPass {
     atmosphere: wgpu::Buffer,
     single: wgpu::Buffer,
     params: wgpu::Buffer,
-    /// The map's texels (rgba16float), copied into the shared texture after the dispatch.
+    /// The map's texels (rgba8unorm), copied into the shared texture after the dispatch.
     texels: wgpu::Buffer,
     map: wgpu::Texture,
     bind_group: wgpu::BindGroup,
@@ -87,7 +87,7 @@ impl SkyViewPass {
         let (w, h) = SharedTextures::SKY_VIEW_SIZE;
         let texels = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::texels"),
-            size: (w * h * 8) as u64,
+            size: (w * h * 4) as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
@@ -189,7 +189,7 @@ impl Pass for SkyViewPass {
         if self.dirty {
             let (w, h) = SharedTextures::SKY_VIEW_SIZE;
             encoder.copy_buffer_to_texture(
-                wgpu::TexelCopyBufferInfo { buffer: &self.texels, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * 8), rows_per_image: Some(h) } },
+                wgpu::TexelCopyBufferInfo { buffer: &self.texels, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * 4), rows_per_image: Some(h) } },
                 self.map.as_image_copy(),
                 wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
             );
