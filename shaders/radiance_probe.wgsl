@@ -1,4 +1,4 @@
-//! requires: sky_model/single
+//! requires: sky_model/single, sky_model/lut_sampling
 // Evaluates a sky model for a list of radiance cases (`skytune radiance`, tests, benchmarks).
 // Keep in sync with src/render/radiance_probe.rs.
 @group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
@@ -6,6 +6,10 @@
 // Per case: camera_km, sun_elev_deg, view_elev_deg, rel_azimuth_deg.
 @group(1) @binding(2) var<storage, read> cases: array<vec4<f32>>;
 @group(1) @binding(3) var<storage, read_write> radiance: array<vec4<f32>>;
+// The `lut` model's tables, built by sky_luts.wgsl before cs_lut runs.
+@group(1) @binding(4) var<storage, read> lut_params: LutParams;
+@group(1) @binding(5) var<storage, read> transmittance_lut: array<vec4<f32>>;
+@group(1) @binding(6) var<storage, read> multiscattering_lut: array<vec4<f32>>;
 
 fn direction(elevation_deg: f32, azimuth_deg: f32) -> vec3<f32> {
     let e = radians(elevation_deg);
@@ -22,4 +26,15 @@ fn cs_single(@builtin(global_invocation_id) id: vec3<u32>) {
     let sun = direction(c.y, 0.0);
     let view = direction(c.z, c.w);
     radiance[id.x] = vec4<f32>(single_scattering(atmosphere, single_settings, c.x, view, sun), 1.0);
+}
+
+@compute @workgroup_size(64)
+fn cs_lut(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= arrayLength(&cases)) {
+        return;
+    }
+    let c = cases[id.x];
+    let sun = direction(c.y, 0.0);
+    let view = direction(c.z, c.w);
+    radiance[id.x] = vec4<f32>(lut_radiance(atmosphere, c.x, view, sun), 1.0);
 }

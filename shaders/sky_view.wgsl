@@ -1,10 +1,11 @@
-//! requires: sky_model/single, sky_model/tone, sky_model/sky_view_map
+//! requires: sky_model/single, sky_model/lut_sampling, sky_model/tone, sky_model/sky_view_map
 // Sky-view pass (compute phase): the current physical model rendered into the sky-view map,
 // exposed, tone-mapped and display-encoded, for the skydome's gradient stage to sample.
 // Keep `SkyViewParams` in sync with src/render/sky_view.rs.
 struct SkyViewParams {
     towards_sun: vec4<f32>, // xyz unit vector, w: camera altitude (km)
     exposure: vec4<f32>,    // x: radiance scale (2^EV), y: tone mapper as f32 (0 ACES, 1 neutral), zw: map size (texels)
+    model: vec4<f32>,       // x: 0 single, 1 lut
 };
 
 @group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
@@ -16,6 +17,10 @@ struct SkyViewParams {
 // up in), copied into the sky-view texture after the phase, so the compute phase only writes
 // buffers (as radiance_probe.wgsl does).
 @group(1) @binding(3) var<storage, read_write> sky_view_out: array<u32>;
+// The `lut` model's tables (sky_luts.wgsl builds them earlier in the compute phase).
+@group(1) @binding(4) var<storage, read> lut_params: LutParams;
+@group(1) @binding(5) var<storage, read> transmittance_lut: array<vec4<f32>>;
+@group(1) @binding(6) var<storage, read> multiscattering_lut: array<vec4<f32>>;
 
 @compute @workgroup_size(64)
 fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -26,7 +31,12 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let id = vec2<u32>(gid.x % size.x, gid.x / size.x);
     let uv = (vec2<f32>(id) + 0.5) / vec2<f32>(size);
     let dir = sky_view_direction(uv);
-    let radiance = single_scattering(atmosphere, single_settings, params.towards_sun.w, dir, params.towards_sun.xyz);
+    var radiance: vec3<f32>;
+    if (params.model.x > 0.5) {
+        radiance = lut_radiance(atmosphere, params.towards_sun.w, dir, params.towards_sun.xyz);
+    } else {
+        radiance = single_scattering(atmosphere, single_settings, params.towards_sun.w, dir, params.towards_sun.xyz);
+    }
     let color = display_from_radiance(radiance, params.exposure.x, u32(params.exposure.y));
     sky_view_out[id.y * size.x + id.x] = pack4x8unorm(vec4<f32>(color, 1.0));
 }

@@ -61,6 +61,8 @@ pub enum RadianceModel {
     Reference,
     /// Single scattering ray-marched on the GPU, erf or numerical optical depth towards the sun.
     Single,
+    /// Multiple scattering from look-up tables on the GPU (Hillaire 2020).
+    Lut,
 }
 
 /// Optical depth towards the sun of the `single` model.
@@ -93,9 +95,18 @@ pub struct RadianceArgs {
     /// Seed of the reference's paths.
     #[arg(long, default_value_t = 0x5eed)]
     pub seed: u64,
-    /// `single`: samples along the view ray.
+    /// `single` and `lut`: samples along the view ray.
     #[arg(long, default_value_t = 32)]
     pub view_steps: u32,
+    /// `lut`: transmittance table, WIDTHxHEIGHT texels.
+    #[arg(long, default_value = "256x64")]
+    pub transmittance_size: String,
+    /// `lut`: multiple-scattering table side, texels.
+    #[arg(long, default_value_t = 32)]
+    pub multiscattering_size: u32,
+    /// `lut`: the multiple-scattering integral uses GRID x GRID directions.
+    #[arg(long, default_value_t = 8)]
+    pub multiscattering_grid: u32,
     /// `single`: samples towards the sun (numerical optical depth).
     #[arg(long, default_value_t = 16)]
     pub sun_steps: u32,

@@ -77,10 +77,27 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             let out = out.into_iter().map(|c| c.map(f64::from)).collect();
             (out, format!("model single on {}: {settings:?}", ctx.adapter_line()))
         }
+        cli::RadianceModel::Lut => {
+            let (tw, th) = cli::parse_size(&args.transmittance_size)?;
+            let settings = skytune::atmosphere::LutSettings {
+                transmittance_size: [tw, th],
+                multiscattering_size: args.multiscattering_size,
+                multiscattering_grid: args.multiscattering_grid,
+                view_steps: args.view_steps,
+                ..Default::default()
+            };
+            settings.validate().map_err(|e| anyhow!("--{}: {}", e.field.replace('_', "-"), e.message))?;
+            let ctx = GpuContext::headless(adapter(args.cpu))?;
+            let probe = skytune::render::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
+            let out = probe.lut(&ctx, &atm, &settings, &list)?;
+            let out = out.into_iter().map(|c| c.map(f64::from)).collect();
+            (out, format!("model lut on {}: {settings:?}", ctx.adapter_line()))
+        }
     };
     let name = match args.model {
         cli::RadianceModel::Reference => "reference",
         cli::RadianceModel::Single => "single",
+        cli::RadianceModel::Lut => "lut",
     };
     cases::write_radiance(&args.out, &format!("skytune radiance --model {name}: {units}\n{comment}"), &list, &out)?;
     println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());

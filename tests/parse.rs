@@ -206,6 +206,8 @@ fn bad_sky_model_and_atmosphere_values_are_located() {
         ("[atmosphere]\nmie_scattering_per_km = -1\n", "mie_scattering_per_km = -1", "atmosphere.mie_scattering_per_km", "expected a finite number >= 0"),
         ("[atmosphere]\ntop_radius_km = 6000\n", "top_radius_km = 6000", "atmosphere.top_radius_km", "expected more than ground_radius_km"),
         ("[atmosphere]\nmie_extinction_per_km = 0.001\n", "mie_extinction_per_km = 0.001", "atmosphere.mie_extinction_per_km", "expected at least mie_scattering_per_km"),
+        ("[sky_model]\nkind = \"lut\"\nmultiscattering_size = 1000\n", "multiscattering_size = 1000", "sky_model.multiscattering_size", "expected 2..=64 texels, found 1000"),
+        ("[sky_model]\nkind = \"lut\"\ntransmittance_size = [1000000, 64]\n", "transmittance_size = [1000000, 64]", "sky_model.transmittance_size[0]", "found 1000000"),
     ] {
         let (result, file, text) = with_sections(extra);
         let errors = result.expect_err(extra);

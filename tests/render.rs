@@ -238,3 +238,32 @@ fn switching_the_sky_model_live_leaves_the_bitmap_path_exact() {
     assert_eq!(maps(&h), n + 2, "the exposure changed: the map is recomputed");
     h.ctx.wait_idle().unwrap();
 }
+
+fn render_lut(name: &str, hour: f32, weather: f32) {
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model };
+    let input = FrameInput { sky_model: Some(model), ..FrameInput::new(hour, weather) };
+    let img = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+    common::check_reference(name, &img);
+    // The tables were built once; a moving sun only recomputes the sky-view map.
+    let builds = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::sky_luts::SkyLutsPass>().unwrap().builds;
+    let before = builds(&h);
+    h.frame(&sky, &FrameInput { hour: hour + 0.5, ..input.clone() }, &camera(), &RenderOptions::default(), 0.0);
+    assert_eq!(builds(&h), before, "the sun moved: the LUTs stay");
+    let hazy = skytune::sky::resolved::SkyModel { ground_albedo: 0.8, ..model };
+    h.frame(&sky, &FrameInput { sky_model: Some(hazy), ..input }, &camera(), &RenderOptions::default(), 0.0);
+    assert_eq!(builds(&h), before + 1, "the ground albedo changed: the LUTs are rebuilt");
+    h.ctx.wait_idle().unwrap();
+}
+
+#[test]
+fn lut_model_day() {
+    render_lut("lut_day", 13.0, 0.0);
+}
+
+#[test]
+fn lut_model_sunset() {
+    render_lut("lut_sunset", 18.0, 0.1);
+}

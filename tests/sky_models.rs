@@ -67,3 +67,35 @@ fn single_scattering_on_the_gpu_matches_the_reference() {
         }
     }
 }
+
+#[test]
+fn lut_multiple_scattering_on_the_gpu_matches_the_reference() {
+    let atm = Atmosphere::default();
+    let mut cases = Vec::new();
+    for sun in [-4.0, 2.0, 8.0, 30.0, 70.0] {
+        for view in [-5.0, 3.0, 20.0, 80.0] {
+            for az in [30.0, 150.0] {
+                cases.push(Case { camera_km: 0.2, albedo: 0.3, sun_elev_deg: sun, view_elev_deg: view, rel_azimuth_deg: az });
+            }
+        }
+    }
+    let reference = Reference::new(atm, ReferenceSettings { paths: 2048, ..Default::default() });
+    let exact: Vec<[f64; 3]> = cases.iter().map(|c| reference.radiance(c)).collect();
+    let ctx = GpuContext::headless(AdapterChoice::Cpu).unwrap();
+    let probe = RadianceProbe::new(&ctx, &ShaderLibrary::embedded()).unwrap();
+    let lut = probe.lut(&ctx, &atm, &skytune::atmosphere::LutSettings::default(), &cases).unwrap();
+    assert!(lut.iter().flatten().all(|x| x.is_finite() && *x >= 0.0), "NaN or negative radiance");
+    for (c, (l, r)) in cases.iter().zip(lut.iter().zip(&exact)) {
+        eprintln!("sun {:5.1} view {:5.1} az {:5.1}: lut {:?} reference {:?}", c.sun_elev_deg, c.view_elev_deg, c.rel_azimuth_deg, l, r.map(|x| x as f32));
+    }
+    let worst = worst_errors(&cases, &lut, &exact);
+    eprintln!("lut (Hillaire 2020 defaults): worst relative error day {:.4}, low sun {:.4}, twilight {:.4}", worst[0], worst[1], worst[2]);
+    // Thresholds (day, low sun, twilight): see docs/sky-models.md; they include the reference's noise.
+    for (regime, (w, limit)) in ["day", "low sun", "twilight"].iter().zip(worst.iter().zip([0.15, 0.4, 2.0])) {
+        assert!(*w <= limit, "lut, {regime}: worst relative error {w:.4} > {limit}");
+    }
+    // Multiple scattering is there: the lut sky is brighter than single scattering alone.
+    let single = probe.single(&ctx, &atm, &SingleSettings { view_steps: 32, sun_steps: 32, optical_depth: OpticalDepth::Numerical }, &cases).unwrap();
+    let brighter = lut.iter().zip(&single).filter(|(l, s)| l[2] > s[2] * 1.05).count();
+    assert!(brighter > cases.len() / 2, "{brighter} of {} cases gain blue from multiple scattering", cases.len());
+}

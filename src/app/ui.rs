@@ -370,6 +370,7 @@ fn model_label(kind: SkyModelKind) -> &'static str {
     match kind {
         SkyModelKind::Bitmap => "NeL bitmaps",
         SkyModelKind::Single => "single scattering",
+        SkyModelKind::Lut => "LUT multiple scattering",
     }
 }
 
@@ -390,14 +391,22 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
                 ui.radio_value(&mut model.tone_mapper, t, t.name());
             }
         });
-        ui.horizontal(|ui| {
-            ui.label("optical depth:");
-            ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Erf, "erf");
-            ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Numerical, "numerical");
-        });
-        ui.add(egui::Slider::new(&mut model.single.view_steps, 1..=256).text("view steps"));
-        if model.single.optical_depth == OpticalDepth::Numerical {
-            ui.add(egui::Slider::new(&mut model.single.sun_steps, 1..=256).text("sun steps"));
+        if model.kind == SkyModelKind::Single {
+            ui.horizontal(|ui| {
+                ui.label("optical depth:");
+                ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Erf, "erf");
+                ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Numerical, "numerical");
+            });
+        }
+        if model.kind == SkyModelKind::Lut {
+            ui.add(egui::Slider::new(&mut model.lut.view_steps, 1..=256).text("view steps"));
+            ui.add(egui::Slider::new(&mut model.lut.multiscattering_grid, 1..=16).text("multiple-scattering directions (grid)"));
+            ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
+        } else {
+            ui.add(egui::Slider::new(&mut model.single.view_steps, 1..=256).text("view steps"));
+            if model.single.optical_depth == OpticalDepth::Numerical {
+                ui.add(egui::Slider::new(&mut model.single.sun_steps, 1..=256).text("sun steps"));
+            }
         }
     }
     if model != before {

@@ -230,3 +230,58 @@ impl Default for SingleSettings {
         Self { view_steps: 32, sun_steps: 16, optical_depth: OpticalDepth::Erf }
     }
 }
+
+/// Settings of the `lut` model (Hillaire 2020): table sizes and sample counts, the accuracy axis
+/// of the benchmark.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LutSettings {
+    /// Transmittance table, texels (width: view angle, height: altitude).
+    pub transmittance_size: [u32; 2],
+    /// Samples per transmittance texel.
+    pub transmittance_steps: u32,
+    /// Multiple-scattering table side, texels (sun angle x altitude).
+    pub multiscattering_size: u32,
+    /// The multiple-scattering integral uses grid x grid directions.
+    pub multiscattering_grid: u32,
+    /// Samples per direction of the multiple-scattering integral.
+    pub multiscattering_steps: u32,
+    /// Samples along each view ray.
+    pub view_steps: u32,
+}
+
+impl LutSettings {
+    /// Largest transmittance table the GPU buffers hold.
+    pub const MAX_TRANSMITTANCE: [u32; 2] = [512, 256];
+    /// Largest multiple-scattering table side.
+    pub const MAX_MULTISCATTERING: u32 = 64;
+
+    /// Checks every setting's domain.
+    pub fn validate(&self) -> Result<(), AtmosphereError> {
+        let [w, h] = self.transmittance_size;
+        let bad = |field: &'static str, message: String| Err(AtmosphereError { field, message });
+        if !(2..=Self::MAX_TRANSMITTANCE[0]).contains(&w) || !(2..=Self::MAX_TRANSMITTANCE[1]).contains(&h) {
+            return bad("transmittance_size", format!("expected 2..={} x 2..={} texels, found {w} x {h}", Self::MAX_TRANSMITTANCE[0], Self::MAX_TRANSMITTANCE[1]));
+        }
+        if !(2..=Self::MAX_MULTISCATTERING).contains(&self.multiscattering_size) {
+            return bad("multiscattering_size", format!("expected 2..={} texels, found {}", Self::MAX_MULTISCATTERING, self.multiscattering_size));
+        }
+        for (field, v) in [
+            ("transmittance_steps", self.transmittance_steps),
+            ("multiscattering_grid", self.multiscattering_grid),
+            ("multiscattering_steps", self.multiscattering_steps),
+            ("view_steps", self.view_steps),
+        ] {
+            if !(1..=1024).contains(&v) {
+                return bad(field, format!("expected 1..=1024, found {v}"));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Default for LutSettings {
+    fn default() -> Self {
+        // Hillaire 2020's sizes: 256 x 64 transmittance, 32 x 32 multiple scattering, 64 directions.
+        Self { transmittance_size: [256, 64], transmittance_steps: 40, multiscattering_size: 32, multiscattering_grid: 8, multiscattering_steps: 20, view_steps: 32 }
+    }
+}

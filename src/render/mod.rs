@@ -13,6 +13,7 @@ pub mod radiance_probe;
 pub mod renderer;
 pub mod scene;
 pub mod shaders;
+pub mod sky_luts;
 pub mod sky_model;
 pub mod sky_objects;
 pub mod sky_view;

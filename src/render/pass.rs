@@ -63,11 +63,13 @@ pub struct PassBuild<'a> {
     /// Colour format of the target.
     pub color_format: wgpu::TextureFormat,
     /// Textures one pass writes and others read.
-    pub shared: &'a SharedTextures,
+    pub shared: &'a SharedResources,
 }
 
-/// Textures shared between passes, made once by the renderer.
-pub struct SharedTextures {
+/// Textures and buffers shared between passes, made once by the renderer.
+pub struct SharedResources {
+    /// The `lut` model's tables: `sky_luts` builds them, `sky_view` reads them.
+    pub luts: super::sky_model::LutTables,
     /// The sky-view map: a physical model's display colour by direction (`sky_view` writes it in
     /// the compute phase, `sky_objects` samples it in the gradient stage).
     pub sky_view: wgpu::Texture,
@@ -77,11 +79,11 @@ pub struct SharedTextures {
     pub sky_view_sampler: wgpu::Sampler,
 }
 
-impl SharedTextures {
+impl SharedResources {
     /// Size of the sky-view map, texels (Hillaire 2020's sky-view LUT size).
     pub const SKY_VIEW_SIZE: (u32, u32) = (192, 108);
 
-    /// Creates the shared textures.
+    /// Creates the shared resources.
     pub fn new(device: &wgpu::Device) -> Self {
         let (width, height) = Self::SKY_VIEW_SIZE;
         let sky_view = device.create_texture(&wgpu::TextureDescriptor {
@@ -103,7 +105,7 @@ impl SharedTextures {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        Self { sky_view, sky_view_view, sky_view_sampler }
+        Self { luts: super::sky_model::LutTables::new(device), sky_view, sky_view_view, sky_view_sampler }
     }
 }
 
@@ -231,6 +233,7 @@ pub fn boxed<P: Pass, F: Fn(&PassBuild<'_>) -> RenderResult<P>>(f: F, build: &Pa
 /// Every pass of the renderer, in recording order within its phase. The one list: pipelines,
 /// shader reloads, sky uploads, per-frame steps and GPU timings all follow it.
 pub const PASSES: &[(&str, PassConstructor)] = &[
+    ("sky_luts", |b| boxed(super::sky_luts::SkyLutsPass::new, b)),
     ("sky_view", |b| boxed(super::sky_view::SkyViewPass::new, b)),
     ("scene", |b| boxed(super::scene::ScenePass::new, b)),
     ("sky_objects", |b| boxed(super::sky_objects::SkyObjectsPass::new, b)),

@@ -5,15 +5,26 @@
 use wgpu::util::DeviceExt;
 
 use super::error::{RenderError, RenderResult};
-use super::sky_model::{AtmosphereUniform, SingleUniform};
+use super::sky_model::{storage_entry, AtmosphereUniform, LutBuilder, LutTables, LutUniform, SingleUniform};
 use super::{shaders, GpuContext, ShaderLibrary};
 use crate::atmosphere::reference::Case;
-use crate::atmosphere::{Atmosphere, SingleSettings};
+use crate::atmosphere::{Atmosphere, LutSettings, SingleSettings};
 
-/// The probe's pipeline.
+/// The probe's pipelines, and the `lut` model's tables and builders.
 pub struct RadianceProbe {
     layout: wgpu::BindGroupLayout,
+    empty_layout: wgpu::BindGroupLayout,
     single: wgpu::ComputePipeline,
+    lut: wgpu::ComputePipeline,
+    tables: LutTables,
+    builder: LutBuilder,
+}
+
+/// Which entry point evaluates the cases.
+#[derive(Clone, Copy)]
+enum Model {
+    Single,
+    Lut,
 }
 
 fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
@@ -36,6 +47,9 @@ impl RadianceProbe {
                 buffer_entry(1, wgpu::BufferBindingType::Uniform),
                 buffer_entry(2, wgpu::BufferBindingType::Storage { read_only: true }),
                 buffer_entry(3, wgpu::BufferBindingType::Storage { read_only: false }),
+                storage_entry(4, true),
+                storage_entry(5, true),
+                storage_entry(6, true),
             ],
         });
         // Group 0 (the frame's globals) is declared by every module but unused here.
@@ -46,22 +60,50 @@ impl RadianceProbe {
             immediate_size: 0,
         });
         let module = shaders::module(device, library, "radiance_probe")?;
-        let single = shaders::validated(device, "RadianceProbe::single", || {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("RadianceProbe::single"),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some("cs_single"),
-                compilation_options: Default::default(),
-                cache: None,
+        let pipeline = |entry: &'static str, label: &'static str| {
+            shaders::validated(device, label, || {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
             })
-        })?;
-        Ok(Self { layout, single })
+        };
+        let (single, lut) = (pipeline("cs_single", "RadianceProbe::single")?, pipeline("cs_lut", "RadianceProbe::lut")?);
+        let builder = LutBuilder::new(device, library, &empty)?;
+        Ok(Self { layout, empty_layout: empty, single, lut, tables: LutTables::new(device), builder })
+    }
+
+    /// Radiance of the `lut` model for every case (tables built per distinct ground albedo).
+    pub fn lut(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &LutSettings, cases: &[Case]) -> RenderResult<Vec<[f32; 3]>> {
+        let mut out = vec![[0.0; 3]; cases.len()];
+        let mut albedos: Vec<f64> = cases.iter().map(|c| c.albedo).collect();
+        albedos.sort_by(f64::total_cmp);
+        albedos.dedup();
+        for albedo in albedos {
+            let index: Vec<usize> = (0..cases.len()).filter(|i| cases[*i].albedo == albedo).collect();
+            let subset: Vec<Case> = index.iter().map(|i| cases[*i]).collect();
+            let params = LutUniform::new(settings, albedo as f32);
+            ctx.queue.write_buffer(&self.tables.params, 0, bytemuck::bytes_of(&params));
+            let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Lut, Some(settings))?;
+            for (i, r) in index.into_iter().zip(result) {
+                out[i] = r;
+            }
+        }
+        Ok(out)
     }
 
     /// Radiance of the `single` model for every case, sr^-1 per unit of solar irradiance
     /// (blocks until the GPU is done).
     pub fn single(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &SingleSettings, cases: &[Case]) -> RenderResult<Vec<[f32; 3]>> {
+        self.run(ctx, atmosphere, settings, cases, Model::Single, None)
+    }
+
+    /// Evaluates `model` for `cases`; with `luts`, builds the tables first.
+    fn run(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &SingleSettings, cases: &[Case], model: Model, luts: Option<&LutSettings>) -> RenderResult<Vec<[f32; 3]>> {
         if cases.is_empty() {
             return Ok(Vec::new());
         }
@@ -92,14 +134,24 @@ impl RadianceProbe {
                 wgpu::BindGroupEntry { binding: 1, resource: set.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: input.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: output.as_entire_binding() },
+                self.tables.entries(4)[0].clone(),
+                self.tables.entries(4)[1].clone(),
+                self.tables.entries(4)[2].clone(),
             ],
         });
-        let empty = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("RadianceProbe::empty"), layout: &self.single.get_bind_group_layout(0), entries: &[] });
+        let empty = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("RadianceProbe::empty"), layout: &self.empty_layout, entries: &[] });
+        let builder_group = luts.map(|_| self.builder.bind_group(device, &atm, &self.tables));
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("RadianceProbe::encoder") });
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("RadianceProbe::pass"), timestamp_writes: None });
-            pass.set_pipeline(&self.single);
             pass.set_bind_group(0, &empty, &[]);
+            if let (Some(settings), Some(group)) = (luts, &builder_group) {
+                self.builder.dispatch(&mut pass, group, settings);
+            }
+            pass.set_pipeline(match model {
+                Model::Single => &self.single,
+                Model::Lut => &self.lut,
+            });
             pass.set_bind_group(1, &bind_group, &[]);
             pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
         }

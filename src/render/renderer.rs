@@ -5,7 +5,7 @@
 use super::camera::Camera;
 use super::error::RenderResult;
 use super::globals::{Globals, GlobalsBinding};
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SharedTextures, SkyUpload, PASSES};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SharedResources, SkyUpload, PASSES};
 use super::shaders::{self, ShaderLibrary};
 use super::textures::TextureCache;
 use super::timing::GpuTimer;
@@ -75,7 +75,7 @@ pub struct SkyRenderer {
     library: ShaderLibrary,
     color_format: wgpu::TextureFormat,
     textures: TextureCache,
-    shared: SharedTextures,
+    shared: SharedResources,
     passes: Vec<Box<dyn Pass>>,
     has_sky: bool,
     timer: Option<GpuTimer>,
@@ -96,7 +96,7 @@ impl SkyRenderer {
     pub fn with_passes(ctx: &GpuContext, color_format: wgpu::TextureFormat, library: ShaderLibrary, extra: &[(&str, super::pass::PassConstructor)]) -> RenderResult<Self> {
         let device = &ctx.device;
         let globals = GlobalsBinding::new(device);
-        let shared = SharedTextures::new(device);
+        let shared = SharedResources::new(device);
         let build = PassBuild { device, globals_layout: &globals.layout, library: &library, color_format, shared: &shared };
         let passes = PASSES.iter().chain(extra).map(|(_, new)| new(&build)).collect::<RenderResult<Vec<_>>>()?;
         Ok(Self {

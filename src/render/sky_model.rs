@@ -3,7 +3,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::atmosphere::{Atmosphere, OpticalDepth, SingleSettings};
+use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, SingleSettings};
 
 /// Keep in sync with `Atmosphere` in shaders/sky_model/atmosphere.wgsl.
 #[repr(C)]
@@ -51,5 +51,133 @@ const _: () = assert!(std::mem::size_of::<SingleUniform>() == 16);
 impl From<&SingleSettings> for SingleUniform {
     fn from(s: &SingleSettings) -> Self {
         Self { view_steps: s.view_steps.max(1), sun_steps: s.sun_steps.max(1), numeric: matches!(s.optical_depth, OpticalDepth::Numerical) as u32, pad: 0 }
+    }
+}
+
+/// Keep in sync with `LutParams` in shaders/sky_model/lut_sampling.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct LutUniform {
+    /// Transmittance width, height; multiple-scattering side; direction grid.
+    pub sizes: [u32; 4],
+    /// Transmittance, multiple-scattering and view-ray samples; unused.
+    pub steps: [u32; 4],
+    /// Ground albedo; unused.
+    pub ground: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<LutUniform>() == 48);
+
+impl LutUniform {
+    /// The GPU form of `settings` with a ground albedo.
+    pub fn new(settings: &LutSettings, albedo: f32) -> Self {
+        let [w, h] = settings.transmittance_size;
+        Self {
+            sizes: [w, h, settings.multiscattering_size, settings.multiscattering_grid],
+            steps: [settings.transmittance_steps, settings.multiscattering_steps, settings.view_steps, 0],
+            ground: [albedo, 0.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// The `lut` model's tables: storage buffers of vec4 sized for the largest settings.
+pub struct LutTables {
+    /// `LutUniform` (read-only storage: Mesa 22's lavapipe miscompiles some uniform-driven loops).
+    pub params: wgpu::Buffer,
+    /// Transmittance, rgb per texel.
+    pub transmittance: wgpu::Buffer,
+    /// Multiple-scattering Psi, rgb per texel.
+    pub multiscattering: wgpu::Buffer,
+}
+
+impl LutTables {
+    /// Allocates the tables.
+    pub fn new(device: &wgpu::Device) -> Self {
+        let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
+            device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage: wgpu::BufferUsages::STORAGE | extra, mapped_at_creation: false })
+        };
+        let [tw, th] = LutSettings::MAX_TRANSMITTANCE;
+        let m = LutSettings::MAX_MULTISCATTERING;
+        Self {
+            params: storage("LutTables::params", std::mem::size_of::<LutUniform>() as u64, wgpu::BufferUsages::COPY_DST),
+            transmittance: storage("LutTables::transmittance", (tw * th * 16) as u64, wgpu::BufferUsages::empty()),
+            multiscattering: storage("LutTables::multiscattering", (m * m * 16) as u64, wgpu::BufferUsages::empty()),
+        }
+    }
+
+    /// Bind group entries of the three buffers at `first`, `first + 1`, `first + 2`.
+    pub fn entries(&self, first: u32) -> [wgpu::BindGroupEntry<'_>; 3] {
+        [
+            wgpu::BindGroupEntry { binding: first, resource: self.params.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: first + 1, resource: self.transmittance.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: first + 2, resource: self.multiscattering.as_entire_binding() },
+        ]
+    }
+}
+
+/// Layout entry of a compute-stage storage buffer.
+pub fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only }, has_dynamic_offset: false, min_binding_size: None },
+        count: None,
+    }
+}
+
+/// The `lut` model's table builders (shaders/sky_luts.wgsl), for the sky LUTs pass and the probe.
+pub struct LutBuilder {
+    layout: wgpu::BindGroupLayout,
+    transmittance: wgpu::ComputePipeline,
+    multiscattering: wgpu::ComputePipeline,
+}
+
+impl LutBuilder {
+    /// Builds the pipelines with `group0` as bind group 0 (the frame's globals, or an empty layout).
+    pub fn new(device: &wgpu::Device, library: &super::ShaderLibrary, group0: &wgpu::BindGroupLayout) -> super::RenderResult<Self> {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("SkyLuts::layout"),
+            entries: &[super::uniform_entry(0, wgpu::ShaderStages::COMPUTE), storage_entry(1, true), storage_entry(2, false), storage_entry(3, false)],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("SkyLuts::pipeline_layout"),
+            bind_group_layouts: &[Some(group0), Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = super::shaders::module(device, library, "sky_luts")?;
+        let pipeline = |entry: &'static str, label: &'static str| {
+            super::shaders::validated(device, label, || {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+            })
+        };
+        Ok(Self { transmittance: pipeline("cs_transmittance", "SkyLuts::transmittance")?, multiscattering: pipeline("cs_multiscattering", "SkyLuts::multiscattering")?, layout })
+    }
+
+    /// A bind group of the builders over `tables` with the atmosphere uniform `atmosphere`.
+    pub fn bind_group(&self, device: &wgpu::Device, atmosphere: &wgpu::Buffer, tables: &LutTables) -> wgpu::BindGroup {
+        let [p, t, m] = tables.entries(1);
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("SkyLuts::bind_group"),
+            layout: &self.layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: atmosphere.as_entire_binding() }, p, t, m],
+        })
+    }
+
+    /// Records both tables' builds (transmittance first: the other reads it) into `cpass`, whose
+    /// bind group 0 is set; `bind_group` comes from [`Self::bind_group`].
+    pub fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, bind_group: &wgpu::BindGroup, settings: &LutSettings) {
+        let [w, h] = settings.transmittance_size;
+        let m = settings.multiscattering_size;
+        cpass.set_bind_group(1, bind_group, &[]);
+        cpass.set_pipeline(&self.transmittance);
+        cpass.dispatch_workgroups((w * h).div_ceil(64), 1, 1);
+        cpass.set_pipeline(&self.multiscattering);
+        cpass.dispatch_workgroups((m * m).div_ceil(64), 1, 1);
     }
 }

@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SharedTextures};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SharedResources};
 use super::shaders;
 use super::sky_model::{AtmosphereUniform, SingleUniform};
 use crate::sky::resolved::{SkyModel, ToneMapper};
@@ -18,8 +18,10 @@ pub struct SkyViewParams {
     pub towards_sun: [f32; 4],
     /// Radiance scale 2^EV (x), tone mapper (y: 0 ACES, 1 neutral), map size in texels (zw).
     pub exposure: [f32; 4],
+    /// Model (x: 0 single, 1 lut).
+    pub model: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<SkyViewParams>() == 32);
+const _: () = assert!(std::mem::size_of::<SkyViewParams>() == 48);
 
 impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
     fn from((model, towards_sun): (&SkyModel, glam::Vec3)) -> Self {
@@ -27,8 +29,9 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
             ToneMapper::Aces => 0.0,
             ToneMapper::Neutral => 1.0,
         };
-        let (w, h) = SharedTextures::SKY_VIEW_SIZE;
-        Self { towards_sun: towards_sun.extend(model.camera_km).to_array(), exposure: [model.exposure_ev.exp2(), tone, w as f32, h as f32] }
+        let (w, h) = SharedResources::SKY_VIEW_SIZE;
+        let kind = if model.kind == crate::sky::resolved::SkyModelKind::Lut { 1.0 } else { 0.0 };
+        Self { towards_sun: towards_sun.extend(model.camera_km).to_array(), exposure: [model.exposure_ev.exp2(), tone, w as f32, h as f32], model: [kind, 0.0, 0.0, 0.0] }
     }
 }
 
@@ -37,6 +40,7 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
 struct Key {
     atmosphere: AtmosphereUniform,
     single: SingleUniform,
+    lut: super::sky_model::LutUniform,
     params: SkyViewParams,
 }
 
@@ -84,7 +88,8 @@ impl SkyViewPass {
             ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: false }, has_dynamic_offset: false, min_binding_size: None },
             count: None,
         });
-        let (w, h) = SharedTextures::SKY_VIEW_SIZE;
+        entries.extend([super::sky_model::storage_entry(4, true), super::sky_model::storage_entry(5, true), super::sky_model::storage_entry(6, true)]);
+        let (w, h) = SharedResources::SKY_VIEW_SIZE;
         let texels = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::texels"),
             size: (w * h * 4) as u64,
@@ -113,6 +118,9 @@ impl SkyViewPass {
                 wgpu::BindGroupEntry { binding: 1, resource: single.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: params.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: texels.as_entire_binding() },
+                b.shared.luts.entries(4)[0].clone(),
+                b.shared.luts.entries(4)[1].clone(),
+                b.shared.luts.entries(4)[2].clone(),
             ],
         });
         let map = b.shared.sky_view.clone();
@@ -159,7 +167,12 @@ impl Pass for SkyViewPass {
         if !model.kind.is_physical() {
             return;
         }
-        let key = Key { atmosphere: (&cx.frame.atmosphere).into(), single: (&model.single).into(), params: (model, cx.frame.towards_sun).into() };
+        let key = Key {
+            atmosphere: (&cx.frame.atmosphere).into(),
+            single: (&model.single).into(),
+            lut: super::sky_model::LutUniform::new(&model.lut, model.ground_albedo),
+            params: (model, cx.frame.towards_sun).into(),
+        };
         if self.computed == Some(key) {
             return;
         }
@@ -178,7 +191,7 @@ impl Pass for SkyViewPass {
     }
 
     fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, _key: usize) {
-        let (w, h) = SharedTextures::SKY_VIEW_SIZE;
+        let (w, h) = SharedResources::SKY_VIEW_SIZE;
         cpass.set_pipeline(self.pipeline.get());
         cpass.set_bind_group(1, &self.bind_group, &[]);
         cpass.dispatch_workgroups((w * h).div_ceil(64), 1, 1);
@@ -187,7 +200,7 @@ impl Pass for SkyViewPass {
     fn after_phase(&self, encoder: &mut wgpu::CommandEncoder) {
         // Between the compute phase and the sky phase, so this frame samples this frame's map.
         if self.dirty {
-            let (w, h) = SharedTextures::SKY_VIEW_SIZE;
+            let (w, h) = SharedResources::SKY_VIEW_SIZE;
             encoder.copy_buffer_to_texture(
                 wgpu::TexelCopyBufferInfo { buffer: &self.texels, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * 4), rows_per_image: Some(h) } },
                 self.map.as_image_copy(),

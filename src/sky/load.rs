@@ -250,13 +250,29 @@ impl Validator<'_> {
             })
         });
         let glare = f.glare.as_ref().and_then(|g| self.glare(g));
-        let model = f.sky_model.as_ref().map_or_else(SkyModel::default, |m| SkyModel {
-            kind: m.kind,
-            single: crate::atmosphere::SingleSettings { view_steps: m.view_steps.0, sun_steps: m.sun_steps.0, optical_depth: m.optical_depth },
-            exposure_ev: m.exposure_ev.get(),
-            tone_mapper: m.tone_mapper,
-            camera_km: m.camera_km.get(),
+        let model = f.sky_model.as_ref().map_or_else(SkyModel::default, |m| {
+            let d = crate::atmosphere::LutSettings::default();
+            let lut = crate::atmosphere::LutSettings {
+                transmittance_size: m.transmittance_size.map_or(d.transmittance_size, |[w, h]| [w.0, h.0]),
+                transmittance_steps: m.transmittance_steps.map_or(d.transmittance_steps, |s| s.0),
+                multiscattering_size: m.multiscattering_size.map_or(d.multiscattering_size, |s| s.0),
+                multiscattering_grid: m.multiscattering_grid.map_or(d.multiscattering_grid, |s| s.0),
+                multiscattering_steps: m.multiscattering_steps.map_or(d.multiscattering_steps, |s| s.0),
+                view_steps: m.view_steps.0,
+            };
+            SkyModel {
+                kind: m.kind,
+                single: crate::atmosphere::SingleSettings { view_steps: m.view_steps.0, sun_steps: m.sun_steps.0, optical_depth: m.optical_depth },
+                exposure_ev: m.exposure_ev.get(),
+                tone_mapper: m.tone_mapper,
+                camera_km: m.camera_km.get(),
+                lut,
+                ground_albedo: m.ground_albedo.get(),
+            }
         });
+        if let Err(e) = model.lut.validate() {
+            self.err_in("[sky_model]", e.field, &format!("sky_model.{}", e.field), e.message);
+        }
         let atmosphere = f.atmosphere.as_ref().map_or_else(crate::atmosphere::Atmosphere::default, |a| a.apply(crate::atmosphere::Atmosphere::default()));
         if let Err(errors) = atmosphere.validate() {
             for e in errors {

@@ -59,17 +59,20 @@ pub enum SkyModelKind {
     Bitmap,
     /// Physical single scattering, ray-marched on the GPU (see docs/sky-models.md).
     Single,
+    /// Multiple scattering from look-up tables, in the manner of Hillaire 2020.
+    Lut,
 }
 
 impl SkyModelKind {
     /// Every model, in the order the app lists them.
-    pub const ALL: [SkyModelKind; 2] = [SkyModelKind::Bitmap, SkyModelKind::Single];
+    pub const ALL: [SkyModelKind; 3] = [SkyModelKind::Bitmap, SkyModelKind::Single, SkyModelKind::Lut];
 
     /// Name in the sky file and the CLI.
     pub fn name(self) -> &'static str {
         match self {
             SkyModelKind::Bitmap => "bitmap",
             SkyModelKind::Single => "single",
+            SkyModelKind::Lut => "lut",
         }
     }
 
@@ -107,7 +110,7 @@ impl ToneMapper {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SkyModelDef {
-    /// `bitmap` (NeL gradients) or `single`.
+    /// `bitmap` (NeL gradients), `single` or `lut`.
     #[serde(default)]
     pub kind: SkyModelKind,
     /// Exposure in stops: display = tone_map(radiance x 2^exposure_ev), radiance in sr^-1 per unit
@@ -129,6 +132,28 @@ pub struct SkyModelDef {
     /// Altitude of the viewer above the ground, km.
     #[serde(default)]
     pub camera_km: NonNegative,
+    /// Ground albedo seen by multiple scattering (`lut`).
+    #[serde(default = "default_albedo")]
+    pub ground_albedo: Unit,
+    /// `lut`: transmittance table [width, height], texels (at most 512 x 256).
+    #[serde(default)]
+    pub transmittance_size: Option<[StepCount; 2]>,
+    /// `lut`: samples per transmittance texel.
+    #[serde(default)]
+    pub transmittance_steps: Option<StepCount>,
+    /// `lut`: multiple-scattering table side, texels (at most 64).
+    #[serde(default)]
+    pub multiscattering_size: Option<StepCount>,
+    /// `lut`: the multiple-scattering integral uses grid x grid directions.
+    #[serde(default)]
+    pub multiscattering_grid: Option<StepCount>,
+    /// `lut`: samples per direction of the multiple-scattering integral.
+    #[serde(default)]
+    pub multiscattering_steps: Option<StepCount>,
+}
+
+fn default_albedo() -> Unit {
+    Unit(0.3)
 }
 
 fn default_exposure_ev() -> Finite {

@@ -72,11 +72,23 @@ pub struct SkyModel {
     pub tone_mapper: ToneMapper,
     /// Viewer altitude, km.
     pub camera_km: f32,
+    /// `lut` settings.
+    pub lut: crate::atmosphere::LutSettings,
+    /// Ground albedo of multiple scattering.
+    pub ground_albedo: f32,
 }
 
 impl Default for SkyModel {
     fn default() -> Self {
-        Self { kind: SkyModelKind::Bitmap, single: Default::default(), exposure_ev: 5.0, tone_mapper: ToneMapper::Aces, camera_km: 0.0 }
+        Self {
+            kind: SkyModelKind::Bitmap,
+            single: Default::default(),
+            exposure_ev: 5.0,
+            tone_mapper: ToneMapper::Aces,
+            camera_km: 0.0,
+            lut: Default::default(),
+            ground_albedo: 0.3,
+        }
     }
 }
 

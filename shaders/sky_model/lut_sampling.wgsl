@@ -1,0 +1,113 @@
+//! requires: sky_model/atmosphere
+// The `lut` model (Hillaire 2020): look-up-table parametrisations, bilinear reads, and the sky
+// radiance from the LUTs. A library: the module that requires it declares `lut_params`,
+// `transmittance_lut` and `multiscattering_lut` (read-only where the LUTs are used, read-write
+// in the pass that builds them). Keep `LutParams` in sync with src/render/sky_model.rs.
+struct LutParams {
+    sizes: vec4<u32>, // transmittance width, height; multiple-scattering size; sqrt of its direction count
+    steps: vec4<u32>, // transmittance, multiple-scattering and view-ray samples; unused
+    ground: vec4<f32>, // ground albedo (grey); unused
+};
+
+// Bruneton's transmittance mapping: u from the distance to the top, v from the radius.
+fn transmittance_uv(atm: Atmosphere, r: f32, mu: f32) -> vec2<f32> {
+    let ground = atm.shape.x;
+    let top = atm.shape.y;
+    let h = sqrt(max(top * top - ground * ground, 0.0));
+    let rho = sqrt(max(r * r - ground * ground, 0.0));
+    let d = distance_to_top(atm, r, mu);
+    let d_min = top - r;
+    let d_max = rho + h;
+    return vec2<f32>(clamp((d - d_min) / max(d_max - d_min, 1e-6), 0.0, 1.0), clamp(rho / h, 0.0, 1.0));
+}
+
+fn transmittance_r_mu(atm: Atmosphere, uv: vec2<f32>) -> vec2<f32> {
+    let ground = atm.shape.x;
+    let top = atm.shape.y;
+    let h = sqrt(max(top * top - ground * ground, 0.0));
+    let rho = h * uv.y;
+    let r = sqrt(rho * rho + ground * ground);
+    let d_min = top - r;
+    let d_max = rho + h;
+    let d = d_min + uv.x * (d_max - d_min);
+    var mu = 1.0;
+    if (d > 1e-6) {
+        mu = clamp((h * h - rho * rho - d * d) / (2.0 * r * d), -1.0, 1.0);
+    }
+    return vec2<f32>(r, mu);
+}
+
+// Bilinear read of a width x height table of texel centres spanning uv in [0, 1].
+fn bilinear_index(size: vec2<u32>, uv: vec2<f32>) -> vec4<f32> {
+    let p = clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0)) * vec2<f32>(size - vec2<u32>(1u));
+    let i = min(vec2<u32>(floor(p)), size - vec2<u32>(2u));
+    let f = p - vec2<f32>(i);
+    return vec4<f32>(f32(i.y * size.x + i.x), f32(size.x), f.x, f.y);
+}
+
+fn sample_transmittance(atm: Atmosphere, r: f32, mu: f32) -> vec3<f32> {
+    let b = bilinear_index(lut_params.sizes.xy, transmittance_uv(atm, r, mu));
+    let k = u32(b.x);
+    let w = u32(b.y);
+    let top = mix(transmittance_lut[k].xyz, transmittance_lut[k + 1u].xyz, b.z);
+    let bottom = mix(transmittance_lut[k + w].xyz, transmittance_lut[k + w + 1u].xyz, b.z);
+    return mix(top, bottom, b.w);
+}
+
+// Transmittance to the sun from radius r at sun cosine mu_s; 0 behind the planet.
+fn sun_transmittance(atm: Atmosphere, r: f32, mu_s: f32) -> vec3<f32> {
+    if (distance_to_ground(atm, r, mu_s) >= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    return sample_transmittance(atm, r, mu_s);
+}
+
+// Multiple-scattering table: u = (mu_s + 1) / 2, v = altitude / thickness.
+fn sample_multiscattering(atm: Atmosphere, r: f32, mu_s: f32) -> vec3<f32> {
+    let n = lut_params.sizes.z;
+    let uv = vec2<f32>(0.5 * (mu_s + 1.0), (r - atm.shape.x) / (atm.shape.y - atm.shape.x));
+    let b = bilinear_index(vec2<u32>(n, n), uv);
+    let k = u32(b.x);
+    let top = mix(multiscattering_lut[k].xyz, multiscattering_lut[k + 1u].xyz, b.z);
+    let bottom = mix(multiscattering_lut[k + n].xyz, multiscattering_lut[k + n + 1u].xyz, b.z);
+    return mix(top, bottom, b.w);
+}
+
+// Sky radiance by the LUT method: single scattering with LUT transmittance to the sun plus
+// the isotropic multiple-scattering term sigma_s x Psi_ms.
+fn lut_radiance(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
+    let r = atm.shape.x + camera_km;
+    let mu = view.y;
+    let ground = distance_to_ground(atm, r, mu);
+    var ray_length = distance_to_top(atm, r, mu);
+    if (ground >= 0.0) {
+        ray_length = ground;
+    }
+    let nu = dot(view, sun);
+    let phase_r = rayleigh_phase(nu);
+    let phase_m = cornette_shanks_phase(nu, atm.mie.w);
+    let steps = max(lut_params.steps.z, 1u);
+    let n = f32(steps);
+    var tau = vec3<f32>(0.0);
+    var sum = vec3<f32>(0.0);
+    var t_prev = 0.0;
+    for (var i = 0u; i < steps; i++) {
+        let t_next = ray_length * ((f32(i) + 1.0) / n) * ((f32(i) + 1.0) / n);
+        let dt = t_next - t_prev;
+        let t = t_prev + 0.5 * dt;
+        t_prev = t_next;
+        let h = max(altitude_along(atm, r, mu, t), 0.0);
+        let e = extinction_at(atm, h);
+        let tau_mid = tau + e * (0.5 * dt);
+        tau += e * dt;
+        let p = vec3<f32>(0.0, r, 0.0) + view * t;
+        let r_p = atm.shape.x + h;
+        let mu_s = dot(p, sun) / max(length(p), 1e-3);
+        let sigma_r = atm.rayleigh.xyz * exp(-h / atm.rayleigh.w);
+        let sigma_m = atm.mie.x * exp(-h / atm.mie.z);
+        let single = (sigma_r * phase_r + vec3<f32>(sigma_m * phase_m)) * sun_transmittance(atm, r_p, mu_s);
+        let multiple = (sigma_r + vec3<f32>(sigma_m)) * sample_multiscattering(atm, r_p, mu_s);
+        sum += (single + multiple) * exp(-tau_mid) * dt;
+    }
+    return sum;
+}
