@@ -214,3 +214,22 @@ fn bad_sky_model_and_atmosphere_values_are_located() {
         assert_error(&errors, &file, line_of(&text, needle), field, message);
     }
 }
+
+#[test]
+fn the_atmosphere_follows_the_weather() {
+    let (sky, _, _) = with_sections(
+        "[atmosphere]\nrayleigh_scale_height_km = 8.5\n[[atmosphere.weather]]\nmie_scattering_per_km = 0.004\n[[atmosphere.weather]]\nmie_scattering_per_km = 0.02\nmie_extinction_per_km = 0.022\n",
+    );
+    let sky = sky.unwrap();
+    assert_eq!(sky.atmosphere_by_weather.len(), 2);
+    let at = |w: f32| sky.evaluate(&skytune::sky::FrameInput::new(12.0, w)).atmosphere;
+    assert!((at(0.0).mie_scattering_per_km - 0.004).abs() < 1e-9);
+    assert!((at(0.5).mie_scattering_per_km - 0.012).abs() < 1e-6, "{}", at(0.5).mie_scattering_per_km);
+    assert!((at(1.0).mie_scattering_per_km - 0.02).abs() < 1e-9);
+    // The base section applies to every step.
+    assert!((at(0.7).rayleigh_scale_height_km - 8.5).abs() < 1e-6);
+    // A step breaking a cross-field rule names its step.
+    let (bad, _, _) = with_sections("[atmosphere]\n[[atmosphere.weather]]\nmie_scattering_per_km = 0.02\n");
+    let errors = bad.expect_err("Mie extinction below scattering");
+    assert!(errors.0.iter().any(|e| e.field == "atmosphere.weather[0].mie_extinction_per_km"), "{errors}");
+}

@@ -27,13 +27,28 @@ fn every_wgsl_file_validates() {
     let mut modules = Vec::new();
     modules_on_disk(&dir, "", &mut modules);
     assert!(!modules.is_empty());
+    // Files with entry points are validated as the renderer loads them (globals, the modules they
+    // require, the file); library files (no entry point, e.g. one that uses bindings its users
+    // declare) through every file that requires them, and each must be required by one.
+    let is_entry = |path: &Path| std::fs::read_to_string(path).unwrap().lines().any(|l| ["@compute", "@vertex", "@fragment"].iter().any(|a| l.trim_start().starts_with(a)));
+    let mut required = std::collections::HashSet::new();
     for (name, path) in &modules {
-        // As the renderer loads it: globals, the modules it requires, the file.
+        if !is_entry(path) {
+            continue;
+        }
         let source = library.source(name).unwrap();
+        for (other, other_path) in &modules {
+            if !is_entry(other_path) && source.contains(&std::fs::read_to_string(other_path).unwrap()) {
+                required.insert(other.clone());
+            }
+        }
         let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}: {}", path.display(), e.emit_to_string(&source)));
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
             .validate(&module)
             .unwrap_or_else(|e| panic!("{}: {}", path.display(), e.emit_to_string(&source)));
+    }
+    for (name, path) in &modules {
+        assert!(is_entry(path) || required.contains(name), "shaders/{name}.wgsl has no entry point and no shader requires it");
     }
     // Every pass of the renderer has its shader, a file or a folder: a missing one must not pass silently.
     for (name, _) in skytune::render::PASSES {

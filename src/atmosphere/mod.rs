@@ -164,6 +164,39 @@ impl Atmosphere {
         }
     }
 
+    /// Field by field linear interpolation: `self` at t = 0, `other` at t = 1.
+    pub fn lerp(&self, other: &Self, t: f64) -> Self {
+        let l = |a: f64, b: f64| a + (b - a) * t;
+        let l3 = |a: Rgb, b: Rgb| std::array::from_fn(|c| l(a[c], b[c]));
+        Self {
+            ground_radius_km: l(self.ground_radius_km, other.ground_radius_km),
+            top_radius_km: l(self.top_radius_km, other.top_radius_km),
+            rayleigh_scattering_per_km: l3(self.rayleigh_scattering_per_km, other.rayleigh_scattering_per_km),
+            rayleigh_scale_height_km: l(self.rayleigh_scale_height_km, other.rayleigh_scale_height_km),
+            mie_scattering_per_km: l(self.mie_scattering_per_km, other.mie_scattering_per_km),
+            mie_extinction_per_km: l(self.mie_extinction_per_km, other.mie_extinction_per_km),
+            mie_scale_height_km: l(self.mie_scale_height_km, other.mie_scale_height_km),
+            mie_g: l(self.mie_g, other.mie_g),
+            ozone_absorption_per_km: l3(self.ozone_absorption_per_km, other.ozone_absorption_per_km),
+            ozone_center_km: l(self.ozone_center_km, other.ozone_center_km),
+            ozone_half_width_km: l(self.ozone_half_width_km, other.ozone_half_width_km),
+            sun_angular_radius_rad: l(self.sun_angular_radius_rad, other.sun_angular_radius_rad),
+        }
+    }
+
+    /// The atmosphere at `weather` (0..1) from one atmosphere per weather step, evenly spaced.
+    pub fn at_weather(steps: &[Atmosphere], weather: f64) -> Option<Atmosphere> {
+        match steps {
+            [] => None,
+            [one] => Some(*one),
+            _ => {
+                let x = weather.clamp(0.0, 1.0) * (steps.len() - 1) as f64;
+                let i = (x.floor() as usize).min(steps.len() - 2);
+                Some(steps[i].lerp(&steps[i + 1], x - i as f64))
+            }
+        }
+    }
+
     /// Optical depth of a vertical column from `altitude_km` to the top, per channel, in closed
     /// form (the check of every numerical integrator).
     pub fn vertical_optical_depth(&self, altitude_km: f64) -> Rgb {

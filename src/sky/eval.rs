@@ -376,7 +376,7 @@ impl Sky {
             tier: input.tier,
             env_map: input.env_map,
             sky_model: input.sky_model.unwrap_or(self.model),
-            atmosphere: self.atmosphere,
+            atmosphere: crate::atmosphere::Atmosphere::at_weather(&self.atmosphere_by_weather, weather as f64).unwrap_or(self.atmosphere),
             fog_color: fog,
             sun_ambient: self.sun_ambient.sample(hour, hpd, weather),
             sun_diffuse: self.sun_diffuse.sample(hour, hpd, weather),

@@ -279,6 +279,20 @@ impl Validator<'_> {
                 self.err_in("[atmosphere]", e.field, &format!("atmosphere.{}", e.field), e.message);
             }
         }
+        let weather_defs = f.atmosphere.as_ref().map_or(&[][..], |a| &a.weather[..]);
+        let mut atmosphere_by_weather = Vec::new();
+        for (k, def) in weather_defs.iter().enumerate() {
+            if !def.weather.is_empty() {
+                self.err_near("[[atmosphere.weather.weather]]", &format!("atmosphere.weather[{k}].weather"), "weather steps cannot have weather steps of their own");
+            }
+            let step = def.apply(atmosphere);
+            if let Err(errors) = step.validate() {
+                for e in errors {
+                    self.err_in("[[atmosphere.weather]]", e.field, &format!("atmosphere.weather[{k}].{}", e.field), e.message);
+                }
+            }
+            atmosphere_by_weather.push(step);
+        }
         if model.camera_km as f64 >= atmosphere.thickness_km() {
             self.err_in("[sky_model]", "camera_km", "sky_model.camera_km", format!("expected an altitude below the top of the atmosphere ({} km)", atmosphere.thickness_km()));
         }
@@ -305,6 +319,7 @@ impl Validator<'_> {
             watched_files: watched,
             model,
             atmosphere,
+            atmosphere_by_weather,
         })
     }
 

@@ -198,6 +198,10 @@ pub struct AtmosphereDef {
     pub ozone_half_width_km: Option<Positive>,
     /// Sun's angular radius, rad.
     pub sun_angular_radius_rad: Option<Positive>,
+    /// Per weather step, from weather 0 to weather 1, overrides on top of these (e.g. aerosols
+    /// rising with the storm); the atmosphere is interpolated between steps like a NeL bitmap.
+    #[serde(default)]
+    pub weather: Vec<AtmosphereDef>,
 }
 
 impl AtmosphereDef {

@@ -57,6 +57,8 @@ pub struct Sky {
     pub model: SkyModel,
     /// Atmosphere of the physical models.
     pub atmosphere: crate::atmosphere::Atmosphere,
+    /// One atmosphere per weather step (empty: `atmosphere` in every weather).
+    pub atmosphere_by_weather: Vec<crate::atmosphere::Atmosphere>,
 }
 
 /// A skydome colour source and its settings.
