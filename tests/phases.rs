@@ -66,16 +66,7 @@ impl HourProbe {
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::ComputePipeline> {
         let module = skytune::render::shaders::module(b.device, b.library, "hour_probe")?;
-        skytune::render::shaders::validated(b.device, "HourProbe::pipeline", || {
-            b.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("HourProbe::pipeline"),
-                layout: Some(layout),
-                module: &module,
-                entry_point: Some("cs_main"),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        })
+        skytune::render::shaders::compute_pipeline(b.device, layout, &module, "cs_main", "HourProbe::pipeline")
     }
 
     /// The probe's buffer after the last frame (blocks).

@@ -135,3 +135,35 @@ fn numeric_optical_depth(atm: Atmosphere, r: f32, mu: f32, steps: u32) -> vec3<f
     }
     return tau;
 }
+
+// A view ray from the camera: its start radius, cosine to the vertical, length inside the
+// atmosphere (to the ground if it meets it) and the phase functions towards the sun.
+struct ViewRay {
+    r: f32,
+    mu: f32,
+    distance_km: f32,
+    phase_r: f32,
+    phase_m: f32,
+};
+
+fn view_ray(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>) -> ViewRay {
+    let r = atm.shape.x + camera_km;
+    let mu = view.y;
+    let ground = distance_to_ground(atm, r, mu);
+    var distance_km = distance_to_top(atm, r, mu);
+    if (ground >= 0.0) {
+        distance_km = ground;
+    }
+    let nu = dot(view, sun);
+    return ViewRay(r, mu, distance_km, rayleigh_phase(nu), cornette_shanks_phase(nu, atm.mie.w));
+}
+
+// Sample i of n along a ray of `distance_km`, crowded near its start where the air is densest
+// (boundaries at distance (k / n)^2): the sample's midpoint and length.
+fn crowded_sample(distance_km: f32, i: u32, n: u32) -> vec2<f32> {
+    let a = f32(i) / f32(n);
+    let b = (f32(i) + 1.0) / f32(n);
+    let t0 = distance_km * a * a;
+    let t1 = distance_km * b * b;
+    return vec2<f32>(0.5 * (t0 + t1), t1 - t0);
+}

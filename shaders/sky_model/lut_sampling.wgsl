@@ -76,26 +76,16 @@ fn sample_multiscattering(atm: Atmosphere, r: f32, mu_s: f32) -> vec3<f32> {
 // Sky radiance by the LUT method: single scattering with LUT transmittance to the sun plus
 // the isotropic multiple-scattering term sigma_s x Psi_ms.
 fn lut_radiance(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
-    let r = atm.shape.x + camera_km;
-    let mu = view.y;
-    let ground = distance_to_ground(atm, r, mu);
-    var ray_length = distance_to_top(atm, r, mu);
-    if (ground >= 0.0) {
-        ray_length = ground;
-    }
-    let nu = dot(view, sun);
-    let phase_r = rayleigh_phase(nu);
-    let phase_m = cornette_shanks_phase(nu, atm.mie.w);
+    let ray = view_ray(atm, camera_km, view, sun);
+    let r = ray.r;
+    let mu = ray.mu;
     let steps = max(lut_params.steps.z, 1u);
-    let n = f32(steps);
     var tau = vec3<f32>(0.0);
     var sum = vec3<f32>(0.0);
-    var t_prev = 0.0;
     for (var i = 0u; i < steps; i++) {
-        let t_next = ray_length * ((f32(i) + 1.0) / n) * ((f32(i) + 1.0) / n);
-        let dt = t_next - t_prev;
-        let t = t_prev + 0.5 * dt;
-        t_prev = t_next;
+        let sample = crowded_sample(ray.distance_km, i, steps);
+        let t = sample.x;
+        let dt = sample.y;
         let h = max(altitude_along(atm, r, mu, t), 0.0);
         let e = extinction_at(atm, h);
         let tau_mid = tau + e * (0.5 * dt);
@@ -105,7 +95,7 @@ fn lut_radiance(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>
         let mu_s = dot(p, sun) / max(length(p), 1e-3);
         let sigma_r = atm.rayleigh.xyz * exp(-h / atm.rayleigh.w);
         let sigma_m = atm.mie.x * exp(-h / atm.mie.z);
-        let single = (sigma_r * phase_r + vec3<f32>(sigma_m * phase_m)) * sun_transmittance(atm, r_p, mu_s);
+        let single = (sigma_r * ray.phase_r + vec3<f32>(sigma_m * ray.phase_m)) * sun_transmittance(atm, r_p, mu_s);
         let multiple = (sigma_r + vec3<f32>(sigma_m)) * sample_multiscattering(atm, r_p, mu_s);
         sum += (single + multiple) * exp(-tau_mid) * dt;
     }

@@ -17,26 +17,16 @@ fn sun_optical_depth(atm: Atmosphere, s: SingleSettings, r: f32, h: f32, mu_s: f
 
 // Sky radiance seen from `camera_km` along the unit `view` (y up), sun along the unit `sun`.
 fn single_scattering(atm: Atmosphere, s: SingleSettings, camera_km: f32, view: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
-    let r = atm.shape.x + camera_km;
-    let mu = view.y;
-    let ground = distance_to_ground(atm, r, mu);
-    var ray_length = distance_to_top(atm, r, mu);
-    if (ground >= 0.0) {
-        ray_length = ground;
-    }
-    let nu = dot(view, sun);
-    let phase_r = rayleigh_phase(nu);
-    let phase_m = cornette_shanks_phase(nu, atm.mie.w);
-    // Samples crowd near the camera, where the air is densest: t = length (i / n)^2.
-    let n = f32(max(s.view_steps, 1u));
+    let ray = view_ray(atm, camera_km, view, sun);
+    let r = ray.r;
+    let mu = ray.mu;
+    let n = max(s.view_steps, 1u);
     var tau = vec3<f32>(0.0);
     var sum = vec3<f32>(0.0);
-    var t_prev = 0.0;
-    for (var i = 0u; i < max(s.view_steps, 1u); i++) {
-        let t_next = ray_length * ((f32(i) + 1.0) / n) * ((f32(i) + 1.0) / n);
-        let dt = t_next - t_prev;
-        let t = t_prev + 0.5 * dt;
-        t_prev = t_next;
+    for (var i = 0u; i < n; i++) {
+        let sample = crowded_sample(ray.distance_km, i, n);
+        let t = sample.x;
+        let dt = sample.y;
         let h = altitude_along(atm, r, mu, t);
         let e = extinction_at(atm, h);
         let tau_mid = tau + e * (0.5 * dt);
@@ -49,7 +39,7 @@ fn single_scattering(atm: Atmosphere, s: SingleSettings, camera_km: f32, view: v
         // A negative optical depth means the ground hides the sun from this sample.
         if (tau_sun.x >= 0.0) {
             let hh = max(h, 0.0);
-            let scattering = atm.rayleigh.xyz * exp(-hh / atm.rayleigh.w) * phase_r + vec3<f32>(atm.mie.x * exp(-hh / atm.mie.z) * phase_m);
+            let scattering = atm.rayleigh.xyz * exp(-hh / atm.rayleigh.w) * ray.phase_r + vec3<f32>(atm.mie.x * exp(-hh / atm.mie.z) * ray.phase_m);
             sum += scattering * exp(-(tau_mid + tau_sun)) * dt;
         }
     }

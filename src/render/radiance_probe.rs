@@ -60,19 +60,8 @@ impl RadianceProbe {
             immediate_size: 0,
         });
         let module = shaders::module(device, library, "radiance_probe")?;
-        let pipeline = |entry: &'static str, label: &'static str| {
-            shaders::validated(device, label, || {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
-            })
-        };
-        let (single, lut) = (pipeline("cs_single", "RadianceProbe::single")?, pipeline("cs_lut", "RadianceProbe::lut")?);
+        let single = shaders::compute_pipeline(device, &pipeline_layout, &module, "cs_single", "RadianceProbe::single")?;
+        let lut = shaders::compute_pipeline(device, &pipeline_layout, &module, "cs_lut", "RadianceProbe::lut")?;
         let builder = LutBuilder::new(device, library, &empty)?;
         Ok(Self { layout, empty_layout: empty, single, lut, tables: LutTables::new(device), builder })
     }

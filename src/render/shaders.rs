@@ -101,3 +101,17 @@ pub fn module(device: &wgpu::Device, library: &ShaderLibrary, name: &str) -> Ren
         device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(name), source: wgpu::ShaderSource::Wgsl(source.into()) })
     })
 }
+
+/// Creates a compute pipeline from `module`'s `entry`, validated.
+pub fn compute_pipeline(device: &wgpu::Device, layout: &wgpu::PipelineLayout, module: &wgpu::ShaderModule, entry: &str, label: &str) -> RenderResult<wgpu::ComputePipeline> {
+    validated(device, label, || {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    })
+}

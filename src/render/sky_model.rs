@@ -144,18 +144,7 @@ impl LutBuilder {
             immediate_size: 0,
         });
         let module = super::shaders::module(device, library, "sky_luts")?;
-        let pipeline = |entry: &'static str, label: &'static str| {
-            super::shaders::validated(device, label, || {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
-            })
-        };
+        let pipeline = |entry: &str, label: &str| super::shaders::compute_pipeline(device, &pipeline_layout, &module, entry, label);
         Ok(Self { transmittance: pipeline("cs_transmittance", "SkyLuts::transmittance")?, multiscattering: pipeline("cs_multiscattering", "SkyLuts::multiscattering")?, layout })
     }
 

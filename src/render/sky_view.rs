@@ -129,16 +129,7 @@ impl SkyViewPass {
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::ComputePipeline> {
         let module = shaders::module(b.device, b.library, "sky_view")?;
-        shaders::validated(b.device, "SkyView::pipeline", || {
-            b.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("SkyView::pipeline"),
-                layout: Some(layout),
-                module: &module,
-                entry_point: Some("cs_main"),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        })
+        shaders::compute_pipeline(b.device, layout, &module, "cs_main", "SkyView::pipeline")
     }
 }
 
