@@ -63,6 +63,8 @@ pub enum RadianceModel {
     Single,
     /// Multiple scattering from look-up tables on the GPU (Hillaire 2020).
     Lut,
+    /// The cell model of the procedural-sky text (CPU, solved per ground albedo).
+    Cells,
 }
 
 /// Optical depth towards the sun of the `single` model.
@@ -107,6 +109,9 @@ pub struct RadianceArgs {
     /// `lut`: the multiple-scattering integral uses GRID x GRID directions.
     #[arg(long, default_value_t = 8)]
     pub multiscattering_grid: u32,
+    /// `cells`: refinement iterations (0: single scattering).
+    #[arg(long, default_value_t = 6)]
+    pub iterations: usize,
     /// `single`: samples towards the sun (numerical optical depth).
     #[arg(long, default_value_t = 16)]
     pub sun_steps: u32,

@@ -93,11 +93,28 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             let out = out.into_iter().map(|c| c.map(f64::from)).collect();
             (out, format!("model lut on {}: {settings:?}", ctx.adapter_line()))
         }
+        cli::RadianceModel::Cells => {
+            use skytune::atmosphere::cells::{CellModel, CellSettings};
+            anyhow::ensure!(args.iterations <= 32, "--iterations: expected 0..=32, found {}", args.iterations);
+            let settings = CellSettings { iterations: args.iterations, ..Default::default() };
+            let mut out = vec![[0.0; 3]; list.len()];
+            let mut albedos: Vec<f64> = list.iter().map(|c| c.albedo).collect();
+            albedos.sort_by(f64::total_cmp);
+            albedos.dedup();
+            for albedo in albedos {
+                let model = CellModel::solve(atm, albedo, settings);
+                for (c, o) in list.iter().zip(out.iter_mut()).filter(|(c, _)| c.albedo == albedo) {
+                    *o = model.radiance(c);
+                }
+            }
+            (out, format!("model cells: {settings:?}"))
+        }
     };
     let name = match args.model {
         cli::RadianceModel::Reference => "reference",
         cli::RadianceModel::Single => "single",
         cli::RadianceModel::Lut => "lut",
+        cli::RadianceModel::Cells => "cells",
     };
     cases::write_radiance(&args.out, &format!("skytune radiance --model {name}: {units}\n{comment}"), &list, &out)?;
     println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());

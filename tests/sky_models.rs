@@ -69,7 +69,7 @@ fn single_scattering_on_the_gpu_matches_the_reference() {
 }
 
 #[test]
-fn lut_multiple_scattering_on_the_gpu_matches_the_reference() {
+fn multiple_scattering_models_match_the_reference() {
     let atm = Atmosphere::default();
     let mut cases = Vec::new();
     for sun in [-4.0, 2.0, 8.0, 30.0, 70.0] {
@@ -85,9 +85,6 @@ fn lut_multiple_scattering_on_the_gpu_matches_the_reference() {
     let probe = RadianceProbe::new(&ctx, &ShaderLibrary::embedded()).unwrap();
     let lut = probe.lut(&ctx, &atm, &skytune::atmosphere::LutSettings::default(), &cases).unwrap();
     assert!(lut.iter().flatten().all(|x| x.is_finite() && *x >= 0.0), "NaN or negative radiance");
-    for (c, (l, r)) in cases.iter().zip(lut.iter().zip(&exact)) {
-        eprintln!("sun {:5.1} view {:5.1} az {:5.1}: lut {:?} reference {:?}", c.sun_elev_deg, c.view_elev_deg, c.rel_azimuth_deg, l, r.map(|x| x as f32));
-    }
     let worst = worst_errors(&cases, &lut, &exact);
     eprintln!("lut (Hillaire 2020 defaults): worst relative error day {:.4}, low sun {:.4}, twilight {:.4}", worst[0], worst[1], worst[2]);
     // Thresholds (day, low sun, twilight): see docs/sky-models.md; they include the reference's noise.
@@ -98,4 +95,29 @@ fn lut_multiple_scattering_on_the_gpu_matches_the_reference() {
     let single = probe.single(&ctx, &atm, &SingleSettings { view_steps: 32, sun_steps: 32, optical_depth: OpticalDepth::Numerical }, &cases).unwrap();
     let brighter = lut.iter().zip(&single).filter(|(l, s)| l[2] > s[2] * 1.05).count();
     assert!(brighter > cases.len() / 2, "{brighter} of {} cases gain blue from multiple scattering", cases.len());
+
+    // The cell model (CPU): iteration 0 is single scattering; 6 iterations approach every order.
+    use skytune::atmosphere::cells::{CellModel, CellSettings};
+    let by_iterations: Vec<Vec<[f32; 3]>> = [0, 1, 6]
+        .iter()
+        .map(|n| {
+            let model = CellModel::solve(atm, 0.3, CellSettings { iterations: *n, ..Default::default() });
+            cases.iter().map(|c| model.radiance(c).map(|x| x as f32)).collect()
+        })
+        .collect();
+    let single_exact: Vec<[f64; 3]> = cases.iter().map(|c| Reference::new(atm, ReferenceSettings { max_order: 1, ..Default::default() }).radiance(c)).collect();
+    let worst0 = worst_errors(&cases, &by_iterations[0], &single_exact);
+    let worst6 = worst_errors(&cases, &by_iterations[2], &exact);
+    eprintln!("cells, 0 iterations against single scattering: day {:.4}, low sun {:.4}, twilight {:.4}", worst0[0], worst0[1], worst0[2]);
+    eprintln!("cells, 6 iterations against all orders: day {:.4}, low sun {:.4}, twilight {:.4}", worst6[0], worst6[1], worst6[2]);
+    for (regime, (w, limit)) in ["day", "low sun", "twilight"].iter().zip(worst0.iter().zip([0.03, 0.06, 0.1])) {
+        assert!(*w <= limit, "cells, 0 iterations, {regime}: worst relative error {w:.4} > {limit}");
+    }
+    for (regime, (w, limit)) in ["day", "low sun", "twilight"].iter().zip(worst6.iter().zip([0.1, 0.25, 4.0])) {
+        assert!(*w <= limit, "cells, 6 iterations, {regime}: worst relative error {w:.4} > {limit}");
+    }
+    // Each iteration adds light, the first the most.
+    let blue = |run: &Vec<[f32; 3]>| run.iter().map(|c| c[2] as f64).sum::<f64>();
+    let (b0, b1, b6) = (blue(&by_iterations[0]), blue(&by_iterations[1]), blue(&by_iterations[2]));
+    assert!(b1 > b0 && b6 > b1 && b6 - b1 < b1 - b0, "blue sums by iteration: {b0} {b1} {b6}");
 }

@@ -6,6 +6,7 @@
 //! Radiance is in sr^-1 relative to a solar irradiance of 1 per channel at the top of the atmosphere.
 
 pub mod cases;
+pub mod cells;
 pub mod reference;
 
 use std::f64::consts::PI;
