@@ -5,7 +5,7 @@
 struct SkyViewParams {
     towards_sun: vec4<f32>, // xyz unit vector, w: camera altitude (km)
     exposure: vec4<f32>,    // x: radiance scale (2^EV), y: tone mapper as f32 (0 ACES, 1 neutral), zw: map size (texels)
-    model: vec4<f32>,       // x: 0 single, 1 lut
+    model: vec4<f32>,       // x: 0 single, 1 lut, 2 radiance computed on the CPU (cells)
 };
 
 @group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
@@ -21,6 +21,8 @@ struct SkyViewParams {
 @group(1) @binding(4) var<storage, read> lut_params: LutParams;
 @group(1) @binding(5) var<storage, read> transmittance_lut: array<vec4<f32>>;
 @group(1) @binding(6) var<storage, read> multiscattering_lut: array<vec4<f32>>;
+// Radiance per texel computed on the CPU (the `cells` model), in the same texel order.
+@group(1) @binding(7) var<storage, read> cpu_radiance: array<vec4<f32>>;
 
 @compute @workgroup_size(64)
 fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -32,7 +34,9 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let uv = (vec2<f32>(id) + 0.5) / vec2<f32>(size);
     let dir = sky_view_direction(uv);
     var radiance: vec3<f32>;
-    if (params.model.x > 0.5) {
+    if (params.model.x > 1.5) {
+        radiance = cpu_radiance[id.y * size.x + id.x].xyz;
+    } else if (params.model.x > 0.5) {
         radiance = lut_radiance(atmosphere, params.towards_sun.w, dir, params.towards_sun.xyz);
     } else {
         radiance = single_scattering(atmosphere, single_settings, params.towards_sun.w, dir, params.towards_sun.xyz);

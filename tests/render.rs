@@ -267,3 +267,16 @@ fn lut_model_day() {
 fn lut_model_sunset() {
     render_lut("lut_sunset", 18.0, 0.1);
 }
+
+#[test]
+fn cells_model_sunset() {
+    // Solved on the CPU worker; the still waits for it.
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Cells, ..sky.model };
+    let input = FrameInput { sky_model: Some(model), ..FrameInput::new(18.0, 0.1) };
+    let img = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+    assert!(!h.renderer.busy(), "the still waited for the cells worker");
+    common::check_reference("cells_sunset", &img);
+}

@@ -371,6 +371,7 @@ fn model_label(kind: SkyModelKind) -> &'static str {
         SkyModelKind::Bitmap => "NeL bitmaps",
         SkyModelKind::Single => "single scattering",
         SkyModelKind::Lut => "LUT multiple scattering",
+        SkyModelKind::Cells => "cells (CPU, background)",
     }
 }
 
@@ -398,7 +399,10 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
                 ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Numerical, "numerical");
             });
         }
-        if model.kind == SkyModelKind::Lut {
+        if model.kind == SkyModelKind::Cells {
+            ui.add(egui::Slider::new(&mut model.cell_iterations, 1..=12).text("iterations"));
+            ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
+        } else if model.kind == SkyModelKind::Lut {
             ui.add(egui::Slider::new(&mut model.lut.view_steps, 1..=256).text("view steps"));
             ui.add(egui::Slider::new(&mut model.lut.multiscattering_grid, 1..=16).text("multiple-scattering directions (grid)"));
             ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));

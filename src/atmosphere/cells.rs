@@ -59,7 +59,7 @@ pub struct CellModel {
     atm: Atmosphere,
     settings: CellSettings,
     albedo: f64,
-    /// Altitude cell boundaries, km.
+    /// Altitude cell boundaries, km (the altitude goes as the square of the cell index).
     altitude_edges: Vec<f64>,
     /// Transmittance to the sun by (altitude, sun angle): a fine table from the reference's quadrature.
     sun_table: Vec<Rgb>,
@@ -139,17 +139,42 @@ impl CellModel {
         })
     }
 
-    /// The cell holding a point, and the point's local frame (tangent towards the sun, up, side).
-    fn cell_and_frame(&self, p: DVec3, sun: DVec3) -> (usize, [DVec3; 3]) {
+    /// A point's local frame: tangent towards the sun, up, side.
+    fn frame(p: DVec3, sun: DVec3) -> [DVec3; 3] {
         let up = p.normalize();
-        let h = p.length() - self.atm.ground_radius_km;
-        let i = self.altitude_edges.partition_point(|e| *e <= h).clamp(1, self.altitude_edges.len() - 1) - 1;
-        let angle = up.dot(sun).clamp(-1.0, 1.0).acos();
-        let n_a = self.settings.angle_cells.max(1);
-        let j = ((angle / PI * n_a as f64) as usize).min(n_a - 1);
         let toward_sun = (sun - up * up.dot(sun)).try_normalize().unwrap_or_else(|| up.any_orthogonal_vector().normalize());
-        let side = up.cross(toward_sun);
-        (i * n_a + j, [toward_sun, up, side])
+        [toward_sun, up, up.cross(toward_sun)]
+    }
+
+    /// Centre of cell (altitude index, angle index): its altitude (km) and angle to the sun (rad).
+    fn cell_centre(&self, i: usize, j: usize) -> (f64, f64) {
+        let n_h = self.altitude_edges.len() - 1;
+        let n_a = self.settings.angle_cells.max(1);
+        (self.atm.thickness_km() * ((i as f64 + 0.5) / n_h as f64).powi(2), PI * (j as f64 + 0.5) / n_a as f64)
+    }
+
+    /// Indirect coefficients at a point, blended bilinearly between the centres of the four
+    /// nearest cells (nearest-cell values would show the cell edges as seams in the sky).
+    fn indirect_at(&self, p: DVec3, sun: DVec3) -> [[f64; 9]; 3] {
+        let n_h = self.altitude_edges.len() - 1;
+        let n_a = self.settings.angle_cells.max(1);
+        let h = (p.length() - self.atm.ground_radius_km).clamp(0.0, self.atm.thickness_km());
+        let angle = p.normalize().dot(sun).clamp(-1.0, 1.0).acos();
+        let fi = ((h / self.atm.thickness_km()).sqrt() * n_h as f64 - 0.5).clamp(0.0, (n_h - 1) as f64);
+        let fj = (angle / PI * n_a as f64 - 0.5).clamp(0.0, (n_a - 1) as f64);
+        let (i0, j0) = (fi.floor() as usize, fj.floor() as usize);
+        let (i1, j1) = ((i0 + 1).min(n_h - 1), (j0 + 1).min(n_a - 1));
+        let (ti, tj) = (fi - i0 as f64, fj - j0 as f64);
+        let mut out = [[0.0; 9]; 3];
+        for (i, j, w) in [(i0, j0, (1.0 - ti) * (1.0 - tj)), (i0, j1, (1.0 - ti) * tj), (i1, j0, ti * (1.0 - tj)), (i1, j1, ti * tj)] {
+            let c = &self.indirect[i * n_a + j];
+            for ch in 0..3 {
+                for k in 0..9 {
+                    out[ch][k] += w * c[ch][k];
+                }
+            }
+        }
+        out
     }
 
     fn local(frame: &[DVec3; 3], d: DVec3) -> DVec3 {
@@ -164,10 +189,10 @@ impl CellModel {
         let t_sun = self.sun_transmittance(p, sun);
         let mut j: Rgb = std::array::from_fn(|c| (m.rayleigh[c] * pr + m.mie * pm) * t_sun[c]);
         if with_indirect {
-            let (cell, frame) = self.cell_and_frame(p, sun);
-            let y = sh9(Self::local(&frame, e));
+            let coeffs = self.indirect_at(p, sun);
+            let y = sh9(Self::local(&Self::frame(p, sun), e));
             for (c, jc) in j.iter_mut().enumerate() {
-                *jc += self.indirect[cell][c].iter().zip(&y).map(|(a, b)| a * b).sum::<f64>().max(0.0);
+                *jc += coeffs[c].iter().zip(&y).map(|(a, b)| a * b).sum::<f64>().max(0.0);
             }
         }
         j
@@ -221,11 +246,9 @@ impl CellModel {
         let weight = 4.0 * PI / self.directions.len() as f64;
         let next: Vec<[[f64; 9]; 3]> = (0..n_h * n_a)
             .map(|cell| {
-                let (i, j) = (cell / n_a, cell % n_a);
-                let h = 0.5 * (self.altitude_edges[i] + self.altitude_edges[i + 1]);
-                let angle = PI * (j as f64 + 0.5) / n_a as f64;
+                let (h, angle) = self.cell_centre(cell / n_a, cell % n_a);
                 let p = DVec3::new(angle.sin(), angle.cos(), 0.0) * (self.atm.ground_radius_km + h);
-                let (_, frame) = self.cell_and_frame(p, SUN);
+                let frame = Self::frame(p, SUN);
                 let m = self.atm.medium(h);
                 let received: Vec<Rgb> = self.directions.iter().map(|d| self.march(p, *d, SUN, true, true)).collect();
                 let mut coeffs = [[0.0; 9]; 3];
@@ -254,12 +277,22 @@ impl CellModel {
 
     /// Sky radiance for a case (its albedo must be the model's), sr^-1 per unit of solar irradiance.
     pub fn radiance(&self, case: &Case) -> Rgb {
-        let p = DVec3::new(0.0, self.atm.ground_radius_km + case.camera_km.max(0.0), 0.0);
         let se = case.sun_elev_deg.to_radians();
         let sun = DVec3::new(se.cos(), se.sin(), 0.0);
         let (ve, az) = (case.view_elev_deg.to_radians(), case.rel_azimuth_deg.to_radians());
-        let d = DVec3::new(ve.cos() * az.cos(), ve.sin(), ve.cos() * az.sin()).normalize();
+        let view = DVec3::new(ve.cos() * az.cos(), ve.sin(), ve.cos() * az.sin()).normalize();
+        self.radiance_towards(case.camera_km, view, sun)
+    }
+
+    /// Sky radiance seen from `camera_km` along the unit `view` (y up), sun along the unit `towards_sun`.
+    pub fn radiance_towards(&self, camera_km: f64, view: DVec3, towards_sun: DVec3) -> Rgb {
+        let p = DVec3::new(0.0, self.atm.ground_radius_km + camera_km.max(0.0), 0.0);
         // The ground surface in front of the camera is not part of the sky.
-        self.march(p, d, sun, self.settings.iterations > 0, false)
+        self.march(p, view, towards_sun, self.settings.iterations > 0, false)
+    }
+
+    /// Whether this solution was made for these inputs.
+    pub fn solved_for(&self, atm: &Atmosphere, albedo: f64, settings: &CellSettings) -> bool {
+        self.atm == *atm && self.albedo == albedo && self.settings == *settings
     }
 }

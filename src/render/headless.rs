@@ -95,6 +95,8 @@ impl Offscreen {
 
 /// Most extra frames a still renders while its passes settle.
 const STILL_SETTLE_FRAMES: usize = 6;
+/// Longest a still waits for a pass's background work (the `cells` model's solve).
+const STILL_BUSY_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(300);
 
 /// A renderer with its own offscreen target: renders frames of a sky to images. The context may
 /// be shared with a window (it is a set of shared handles).
@@ -150,16 +152,22 @@ impl Headless {
     /// frames are rendered with a fixed step, each waiting for the GPU, until every pass says its
     /// steady state shows, so the same input always gives the same picture.
     pub fn render(&mut self, sky: &Sky, input: &FrameInput, camera: &Camera, options: &RenderOptions) -> RenderResult<image::RgbaImage> {
-        let settle_dt = self.renderer.settle_dt_s(options);
-        self.frame(sky, input, camera, options, settle_dt.unwrap_or(0.0));
-        if let Some(dt) = settle_dt {
-            for _ in 0..STILL_SETTLE_FRAMES {
-                if self.renderer.settled() {
-                    break;
-                }
-                self.ctx.wait_idle()?;
-                self.frame(sky, input, camera, options, dt);
+        let dt = self.renderer.settle_dt_s(options).unwrap_or(0.0);
+        self.frame(sky, input, camera, options, dt);
+        let started = std::time::Instant::now();
+        let mut extra = 0;
+        while !self.renderer.settled() {
+            let busy = self.renderer.busy();
+            if (!busy && extra >= STILL_SETTLE_FRAMES) || started.elapsed() > STILL_BUSY_TIMEOUT {
+                break;
             }
+            self.ctx.wait_idle()?;
+            if busy {
+                std::thread::sleep(std::time::Duration::from_millis(10));
+            } else {
+                extra += 1;
+            }
+            self.frame(sky, input, camera, options, dt);
         }
         self.target.read(&self.ctx)
     }

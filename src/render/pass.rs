@@ -220,6 +220,11 @@ pub trait Pass: Any {
     fn settled(&self) -> bool {
         true
     }
+
+    /// Whether background work for this pass is in flight (a still waits for it).
+    fn busy(&self) -> bool {
+        false
+    }
 }
 
 /// Creates a pass; its pipelines are built, its sky resources empty.

@@ -201,6 +201,11 @@ impl SkyRenderer {
         self.passes.iter().all(|p| p.settled())
     }
 
+    /// Whether any pass has background work in flight.
+    pub fn busy(&self) -> bool {
+        self.passes.iter().any(|p| p.busy())
+    }
+
     /// Records one frame into `encoder`: every pass's per-frame step, then each phase in order.
     /// Call [`Self::after_submit`] once the encoder is submitted.
     pub fn render(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &RenderTarget<'_>, frame: &FrameSky, camera: &Camera, options: &RenderOptions) {

@@ -1,6 +1,8 @@
 //! Sky-view pass (compute phase): renders the frame's physical sky model into the shared sky-view
 //! map, exposed and tone-mapped, which the skydome's gradient stage then samples. Idle with the
-//! NeL bitmap model; recomputed only when the sun, the model or the atmosphere changes.
+//! NeL bitmap model; recomputed only when the sun, the model or the atmosphere changes. The
+//! `cells` model is solved and marched on a CPU worker thread; its radiance reaches the GPU when
+//! ready, and until then the previous map stays.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -8,7 +10,9 @@ use super::error::RenderResult;
 use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SharedResources};
 use super::shaders;
 use super::sky_model::{AtmosphereUniform, SingleUniform};
-use crate::sky::resolved::{SkyModel, ToneMapper};
+use crate::atmosphere::cells::{CellModel, CellSettings};
+use crate::atmosphere::Atmosphere;
+use crate::sky::resolved::{SkyModel, SkyModelKind, ToneMapper};
 
 /// Keep in sync with `SkyViewParams` in shaders/sky_view.wgsl.
 #[repr(C)]
@@ -18,7 +22,7 @@ pub struct SkyViewParams {
     pub towards_sun: [f32; 4],
     /// Radiance scale 2^EV (x), tone mapper (y: 0 ACES, 1 neutral), map size in texels (zw).
     pub exposure: [f32; 4],
-    /// Model (x: 0 single, 1 lut).
+    /// Model (x: 0 single, 1 lut, 2 radiance from the CPU).
     pub model: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<SkyViewParams>() == 48);
@@ -30,7 +34,11 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
             ToneMapper::Neutral => 1.0,
         };
         let (w, h) = SharedResources::SKY_VIEW_SIZE;
-        let kind = if model.kind == crate::sky::resolved::SkyModelKind::Lut { 1.0 } else { 0.0 };
+        let kind = match model.kind {
+            SkyModelKind::Lut => 1.0,
+            SkyModelKind::Cells => 2.0,
+            _ => 0.0,
+        };
         Self { towards_sun: towards_sun.extend(model.camera_km).to_array(), exposure: [model.exposure_ev.exp2(), tone, w as f32, h as f32], model: [kind, 0.0, 0.0, 0.0] }
     }
 }
@@ -42,6 +50,83 @@ struct Key {
     single: SingleUniform,
     lut: super::sky_model::LutUniform,
     params: SkyViewParams,
+    /// `cells`: iterations.
+    cells: u32,
+}
+
+/// A sky-view map for the CPU worker to compute with the cell model.
+struct CellsJob {
+    id: u64,
+    atmosphere: Atmosphere,
+    albedo: f64,
+    settings: CellSettings,
+    camera_km: f64,
+    towards_sun: glam::DVec3,
+}
+
+/// The CPU worker of the `cells` model: keeps the last solution and answers with radiance per
+/// texel of the sky-view map. Bursts of jobs (a moving sun) are coalesced to the latest.
+struct CellsWorker {
+    jobs: std::sync::mpsc::Sender<CellsJob>,
+    results: std::sync::mpsc::Receiver<(u64, Vec<[f32; 4]>)>,
+}
+
+impl CellsWorker {
+    fn spawn() -> Option<Self> {
+        let (jobs, job_rx) = std::sync::mpsc::channel::<CellsJob>();
+        let (result_tx, results) = std::sync::mpsc::channel();
+        let spawned = std::thread::Builder::new().name("skytune-cells".into()).spawn(move || {
+            let mut model: Option<CellModel> = None;
+            while let Ok(mut job) = job_rx.recv() {
+                while let Ok(next) = job_rx.try_recv() {
+                    job = next;
+                }
+                if !model.as_ref().is_some_and(|m| m.solved_for(&job.atmosphere, job.albedo, &job.settings)) {
+                    model = Some(CellModel::solve(job.atmosphere, job.albedo, job.settings));
+                }
+                let Some(m) = model.as_ref() else { continue };
+                let map = sky_view_radiance(|dir| m.radiance_towards(job.camera_km, dir, job.towards_sun));
+                if result_tx.send((job.id, map)).is_err() {
+                    break;
+                }
+            }
+        });
+        match spawned {
+            Ok(_) => Some(Self { jobs, results }),
+            Err(e) => {
+                log::error!("cannot start the cells worker: {e}");
+                None
+            }
+        }
+    }
+}
+
+/// Radiance of every texel of the sky-view map (the direction of a texel as in
+/// shaders/sky_model/sky_view_map.wgsl), rows split over the machine's cores.
+fn sky_view_radiance(radiance: impl Fn(glam::DVec3) -> [f64; 3] + Sync) -> Vec<[f32; 4]> {
+    let (w, h) = SharedResources::SKY_VIEW_SIZE;
+    let mut out = vec![[0.0f32; 4]; (w * h) as usize];
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let rows_per = (h as usize).div_ceil(workers).max(1);
+    std::thread::scope(|scope| {
+        for (chunk_index, chunk) in out.chunks_mut(rows_per * w as usize).enumerate() {
+            let radiance = &radiance;
+            scope.spawn(move || {
+                for (k, texel) in chunk.iter_mut().enumerate() {
+                    let index = chunk_index * rows_per * w as usize + k;
+                    let (x, y) = ((index % w as usize) as f64, (index / w as usize) as f64);
+                    let (u, v) = ((x + 0.5) / w as f64, (y + 0.5) / h as f64);
+                    let azimuth = (u - 0.5) * std::f64::consts::TAU;
+                    let e = (0.5 - v) * 2.0;
+                    let elevation = e.signum() * e * e * std::f64::consts::FRAC_PI_2;
+                    let dir = glam::DVec3::new(azimuth.sin() * elevation.cos(), elevation.sin(), -azimuth.cos() * elevation.cos());
+                    let l = radiance(dir);
+                    *texel = [l[0] as f32, l[1] as f32, l[2] as f32, 1.0];
+                }
+            });
+        }
+    });
+    out
 }
 
 /// The sky-view pass.
@@ -60,6 +145,12 @@ pub struct SkyViewPass {
     dirty: bool,
     /// Maps computed so far (the stats panel and tests).
     pub maps_computed: u64,
+    /// Radiance per texel from the CPU (`cells`).
+    cpu_radiance: wgpu::Buffer,
+    cells: Option<CellsWorker>,
+    /// The job in flight: its id and the key it answers.
+    cells_pending: Option<(u64, Key)>,
+    next_job: u64,
 }
 
 fn uniform(device: &wgpu::Device, label: &str, size: usize) -> wgpu::Buffer {
@@ -88,8 +179,19 @@ impl SkyViewPass {
             ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: false }, has_dynamic_offset: false, min_binding_size: None },
             count: None,
         });
-        entries.extend([super::sky_model::storage_entry(4, true), super::sky_model::storage_entry(5, true), super::sky_model::storage_entry(6, true)]);
+        entries.extend([
+            super::sky_model::storage_entry(4, true),
+            super::sky_model::storage_entry(5, true),
+            super::sky_model::storage_entry(6, true),
+            super::sky_model::storage_entry(7, true),
+        ]);
         let (w, h) = SharedResources::SKY_VIEW_SIZE;
+        let cpu_radiance = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("SkyView::cpu_radiance"),
+            size: (w * h * 16) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let texels = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::texels"),
             size: (w * h * 4) as u64,
@@ -121,15 +223,69 @@ impl SkyViewPass {
                 b.shared.luts.entries(4)[0].clone(),
                 b.shared.luts.entries(4)[1].clone(),
                 b.shared.luts.entries(4)[2].clone(),
+                wgpu::BindGroupEntry { binding: 7, resource: cpu_radiance.as_entire_binding() },
             ],
         });
         let map = b.shared.sky_view.clone();
-        Ok(Self { pipeline: Pipelines::new(b, pipeline_layout, Self::build)?, atmosphere, single, params, texels, map, bind_group, computed: None, dirty: false, maps_computed: 0 })
+        Ok(Self {
+            pipeline: Pipelines::new(b, pipeline_layout, Self::build)?,
+            atmosphere,
+            single,
+            params,
+            texels,
+            map,
+            bind_group,
+            computed: None,
+            dirty: false,
+            maps_computed: 0,
+            cpu_radiance,
+            cells: None,
+            cells_pending: None,
+            next_job: 0,
+        })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::ComputePipeline> {
         let module = shaders::module(b.device, b.library, "sky_view")?;
         shaders::compute_pipeline(b.device, layout, &module, "cs_main", "SkyView::pipeline")
+    }
+}
+
+impl SkyViewPass {
+    /// Asks the CPU worker for the map of `key` if it is not on it yet, and uploads a finished
+    /// one. Returns whether this frame has the radiance of `key` to show.
+    fn cells_ready(&mut self, cx: &FrameContext<'_>, model: &SkyModel, key: Key) -> bool {
+        if self.cells.is_none() {
+            self.cells = CellsWorker::spawn();
+        }
+        let Some(worker) = &self.cells else { return false };
+        if self.cells_pending.is_none_or(|(_, k)| k != key) {
+            self.next_job += 1;
+            let job = CellsJob {
+                id: self.next_job,
+                atmosphere: cx.frame.atmosphere,
+                albedo: model.ground_albedo as f64,
+                settings: CellSettings { iterations: model.cell_iterations as usize, ..Default::default() },
+                camera_km: model.camera_km as f64,
+                towards_sun: cx.frame.towards_sun.as_dvec3(),
+            };
+            if worker.jobs.send(job).is_err() {
+                self.cells = None;
+                return false;
+            }
+            self.cells_pending = Some((self.next_job, key));
+        }
+        let Some((id, _)) = self.cells_pending else { return false };
+        let mut ready = None;
+        while let Ok((done, map)) = worker.results.try_recv() {
+            if done == id {
+                ready = Some(map);
+            }
+        }
+        let Some(map) = ready else { return false };
+        cx.queue.write_buffer(&self.cpu_radiance, 0, bytemuck::cast_slice(&map));
+        self.cells_pending = None;
+        true
     }
 }
 
@@ -155,6 +311,10 @@ impl Pass for SkyViewPass {
     fn prepare(&mut self, cx: &FrameContext<'_>) {
         let model = &cx.frame.sky_model;
         self.dirty = false;
+        if model.kind != SkyModelKind::Cells {
+            // A switch away from `cells` drops its request (a late answer is ignored).
+            self.cells_pending = None;
+        }
         if !model.kind.is_physical() {
             return;
         }
@@ -163,8 +323,13 @@ impl Pass for SkyViewPass {
             single: (&model.single).into(),
             lut: super::sky_model::LutUniform::new(&model.lut, model.ground_albedo),
             params: (model, cx.frame.towards_sun).into(),
+            cells: model.cell_iterations,
         };
         if self.computed == Some(key) {
+            self.cells_pending = None;
+            return;
+        }
+        if model.kind == SkyModelKind::Cells && !self.cells_ready(cx, model, key) {
             return;
         }
         cx.queue.write_buffer(&self.atmosphere, 0, bytemuck::bytes_of(&key.atmosphere));
@@ -173,6 +338,14 @@ impl Pass for SkyViewPass {
         self.computed = Some(key);
         self.dirty = true;
         self.maps_computed += 1;
+    }
+
+    fn busy(&self) -> bool {
+        self.cells_pending.is_some()
+    }
+
+    fn settled(&self) -> bool {
+        self.cells_pending.is_none()
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {

@@ -268,8 +268,12 @@ impl Validator<'_> {
                 camera_km: m.camera_km.get(),
                 lut,
                 ground_albedo: m.ground_albedo.get(),
+                cell_iterations: m.cell_iterations.map_or(6, |s| s.0),
             }
         });
+        if model.cell_iterations > 32 {
+            self.err_in("[sky_model]", "cell_iterations", "sky_model.cell_iterations", format!("expected 1..=32, found {}", model.cell_iterations));
+        }
         if let Err(e) = model.lut.validate() {
             self.err_in("[sky_model]", e.field, &format!("sky_model.{}", e.field), e.message);
         }

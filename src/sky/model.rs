@@ -61,11 +61,13 @@ pub enum SkyModelKind {
     Single,
     /// Multiple scattering from look-up tables, in the manner of Hillaire 2020.
     Lut,
+    /// The cell model of the procedural-sky text, solved on the CPU in the background.
+    Cells,
 }
 
 impl SkyModelKind {
     /// Every model, in the order the app lists them.
-    pub const ALL: [SkyModelKind; 3] = [SkyModelKind::Bitmap, SkyModelKind::Single, SkyModelKind::Lut];
+    pub const ALL: [SkyModelKind; 4] = [SkyModelKind::Bitmap, SkyModelKind::Single, SkyModelKind::Lut, SkyModelKind::Cells];
 
     /// Name in the sky file and the CLI.
     pub fn name(self) -> &'static str {
@@ -73,6 +75,7 @@ impl SkyModelKind {
             SkyModelKind::Bitmap => "bitmap",
             SkyModelKind::Single => "single",
             SkyModelKind::Lut => "lut",
+            SkyModelKind::Cells => "cells",
         }
     }
 
@@ -110,7 +113,7 @@ impl ToneMapper {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SkyModelDef {
-    /// `bitmap` (NeL gradients), `single` or `lut`.
+    /// `bitmap` (NeL gradients), `single`, `lut` or `cells`.
     #[serde(default)]
     pub kind: SkyModelKind,
     /// Exposure in stops: display = tone_map(radiance x 2^exposure_ev), radiance in sr^-1 per unit
@@ -150,6 +153,9 @@ pub struct SkyModelDef {
     /// `lut`: samples per direction of the multiple-scattering integral.
     #[serde(default)]
     pub multiscattering_steps: Option<StepCount>,
+    /// `cells`: refinement iterations, 1..=32 (the text uses 6).
+    #[serde(default)]
+    pub cell_iterations: Option<StepCount>,
 }
 
 fn default_albedo() -> Unit {

@@ -78,6 +78,8 @@ pub struct SkyModel {
     pub lut: crate::atmosphere::LutSettings,
     /// Ground albedo of multiple scattering.
     pub ground_albedo: f32,
+    /// `cells` refinement iterations.
+    pub cell_iterations: u32,
 }
 
 impl Default for SkyModel {
@@ -90,6 +92,7 @@ impl Default for SkyModel {
             camera_km: 0.0,
             lut: Default::default(),
             ground_albedo: 0.3,
+            cell_iterations: 6,
         }
     }
 }
