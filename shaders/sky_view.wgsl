@@ -5,7 +5,7 @@
 struct SkyViewParams {
     towards_sun: vec4<f32>, // xyz unit vector, w: camera altitude (km)
     exposure: vec4<f32>,    // x: radiance scale (2^EV), y: tone mapper as f32 (0 ACES, 1 neutral), zw: map size (texels)
-    model: vec4<f32>,       // x: 0 single, 1 lut, 2 radiance computed on the CPU (cells)
+    model: vec4<f32>,       // x: 0 single, 1 lut, 2 radiance computed on the CPU (cells); y: 1 automatic exposure
 };
 
 @group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
@@ -23,6 +23,51 @@ struct SkyViewParams {
 @group(1) @binding(6) var<storage, read> multiscattering_lut: array<vec4<f32>>;
 // Radiance per texel computed on the CPU (the `cells` model), in the same texel order.
 @group(1) @binding(7) var<storage, read> cpu_radiance: array<vec4<f32>>;
+// The exposure scale of this map: x = 2^EV, or with automatic exposure the scale that brings the
+// sky's mean luminance to middle grey, times 2^EV as compensation.
+@group(1) @binding(8) var<storage, read_write> exposure_out: array<f32, 4>;
+
+// Radiance of the frame's model along `dir` (texel `index` of the CPU map for `cells`).
+fn model_radiance(dir: vec3<f32>, index: u32) -> vec3<f32> {
+    if (params.model.x > 1.5) {
+        return cpu_radiance[index].xyz;
+    } else if (params.model.x > 0.5) {
+        return lut_radiance(atmosphere, params.towards_sun.w, dir, params.towards_sun.xyz);
+    }
+    return single_scattering(atmosphere, single_settings, params.towards_sun.w, dir, params.towards_sun.xyz);
+}
+
+fn texel_index(uv: vec2<f32>, size: vec2<u32>) -> u32 {
+    let t = min(vec2<u32>(uv * vec2<f32>(size)), size - vec2<u32>(1u));
+    return t.y * size.x + t.x;
+}
+
+var<workgroup> luminance: array<f32, 64>;
+
+// One workgroup: the mean luminance (Rec. 709) of 64 equal-area directions of the upper sky sets
+// the exposure (middle grey 0.18), before cs_main uses it.
+@compute @workgroup_size(64)
+fn cs_exposure(@builtin(local_invocation_index) i: u32) {
+    let size = vec2<u32>(params.exposure.zw);
+    let cos_theta = 1.0 - (f32(i / 8u) + 0.5) / 8.0;
+    let phi = 2.0 * PI * (f32(i % 8u) + 0.5) / 8.0;
+    let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
+    let dir = vec3<f32>(sin_theta * cos(phi), cos_theta, sin_theta * sin(phi));
+    let l = model_radiance(dir, texel_index(sky_view_uv(dir), size));
+    luminance[i] = dot(l, vec3<f32>(0.2126, 0.7152, 0.0722));
+    workgroupBarrier();
+    if (i == 0u) {
+        var sum = 0.0;
+        for (var k = 0u; k < 64u; k++) {
+            sum += luminance[k];
+        }
+        var scale = params.exposure.x;
+        if (params.model.y > 0.5) {
+            scale = params.exposure.x * 0.18 / max(sum / 64.0, 1e-6);
+        }
+        exposure_out[0] = scale;
+    }
+}
 
 @compute @workgroup_size(64)
 fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -33,14 +78,7 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let id = vec2<u32>(gid.x % size.x, gid.x / size.x);
     let uv = (vec2<f32>(id) + 0.5) / vec2<f32>(size);
     let dir = sky_view_direction(uv);
-    var radiance: vec3<f32>;
-    if (params.model.x > 1.5) {
-        radiance = cpu_radiance[id.y * size.x + id.x].xyz;
-    } else if (params.model.x > 0.5) {
-        radiance = lut_radiance(atmosphere, params.towards_sun.w, dir, params.towards_sun.xyz);
-    } else {
-        radiance = single_scattering(atmosphere, single_settings, params.towards_sun.w, dir, params.towards_sun.xyz);
-    }
-    let color = display_from_radiance(radiance, params.exposure.x, u32(params.exposure.y));
+    let radiance = model_radiance(dir, id.y * size.x + id.x);
+    let color = display_from_radiance(radiance, exposure_out[0], u32(params.exposure.y));
     sky_view_out[id.y * size.x + id.x] = pack4x8unorm(vec4<f32>(color, 1.0));
 }

@@ -162,6 +162,9 @@ pub struct FrameArgs {
     /// Exposure of physical sky models, stops (default: the sky file's).
     #[arg(long)]
     pub exposure_ev: Option<f32>,
+    /// Physical sky models: expose for the sky's mean luminance (--exposure-ev compensates, default 0).
+    #[arg(long)]
+    pub auto_exposure: bool,
     /// Force the software adapter (lavapipe).
     #[arg(long)]
     pub cpu: bool,

@@ -191,13 +191,17 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
     let (input, camera) = frame_from_args(&args.frame)?;
     let options = RenderOptions { scene: !args.frame.no_scene, ..Default::default() };
     let mut input = input;
-    if args.frame.sky_model.is_some() || args.frame.exposure_ev.is_some() {
+    if args.frame.sky_model.is_some() || args.frame.exposure_ev.is_some() || args.frame.auto_exposure {
         let mut model = sky.model;
         if let Some(name) = &args.frame.sky_model {
             model.kind = SkyModelKind::ALL
                 .into_iter()
                 .find(|k| k.name() == name)
                 .ok_or_else(|| anyhow!("--sky-model: unknown model \"{name}\"; expected one of {}", SkyModelKind::ALL.map(|k| k.name()).join(", ")))?;
+        }
+        if args.frame.auto_exposure {
+            model.auto_exposure = true;
+            model.exposure_ev = 0.0;
         }
         if let Some(ev) = args.frame.exposure_ev {
             anyhow::ensure!(ev.is_finite(), "--exposure-ev: expected a finite number of stops");

@@ -280,3 +280,22 @@ fn cells_model_sunset() {
     assert!(!h.renderer.busy(), "the still waited for the cells worker");
     common::check_reference("cells_sunset", &img);
 }
+
+#[test]
+fn automatic_exposure_adapts_to_the_sky() {
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    let opts = RenderOptions { glare: false, scene: false, ..Default::default() };
+    let mut brightness = |hour: f32, auto: bool| {
+        let model =
+            skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, auto_exposure: auto, exposure_ev: if auto { 0.0 } else { 5.0 }, ..sky.model };
+        let img = h.render(&sky, &FrameInput { sky_model: Some(model), ..FrameInput::new(hour, 0.0) }, &camera(), &opts).unwrap();
+        img.pixels().map(|p| p[0] as f64 + p[1] as f64 + p[2] as f64).sum::<f64>() / (3.0 * 255.0 * (W * H) as f64)
+    };
+    let (fixed_day, fixed_dusk) = (brightness(13.0, false), brightness(18.3, false));
+    let (auto_day, auto_dusk) = (brightness(13.0, true), brightness(18.3, true));
+    eprintln!("mean display value: fixed EV 5 day {fixed_day:.3} dusk {fixed_dusk:.3}; automatic day {auto_day:.3} dusk {auto_dusk:.3}");
+    assert!(auto_dusk > fixed_dusk * 1.2, "automatic exposure brightens the dusk sky");
+    assert!(auto_day / auto_dusk < fixed_day / fixed_dusk, "and narrows the day-dusk gap");
+}

@@ -385,6 +385,7 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
         }
     });
     if model.kind.is_physical() {
+        ui.checkbox(&mut model.auto_exposure, "automatic exposure (EV below compensates)");
         ui.add(egui::Slider::new(&mut model.exposure_ev, -4.0..=12.0).text("exposure (EV)"));
         ui.horizontal(|ui| {
             ui.label("tone mapper:");

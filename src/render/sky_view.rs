@@ -22,7 +22,7 @@ pub struct SkyViewParams {
     pub towards_sun: [f32; 4],
     /// Radiance scale 2^EV (x), tone mapper (y: 0 ACES, 1 neutral), map size in texels (zw).
     pub exposure: [f32; 4],
-    /// Model (x: 0 single, 1 lut, 2 radiance from the CPU).
+    /// Model (x: 0 single, 1 lut, 2 radiance from the CPU), automatic exposure (y: 1).
     pub model: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<SkyViewParams>() == 48);
@@ -39,7 +39,11 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
             SkyModelKind::Cells => 2.0,
             _ => 0.0,
         };
-        Self { towards_sun: towards_sun.extend(model.camera_km).to_array(), exposure: [model.exposure_ev.exp2(), tone, w as f32, h as f32], model: [kind, 0.0, 0.0, 0.0] }
+        Self {
+            towards_sun: towards_sun.extend(model.camera_km).to_array(),
+            exposure: [model.exposure_ev.exp2(), tone, w as f32, h as f32],
+            model: [kind, if model.auto_exposure { 1.0 } else { 0.0 }, 0.0, 0.0],
+        }
     }
 }
 
@@ -131,7 +135,7 @@ fn sky_view_radiance(radiance: impl Fn(glam::DVec3) -> [f64; 3] + Sync) -> Vec<[
 
 /// The sky-view pass.
 pub struct SkyViewPass {
-    pipeline: Pipelines<wgpu::ComputePipeline>,
+    pipeline: Pipelines<[wgpu::ComputePipeline; 2]>,
     atmosphere: wgpu::Buffer,
     single: wgpu::Buffer,
     params: wgpu::Buffer,
@@ -184,7 +188,9 @@ impl SkyViewPass {
             super::sky_model::storage_entry(5, true),
             super::sky_model::storage_entry(6, true),
             super::sky_model::storage_entry(7, true),
+            super::sky_model::storage_entry(8, false),
         ]);
+        let exposure = device.create_buffer(&wgpu::BufferDescriptor { label: Some("SkyView::exposure"), size: 16, usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false });
         let (w, h) = SharedResources::SKY_VIEW_SIZE;
         let cpu_radiance = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::cpu_radiance"),
@@ -224,6 +230,7 @@ impl SkyViewPass {
                 b.shared.luts.entries(4)[1].clone(),
                 b.shared.luts.entries(4)[2].clone(),
                 wgpu::BindGroupEntry { binding: 7, resource: cpu_radiance.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 8, resource: exposure.as_entire_binding() },
             ],
         });
         let map = b.shared.sky_view.clone();
@@ -245,9 +252,13 @@ impl SkyViewPass {
         })
     }
 
-    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::ComputePipeline> {
+    /// The exposure pipeline, then the map pipeline.
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::ComputePipeline; 2]> {
         let module = shaders::module(b.device, b.library, "sky_view")?;
-        shaders::compute_pipeline(b.device, layout, &module, "cs_main", "SkyView::pipeline")
+        Ok([
+            shaders::compute_pipeline(b.device, layout, &module, "cs_exposure", "SkyView::exposure_pipeline")?,
+            shaders::compute_pipeline(b.device, layout, &module, "cs_main", "SkyView::pipeline")?,
+        ])
     }
 }
 
@@ -356,8 +367,11 @@ impl Pass for SkyViewPass {
 
     fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, _key: usize) {
         let (w, h) = SharedResources::SKY_VIEW_SIZE;
-        cpass.set_pipeline(self.pipeline.get());
+        let [exposure, map] = self.pipeline.get();
         cpass.set_bind_group(1, &self.bind_group, &[]);
+        cpass.set_pipeline(exposure);
+        cpass.dispatch_workgroups(1, 1, 1);
+        cpass.set_pipeline(map);
         cpass.dispatch_workgroups((w * h).div_ceil(64), 1, 1);
     }
 

@@ -263,12 +263,13 @@ impl Validator<'_> {
             SkyModel {
                 kind: m.kind,
                 single: crate::atmosphere::SingleSettings { view_steps: m.view_steps.0, sun_steps: m.sun_steps.0, optical_depth: m.optical_depth },
-                exposure_ev: m.exposure_ev.get(),
+                exposure_ev: m.exposure_ev.map_or(if m.auto_exposure { 0.0 } else { 5.0 }, |e| e.get()),
                 tone_mapper: m.tone_mapper,
                 camera_km: m.camera_km.get(),
                 lut,
                 ground_albedo: m.ground_albedo.get(),
                 cell_iterations: m.cell_iterations.map_or(6, |s| s.0),
+                auto_exposure: m.auto_exposure,
             }
         });
         if model.cell_iterations > 32 {

@@ -117,9 +117,9 @@ pub struct SkyModelDef {
     #[serde(default)]
     pub kind: SkyModelKind,
     /// Exposure in stops: display = tone_map(radiance x 2^exposure_ev), radiance in sr^-1 per unit
-    /// of solar irradiance.
-    #[serde(default = "default_exposure_ev")]
-    pub exposure_ev: Finite,
+    /// of solar irradiance (default 5); with `auto_exposure`, a compensation (default 0).
+    #[serde(default)]
+    pub exposure_ev: Option<Finite>,
     /// Tone mapper of physical models.
     #[serde(default)]
     pub tone_mapper: ToneMapper,
@@ -156,14 +156,13 @@ pub struct SkyModelDef {
     /// `cells`: refinement iterations, 1..=32 (the text uses 6).
     #[serde(default)]
     pub cell_iterations: Option<StepCount>,
+    /// Expose for the sky's mean luminance (middle grey), with `exposure_ev` as compensation.
+    #[serde(default)]
+    pub auto_exposure: bool,
 }
 
 fn default_albedo() -> Unit {
     Unit(0.3)
-}
-
-fn default_exposure_ev() -> Finite {
-    Finite(5.0)
 }
 
 fn default_view_steps() -> StepCount {

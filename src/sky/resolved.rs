@@ -80,6 +80,8 @@ pub struct SkyModel {
     pub ground_albedo: f32,
     /// `cells` refinement iterations.
     pub cell_iterations: u32,
+    /// Expose for the sky's mean luminance (then `exposure_ev` is a compensation).
+    pub auto_exposure: bool,
 }
 
 impl Default for SkyModel {
@@ -93,6 +95,7 @@ impl Default for SkyModel {
             lut: Default::default(),
             ground_albedo: 0.3,
             cell_iterations: 6,
+            auto_exposure: false,
         }
     }
 }
