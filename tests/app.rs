@@ -33,6 +33,7 @@ fn run_panels(controls: &mut Controls, events: Vec<egui::Event>) -> Vec<UiAction
         gpu_ms: &[],
         sheet_progress: Some((3, 32)),
         last_capture: "",
+        model_progress: Some(0.4),
     };
     let ctx = egui::Context::default();
     let mut actions = Vec::new();

@@ -299,3 +299,32 @@ fn automatic_exposure_adapts_to_the_sky() {
     assert!(auto_dusk > fixed_dusk * 1.2, "automatic exposure brightens the dusk sky");
     assert!(auto_day / auto_dusk < fixed_day / fixed_dusk, "and narrows the day-dusk gap");
 }
+
+#[test]
+fn reference_model_renders_in_the_background() {
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    // Few paths on a coarse grid keep the test short; the app's defaults are 256 paths on 48 x 27.
+    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Reference, reference_paths: 8, reference_grid: [12, 6], ..sky.model };
+    let input = FrameInput { sky_model: Some(model), ..FrameInput::new(13.0, 0.0) };
+    let opts = RenderOptions { glare: false, ..Default::default() };
+    h.frame(&sky, &input, &camera(), &opts, 0.0);
+    let view = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::sky_view::SkyViewPass>().unwrap().progress();
+    assert!(h.renderer.busy() && view(&h).is_some(), "the first frame starts the background work");
+    let img = h.render(&sky, &input, &camera(), &opts).unwrap();
+    assert!(!h.renderer.busy() && view(&h).is_none(), "the still waited for it");
+    let bitmap = h.render(&sky, &FrameInput::new(13.0, 0.0), &camera(), &opts).unwrap();
+    let (d, _) = common::diff(&img, &bitmap, 10);
+    assert!(d.differing > 0.2, "the reference colours the skydome: {d:?}");
+    // Blue sky by day: over the upper third, blue outweighs red.
+    let (mut red, mut blue) = (0u64, 0u64);
+    for y in 0..H / 3 {
+        for x in 0..W {
+            let p = img.get_pixel(x, y).0;
+            red += p[0] as u64;
+            blue += p[2] as u64;
+        }
+    }
+    assert!(blue > red, "red {red} blue {blue}");
+}

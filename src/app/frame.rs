@@ -147,6 +147,7 @@ impl App {
             gpu_ms: &gpu_ms,
             sheet_progress: self.sheet.as_ref().map(|s| (s.done, s.total())),
             last_capture: &self.last_capture,
+            model_progress: gpu.renderer.pass::<crate::render::sky_view::SkyViewPass>().and_then(|p| p.progress()),
         };
         let mut actions = Vec::new();
         let controls = &mut self.controls;

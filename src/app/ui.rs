@@ -135,6 +135,8 @@ pub struct UiInfo<'a> {
     pub sheet_progress: Option<(usize, usize)>,
     /// Last capture message.
     pub last_capture: &'a str,
+    /// Progress (0..1) of a sky model computed in the background, while it runs.
+    pub model_progress: Option<f32>,
 }
 
 /// Keyboard shortcuts, shown in the help overlay.
@@ -233,6 +235,9 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
                 }
             });
             sky_model_controls(ui, c, info.sky);
+            if let Some(p) = info.model_progress {
+                ui.add(egui::ProgressBar::new(p).show_percentage().text("computing the sky in the background"));
+            }
 
             ui.collapsing("View", |ui| {
                 ui.add(egui::Slider::new(&mut c.camera.fov_y_deg, 10.0..=120.0).text("fov"));
@@ -372,6 +377,7 @@ fn model_label(kind: SkyModelKind) -> &'static str {
         SkyModelKind::Single => "single scattering",
         SkyModelKind::Lut => "LUT multiple scattering",
         SkyModelKind::Cells => "cells (CPU, background)",
+        SkyModelKind::Reference => "reference (CPU still, background)",
     }
 }
 
@@ -400,7 +406,10 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
                 ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Numerical, "numerical");
             });
         }
-        if model.kind == SkyModelKind::Cells {
+        if model.kind == SkyModelKind::Reference {
+            ui.add(egui::Slider::new(&mut model.reference_paths, 1..=1024).text("paths per direction"));
+            ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
+        } else if model.kind == SkyModelKind::Cells {
             ui.add(egui::Slider::new(&mut model.cell_iterations, 1..=12).text("iterations"));
             ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
         } else if model.kind == SkyModelKind::Lut {

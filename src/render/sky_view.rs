@@ -10,7 +10,11 @@ use super::error::RenderResult;
 use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SharedResources};
 use super::shaders;
 use super::sky_model::{AtmosphereUniform, SingleUniform};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+
 use crate::atmosphere::cells::{CellModel, CellSettings};
+use crate::atmosphere::reference::{Case, Reference, ReferenceSettings};
 use crate::atmosphere::Atmosphere;
 use crate::sky::resolved::{SkyModel, SkyModelKind, ToneMapper};
 
@@ -36,7 +40,7 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
         let (w, h) = SharedResources::SKY_VIEW_SIZE;
         let kind = match model.kind {
             SkyModelKind::Lut => 1.0,
-            SkyModelKind::Cells => 2.0,
+            SkyModelKind::Cells | SkyModelKind::Reference => 2.0,
             _ => 0.0,
         };
         Self {
@@ -54,62 +58,123 @@ struct Key {
     single: SingleUniform,
     lut: super::sky_model::LutUniform,
     params: SkyViewParams,
-    /// `cells`: iterations.
-    cells: u32,
+    /// `cells` iterations, or `reference` paths and grid.
+    cpu: [u32; 3],
 }
 
-/// A sky-view map for the CPU worker to compute with the cell model.
-struct CellsJob {
+/// A model computed on the CPU worker.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum CpuModel {
+    /// The cell model with its settings.
+    Cells(CellSettings),
+    /// The double-precision reference: Monte Carlo paths per direction, and the coarse grid of
+    /// directions it is evaluated on (then interpolated over the map).
+    Reference { paths: u32, grid: [u32; 2] },
+}
+
+/// A sky-view map for the CPU worker to compute.
+struct CpuJob {
     id: u64,
     atmosphere: Atmosphere,
     albedo: f64,
-    settings: CellSettings,
+    model: CpuModel,
     camera_km: f64,
     towards_sun: glam::DVec3,
 }
 
-/// The CPU worker of the `cells` model: keeps the last solution and answers with radiance per
-/// texel of the sky-view map. Bursts of jobs (a moving sun) are coalesced to the latest.
-struct CellsWorker {
-    jobs: std::sync::mpsc::Sender<CellsJob>,
-    results: std::sync::mpsc::Receiver<(u64, Vec<[f32; 4]>)>,
+/// Directions done and directions in all, of the job in progress.
+#[derive(Default)]
+struct Progress {
+    done: AtomicUsize,
+    total: AtomicUsize,
 }
 
-impl CellsWorker {
+/// The CPU worker of the `cells` and `reference` models: keeps the last cell solution and
+/// answers with radiance per texel of the sky-view map. Bursts of jobs (a moving sun) are
+/// coalesced to the latest.
+struct CpuWorker {
+    jobs: std::sync::mpsc::Sender<CpuJob>,
+    results: std::sync::mpsc::Receiver<(u64, Vec<[f32; 4]>)>,
+    progress: Arc<Progress>,
+}
+
+impl CpuWorker {
     fn spawn() -> Option<Self> {
-        let (jobs, job_rx) = std::sync::mpsc::channel::<CellsJob>();
+        let (jobs, job_rx) = std::sync::mpsc::channel::<CpuJob>();
         let (result_tx, results) = std::sync::mpsc::channel();
-        let spawned = std::thread::Builder::new().name("skytune-cells".into()).spawn(move || {
-            let mut model: Option<CellModel> = None;
+        let progress = Arc::new(Progress::default());
+        let shared = progress.clone();
+        let spawned = std::thread::Builder::new().name("skytune-sky-model".into()).spawn(move || {
+            let mut cells: Option<CellModel> = None;
             while let Ok(mut job) = job_rx.recv() {
                 while let Ok(next) = job_rx.try_recv() {
                     job = next;
                 }
-                if !model.as_ref().is_some_and(|m| m.solved_for(&job.atmosphere, job.albedo, &job.settings)) {
-                    model = Some(CellModel::solve(job.atmosphere, job.albedo, job.settings));
-                }
-                let Some(m) = model.as_ref() else { continue };
-                let map = sky_view_radiance(|dir| m.radiance_towards(job.camera_km, dir, job.towards_sun));
+                let map = match job.model {
+                    CpuModel::Cells(settings) => {
+                        if !cells.as_ref().is_some_and(|m| m.solved_for(&job.atmosphere, job.albedo, &settings)) {
+                            cells = Some(CellModel::solve(job.atmosphere, job.albedo, settings));
+                        }
+                        let Some(m) = cells.as_ref() else { continue };
+                        sky_view_radiance([SharedResources::SKY_VIEW_SIZE.0, SharedResources::SKY_VIEW_SIZE.1], &shared, |dir| {
+                            m.radiance_towards(job.camera_km, dir, job.towards_sun)
+                        })
+                    }
+                    CpuModel::Reference { paths, grid } => {
+                        let reference = Reference::new(job.atmosphere, ReferenceSettings { paths, ..Default::default() });
+                        let sun = job.towards_sun;
+                        let coarse = sky_view_radiance(grid, &shared, |dir| {
+                            let az = |d: glam::DVec3| d.x.atan2(-d.z);
+                            let case = Case {
+                                camera_km: job.camera_km,
+                                albedo: job.albedo,
+                                sun_elev_deg: sun.y.clamp(-1.0, 1.0).asin().to_degrees(),
+                                view_elev_deg: dir.y.clamp(-1.0, 1.0).asin().to_degrees(),
+                                rel_azimuth_deg: (az(dir) - az(sun)).to_degrees(),
+                            };
+                            reference.radiance(&case)
+                        });
+                        upsample(&coarse, grid)
+                    }
+                };
                 if result_tx.send((job.id, map)).is_err() {
                     break;
                 }
             }
         });
         match spawned {
-            Ok(_) => Some(Self { jobs, results }),
+            Ok(_) => Some(Self { jobs, results, progress }),
             Err(e) => {
-                log::error!("cannot start the cells worker: {e}");
+                log::error!("cannot start the sky-model worker: {e}");
                 None
             }
         }
     }
 }
 
-/// Radiance of every texel of the sky-view map (the direction of a texel as in
-/// shaders/sky_model/sky_view_map.wgsl), rows split over the machine's cores.
-fn sky_view_radiance(radiance: impl Fn(glam::DVec3) -> [f64; 3] + Sync) -> Vec<[f32; 4]> {
+/// Bilinear interpolation of a coarse map (texel centres, azimuth wrapping) onto the sky-view map.
+fn upsample(coarse: &[[f32; 4]], [gw, gh]: [u32; 2]) -> Vec<[f32; 4]> {
     let (w, h) = SharedResources::SKY_VIEW_SIZE;
+    let at = |x: i64, y: i64| coarse[(y.clamp(0, gh as i64 - 1) as u32 * gw + x.rem_euclid(gw as i64) as u32) as usize];
+    (0..w * h)
+        .map(|k| {
+            let (u, v) = ((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
+            let (x, y) = (u / w as f32 * gw as f32 - 0.5, v / h as f32 * gh as f32 - 0.5);
+            let (x0, y0) = (x.floor(), y.floor());
+            let (fx, fy) = (x - x0, y - y0);
+            let (x0, y0) = (x0 as i64, y0 as i64);
+            let (a, b, c, d) = (at(x0, y0), at(x0 + 1, y0), at(x0, y0 + 1), at(x0 + 1, y0 + 1));
+            std::array::from_fn(|i| (a[i] * (1.0 - fx) + b[i] * fx) * (1.0 - fy) + (c[i] * (1.0 - fx) + d[i] * fx) * fy)
+        })
+        .collect()
+}
+
+/// Radiance of every texel of a `w` x `h` sky-view map (the direction of a texel as in
+/// shaders/sky_model/sky_view_map.wgsl), rows split over the machine's cores; counts progress.
+fn sky_view_radiance([w, h]: [u32; 2], progress: &Progress, radiance: impl Fn(glam::DVec3) -> [f64; 3] + Sync) -> Vec<[f32; 4]> {
     let mut out = vec![[0.0f32; 4]; (w * h) as usize];
+    progress.done.store(0, Ordering::Relaxed);
+    progress.total.store(out.len(), Ordering::Relaxed);
     let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
     let rows_per = (h as usize).div_ceil(workers).max(1);
     std::thread::scope(|scope| {
@@ -126,6 +191,7 @@ fn sky_view_radiance(radiance: impl Fn(glam::DVec3) -> [f64; 3] + Sync) -> Vec<[
                     let dir = glam::DVec3::new(azimuth.sin() * elevation.cos(), elevation.sin(), -azimuth.cos() * elevation.cos());
                     let l = radiance(dir);
                     *texel = [l[0] as f32, l[1] as f32, l[2] as f32, 1.0];
+                    progress.done.fetch_add(1, Ordering::Relaxed);
                 }
             });
         }
@@ -151,7 +217,7 @@ pub struct SkyViewPass {
     pub maps_computed: u64,
     /// Radiance per texel from the CPU (`cells`).
     cpu_radiance: wgpu::Buffer,
-    cells: Option<CellsWorker>,
+    cells: Option<CpuWorker>,
     /// The job in flight: its id and the key it answers.
     cells_pending: Option<(u64, Key)>,
     next_job: u64,
@@ -263,20 +329,30 @@ impl SkyViewPass {
 }
 
 impl SkyViewPass {
+    /// Progress (0..1) of a CPU model's map being computed, if one is.
+    pub fn progress(&self) -> Option<f32> {
+        let worker = self.cells.as_ref().filter(|_| self.cells_pending.is_some())?;
+        let total = worker.progress.total.load(Ordering::Relaxed).max(1);
+        Some(worker.progress.done.load(Ordering::Relaxed) as f32 / total as f32)
+    }
+
     /// Asks the CPU worker for the map of `key` if it is not on it yet, and uploads a finished
     /// one. Returns whether this frame has the radiance of `key` to show.
     fn cells_ready(&mut self, cx: &FrameContext<'_>, model: &SkyModel, key: Key) -> bool {
         if self.cells.is_none() {
-            self.cells = CellsWorker::spawn();
+            self.cells = CpuWorker::spawn();
         }
         let Some(worker) = &self.cells else { return false };
         if self.cells_pending.is_none_or(|(_, k)| k != key) {
             self.next_job += 1;
-            let job = CellsJob {
+            let job = CpuJob {
                 id: self.next_job,
                 atmosphere: cx.frame.atmosphere,
                 albedo: model.ground_albedo as f64,
-                settings: CellSettings { iterations: model.cell_iterations as usize, ..Default::default() },
+                model: match model.kind {
+                    SkyModelKind::Reference => CpuModel::Reference { paths: model.reference_paths, grid: model.reference_grid },
+                    _ => CpuModel::Cells(CellSettings { iterations: model.cell_iterations as usize, ..Default::default() }),
+                },
                 camera_km: model.camera_km as f64,
                 towards_sun: cx.frame.towards_sun.as_dvec3(),
             };
@@ -322,8 +398,8 @@ impl Pass for SkyViewPass {
     fn prepare(&mut self, cx: &FrameContext<'_>) {
         let model = &cx.frame.sky_model;
         self.dirty = false;
-        if model.kind != SkyModelKind::Cells {
-            // A switch away from `cells` drops its request (a late answer is ignored).
+        if !model.kind.on_cpu() {
+            // A switch away from a CPU model drops its request (a late answer is ignored).
             self.cells_pending = None;
         }
         if !model.kind.is_physical() {
@@ -334,13 +410,16 @@ impl Pass for SkyViewPass {
             single: (&model.single).into(),
             lut: super::sky_model::LutUniform::new(&model.lut, model.ground_albedo),
             params: (model, cx.frame.towards_sun).into(),
-            cells: model.cell_iterations,
+            cpu: match model.kind {
+                SkyModelKind::Reference => [model.reference_paths, model.reference_grid[0], model.reference_grid[1]],
+                _ => [model.cell_iterations, 0, 0],
+            },
         };
         if self.computed == Some(key) {
             self.cells_pending = None;
             return;
         }
-        if model.kind == SkyModelKind::Cells && !self.cells_ready(cx, model, key) {
+        if model.kind.on_cpu() && !self.cells_ready(cx, model, key) {
             return;
         }
         cx.queue.write_buffer(&self.atmosphere, 0, bytemuck::bytes_of(&key.atmosphere));

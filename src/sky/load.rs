@@ -270,6 +270,8 @@ impl Validator<'_> {
                 ground_albedo: m.ground_albedo.get(),
                 cell_iterations: m.cell_iterations.map_or(6, |s| s.0),
                 auto_exposure: m.auto_exposure,
+                reference_paths: m.reference_paths.map_or(256, |s| s.0),
+                reference_grid: m.reference_grid.map_or([48, 27], |[a, b]| [a.0.max(2), b.0.max(2)]),
             }
         });
         if model.cell_iterations > 32 {

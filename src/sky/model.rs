@@ -63,11 +63,13 @@ pub enum SkyModelKind {
     Lut,
     /// The cell model of the procedural-sky text, solved on the CPU in the background.
     Cells,
+    /// The double-precision reference, computed on the CPU in the background (a still).
+    Reference,
 }
 
 impl SkyModelKind {
     /// Every model, in the order the app lists them.
-    pub const ALL: [SkyModelKind; 4] = [SkyModelKind::Bitmap, SkyModelKind::Single, SkyModelKind::Lut, SkyModelKind::Cells];
+    pub const ALL: [SkyModelKind; 5] = [SkyModelKind::Bitmap, SkyModelKind::Single, SkyModelKind::Lut, SkyModelKind::Cells, SkyModelKind::Reference];
 
     /// Name in the sky file and the CLI.
     pub fn name(self) -> &'static str {
@@ -76,12 +78,18 @@ impl SkyModelKind {
             SkyModelKind::Single => "single",
             SkyModelKind::Lut => "lut",
             SkyModelKind::Cells => "cells",
+            SkyModelKind::Reference => "reference",
         }
     }
 
     /// Whether the model produces radiance (and so needs exposure and a tone mapper).
     pub fn is_physical(self) -> bool {
         self != SkyModelKind::Bitmap
+    }
+
+    /// Whether the model is computed on the CPU in the background.
+    pub fn on_cpu(self) -> bool {
+        matches!(self, SkyModelKind::Cells | SkyModelKind::Reference)
     }
 }
 
@@ -113,7 +121,7 @@ impl ToneMapper {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SkyModelDef {
-    /// `bitmap` (NeL gradients), `single`, `lut` or `cells`.
+    /// `bitmap` (NeL gradients), `single`, `lut`, `cells` or `reference`.
     #[serde(default)]
     pub kind: SkyModelKind,
     /// Exposure in stops: display = tone_map(radiance x 2^exposure_ev), radiance in sr^-1 per unit
@@ -159,6 +167,12 @@ pub struct SkyModelDef {
     /// Expose for the sky's mean luminance (middle grey), with `exposure_ev` as compensation.
     #[serde(default)]
     pub auto_exposure: bool,
+    /// `reference`: Monte Carlo paths per direction, 1..=1024.
+    #[serde(default)]
+    pub reference_paths: Option<StepCount>,
+    /// `reference`: the coarse grid of directions [azimuths, elevations] it is evaluated on.
+    #[serde(default)]
+    pub reference_grid: Option<[StepCount; 2]>,
 }
 
 fn default_albedo() -> Unit {

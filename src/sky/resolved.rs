@@ -82,6 +82,10 @@ pub struct SkyModel {
     pub cell_iterations: u32,
     /// Expose for the sky's mean luminance (then `exposure_ev` is a compensation).
     pub auto_exposure: bool,
+    /// `reference`: Monte Carlo paths per direction.
+    pub reference_paths: u32,
+    /// `reference`: the coarse grid of directions (azimuths, elevations).
+    pub reference_grid: [u32; 2],
 }
 
 impl Default for SkyModel {
@@ -96,6 +100,8 @@ impl Default for SkyModel {
             ground_albedo: 0.3,
             cell_iterations: 6,
             auto_exposure: false,
+            reference_paths: 256,
+            reference_grid: [48, 27],
         }
     }
 }
