@@ -5,7 +5,7 @@
 struct SkyViewParams {
     towards_sun: vec4<f32>, // xyz unit vector, w: camera altitude (km)
     exposure: vec4<f32>,    // x: radiance scale (2^EV), y: tone mapper as f32 (0 ACES, 1 neutral), zw: map size (texels)
-    model: vec4<f32>,       // x: 0 single, 1 lut, 2 radiance computed on the CPU (cells); y: 1 automatic exposure
+    model: vec4<f32>,       // x: 0 single, 1 lut, 2 radiance computed on the CPU (cells, reference); y: 1 automatic exposure
 };
 
 @group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
@@ -23,9 +23,11 @@ struct SkyViewParams {
 @group(1) @binding(6) var<storage, read> multiscattering_lut: array<vec4<f32>>;
 // Radiance per texel computed on the CPU (the `cells` model), in the same texel order.
 @group(1) @binding(7) var<storage, read> cpu_radiance: array<vec4<f32>>;
-// The exposure scale of this map: x = 2^EV, or with automatic exposure the scale that brings the
-// sky's mean luminance to middle grey, times 2^EV as compensation.
-@group(1) @binding(8) var<storage, read_write> exposure_out: array<f32, 4>;
+// [0].x: the exposure scale of this map: 2^EV, or with automatic exposure the scale that brings the
+// sky's mean luminance to middle grey, times 2^EV as compensation. [1], [2], [3]: the main
+// scene's fog colour, sun ambient and sun diffuse from the model, in display values, laid out as
+// in `Globals` (sky_view.rs copies them there when the model drives the scene).
+@group(1) @binding(8) var<storage, read_write> sky_light: array<vec4<f32>, 4>;
 
 // Radiance of the frame's model along `dir` (texel `index` of the CPU map for `cells`).
 fn model_radiance(dir: vec3<f32>, index: u32) -> vec3<f32> {
@@ -42,10 +44,12 @@ fn texel_index(uv: vec2<f32>, size: vec2<u32>) -> u32 {
     return t.y * size.x + t.x;
 }
 
-var<workgroup> luminance: array<f32, 64>;
+var<workgroup> radiance_samples: array<vec3<f32>, 64>;
 
-// One workgroup: the mean luminance (Rec. 709) of 64 equal-area directions of the upper sky sets
-// the exposure (middle grey 0.18), before cs_main uses it.
+// One workgroup, before cs_main: the mean luminance (Rec. 709) of 64 equal-area directions of the
+// upper sky sets the exposure (middle grey 0.18); the same samples give the scene's light: the
+// sky's mean radiance as ambient, the lowest band (0 to 7 degrees) as fog, and the sun's
+// transmittance (irradiance 1 scattered by a white Lambertian surface: T / pi) as diffuse.
 @compute @workgroup_size(64)
 fn cs_exposure(@builtin(local_invocation_index) i: u32) {
     let size = vec2<u32>(params.exposure.zw);
@@ -53,19 +57,32 @@ fn cs_exposure(@builtin(local_invocation_index) i: u32) {
     let phi = 2.0 * PI * (f32(i % 8u) + 0.5) / 8.0;
     let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
     let dir = vec3<f32>(sin_theta * cos(phi), cos_theta, sin_theta * sin(phi));
-    let l = model_radiance(dir, texel_index(sky_view_uv(dir), size));
-    luminance[i] = dot(l, vec3<f32>(0.2126, 0.7152, 0.0722));
+    radiance_samples[i] = model_radiance(dir, texel_index(sky_view_uv(dir), size));
     workgroupBarrier();
     if (i == 0u) {
-        var sum = 0.0;
+        var mean = vec3<f32>(0.0);
+        var horizon = vec3<f32>(0.0);
         for (var k = 0u; k < 64u; k++) {
-            sum += luminance[k];
+            mean += radiance_samples[k] / 64.0;
+            if (k >= 56u) {
+                horizon += radiance_samples[k] / 8.0;
+            }
         }
         var scale = params.exposure.x;
         if (params.model.y > 0.5) {
-            scale = params.exposure.x * 0.18 / max(sum / 64.0, 1e-6);
+            scale = params.exposure.x * 0.18 / max(dot(mean, vec3<f32>(0.2126, 0.7152, 0.0722)), 1e-6);
         }
-        exposure_out[0] = scale;
+        let tone = u32(params.exposure.y);
+        let r = atmosphere.shape.x + params.towards_sun.w;
+        var sun = numeric_optical_depth(atmosphere, r, params.towards_sun.y, 64u);
+        var t_sun = exp(-sun);
+        if (sun.x < 0.0) {
+            t_sun = vec3<f32>(0.0);
+        }
+        sky_light[0] = vec4<f32>(scale, 0.0, 0.0, 0.0);
+        sky_light[1] = vec4<f32>(display_from_radiance(horizon, scale, tone), 1.0);
+        sky_light[2] = vec4<f32>(display_from_radiance(mean, scale, tone), 1.0);
+        sky_light[3] = vec4<f32>(display_from_radiance(t_sun / PI, scale, tone), 1.0);
     }
 }
 
@@ -79,6 +96,6 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let uv = (vec2<f32>(id) + 0.5) / vec2<f32>(size);
     let dir = sky_view_direction(uv);
     let radiance = model_radiance(dir, id.y * size.x + id.x);
-    let color = display_from_radiance(radiance, exposure_out[0], u32(params.exposure.y));
+    let color = display_from_radiance(radiance, sky_light[0].x, u32(params.exposure.y));
     sky_view_out[id.y * size.x + id.x] = pack4x8unorm(vec4<f32>(color, 1.0));
 }

@@ -165,6 +165,9 @@ pub struct FrameArgs {
     /// Physical sky models: expose for the sky's mean luminance (--exposure-ev compensates, default 0).
     #[arg(long)]
     pub auto_exposure: bool,
+    /// Physical sky models: light the main scene (fog, ambient, sun) from the model.
+    #[arg(long)]
+    pub drive_scene: bool,
     /// Force the software adapter (lavapipe).
     #[arg(long)]
     pub cpu: bool,

@@ -191,7 +191,7 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
     let (input, camera) = frame_from_args(&args.frame)?;
     let options = RenderOptions { scene: !args.frame.no_scene, ..Default::default() };
     let mut input = input;
-    if args.frame.sky_model.is_some() || args.frame.exposure_ev.is_some() || args.frame.auto_exposure {
+    if args.frame.sky_model.is_some() || args.frame.exposure_ev.is_some() || args.frame.auto_exposure || args.frame.drive_scene {
         let mut model = sky.model;
         if let Some(name) = &args.frame.sky_model {
             model.kind = SkyModelKind::ALL
@@ -199,6 +199,7 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
                 .find(|k| k.name() == name)
                 .ok_or_else(|| anyhow!("--sky-model: unknown model \"{name}\"; expected one of {}", SkyModelKind::ALL.map(|k| k.name()).join(", ")))?;
         }
+        model.drive_scene |= args.frame.drive_scene;
         if args.frame.auto_exposure {
             model.auto_exposure = true;
             model.exposure_ev = 0.0;

@@ -328,3 +328,33 @@ fn reference_model_renders_in_the_background() {
     }
     assert!(blue > red, "red {red} blue {blue}");
 }
+
+#[test]
+fn a_physical_model_can_light_the_scene() {
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    let opts = RenderOptions { glare: false, ..Default::default() };
+    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model };
+    let render = |h: &mut skytune::render::Headless, drive_scene: bool| {
+        let input = FrameInput { sky_model: Some(skytune::sky::resolved::SkyModel { drive_scene, ..model }), ..FrameInput::new(18.5, 0.0) };
+        h.render(&sky, &input, &camera(), &opts).unwrap()
+    };
+    let (bitmap_lit, model_lit) = (render(&mut h, false), render(&mut h, true));
+    let rows = |img: &image::RgbaImage, ys: std::ops::Range<u32>| {
+        let mut out = image::RgbaImage::new(W, ys.len() as u32);
+        for (k, y) in ys.enumerate() {
+            for x in 0..W {
+                out.put_pixel(x, k as u32, *img.get_pixel(x, y));
+            }
+        }
+        out
+    };
+    // The sky is the same; the ground (bottom rows) takes the model's light and fog.
+    assert_eq!(common::diff(&rows(&bitmap_lit, 0..10), &rows(&model_lit, 0..10), 2).0.differing, 0.0);
+    let (d, _) = common::diff(&rows(&bitmap_lit, H - 20..H), &rows(&model_lit, H - 20..H), 6);
+    assert!(d.differing > 0.5, "the scene is lit by the model: {d:?}");
+    // Switched off again: the bitmaps light the scene exactly as before.
+    let again = render(&mut h, false);
+    assert_eq!(common::diff(&again, &bitmap_lit, 0).0.differing, 0.0);
+}

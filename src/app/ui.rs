@@ -392,6 +392,7 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
     });
     if model.kind.is_physical() {
         ui.checkbox(&mut model.auto_exposure, "automatic exposure (EV below compensates)");
+        ui.checkbox(&mut model.drive_scene, "light the scene from the model (fog, ambient, sun)");
         ui.add(egui::Slider::new(&mut model.exposure_ev, -4.0..=12.0).text("exposure (EV)"));
         ui.horizontal(|ui| {
             ui.label("tone mapper:");

@@ -33,6 +33,12 @@ pub struct Globals {
 }
 const _: () = assert!(std::mem::size_of::<Globals>() == 3 * 64 + 7 * 16);
 
+/// Byte offset of `fog_color` in [`Globals`], followed by `sun_ambient` and `sun_diffuse` (a
+/// physical sky model overwrites the three on the GPU: see `sky_view.rs`).
+pub const SCENE_LIGHT_OFFSET: u64 = std::mem::offset_of!(Globals, fog_color) as u64;
+const _: () = assert!(std::mem::offset_of!(Globals, sun_diffuse) - std::mem::offset_of!(Globals, fog_color) == 32);
+const _: () = assert!(std::mem::offset_of!(Globals, sun_ambient) - std::mem::offset_of!(Globals, fog_color) == 16);
+
 impl Globals {
     /// Globals for a frame seen by `camera` on a `width` x `height` target.
     pub fn new(frame: &FrameSky, camera: &Camera, width: u32, height: u32) -> Self {

@@ -58,6 +58,8 @@ pub struct PassBuild<'a> {
     pub device: &'a wgpu::Device,
     /// Layout of bind group 0 (per-frame globals), shared by every pipeline.
     pub globals_layout: &'a wgpu::BindGroupLayout,
+    /// The globals buffer itself (a pass may overwrite fields on the GPU, e.g. the scene's light).
+    pub globals_buffer: &'a wgpu::Buffer,
     /// Shader sources.
     pub library: &'a ShaderLibrary,
     /// Colour format of the target.

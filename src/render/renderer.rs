@@ -97,7 +97,7 @@ impl SkyRenderer {
         let device = &ctx.device;
         let globals = GlobalsBinding::new(device);
         let shared = SharedResources::new(device);
-        let build = PassBuild { device, globals_layout: &globals.layout, library: &library, color_format, shared: &shared };
+        let build = PassBuild { device, globals_layout: &globals.layout, globals_buffer: &globals.buffer, library: &library, color_format, shared: &shared };
         let passes = PASSES.iter().chain(extra).map(|(_, new)| new(&build)).collect::<RenderResult<Vec<_>>>()?;
         Ok(Self {
             textures: TextureCache::new(device, &ctx.queue),
@@ -137,7 +137,14 @@ impl SkyRenderer {
     /// Rebuilds every pipeline from the shader library (hot reload). All or nothing: on any error
     /// every pass keeps its previous pipelines and the error is returned.
     pub fn reload_shaders(&mut self, ctx: &GpuContext) -> RenderResult<()> {
-        let build = PassBuild { device: &ctx.device, globals_layout: &self.globals.layout, library: &self.library, color_format: self.color_format, shared: &self.shared };
+        let build = PassBuild {
+            device: &ctx.device,
+            globals_layout: &self.globals.layout,
+            globals_buffer: &self.globals.buffer,
+            library: &self.library,
+            color_format: self.color_format,
+            shared: &self.shared,
+        };
         let result = self.passes.iter_mut().try_for_each(|p| p.stage_pipelines(&build));
         for pass in &mut self.passes {
             pass.commit_pipelines(result.is_ok());

@@ -18,6 +18,10 @@ use crate::atmosphere::reference::{Case, Reference, ReferenceSettings};
 use crate::atmosphere::Atmosphere;
 use crate::sky::resolved::{SkyModel, SkyModelKind, ToneMapper};
 
+/// Draw keys of the pass: compute the map, or only copy the scene's light.
+const MAP: usize = 0;
+const LIGHT_ONLY: usize = 1;
+
 /// Keep in sync with `SkyViewParams` in shaders/sky_view.wgsl.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
@@ -221,6 +225,11 @@ pub struct SkyViewPass {
     /// The job in flight: its id and the key it answers.
     cells_pending: Option<(u64, Key)>,
     next_job: u64,
+    /// Exposure (16 bytes), then the scene's fog, ambient and diffuse in the layout of `Globals`.
+    sky_light: wgpu::Buffer,
+    globals: wgpu::Buffer,
+    /// Whether this frame's model lights the main scene (copied into the globals every frame).
+    drive_scene: bool,
 }
 
 fn uniform(device: &wgpu::Device, label: &str, size: usize) -> wgpu::Buffer {
@@ -256,7 +265,12 @@ impl SkyViewPass {
             super::sky_model::storage_entry(7, true),
             super::sky_model::storage_entry(8, false),
         ]);
-        let exposure = device.create_buffer(&wgpu::BufferDescriptor { label: Some("SkyView::exposure"), size: 16, usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false });
+        let sky_light = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("SkyView::sky_light"),
+            size: 64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
         let (w, h) = SharedResources::SKY_VIEW_SIZE;
         let cpu_radiance = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::cpu_radiance"),
@@ -296,7 +310,7 @@ impl SkyViewPass {
                 b.shared.luts.entries(4)[1].clone(),
                 b.shared.luts.entries(4)[2].clone(),
                 wgpu::BindGroupEntry { binding: 7, resource: cpu_radiance.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 8, resource: exposure.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 8, resource: sky_light.as_entire_binding() },
             ],
         });
         let map = b.shared.sky_view.clone();
@@ -315,6 +329,9 @@ impl SkyViewPass {
             cells: None,
             cells_pending: None,
             next_job: 0,
+            sky_light,
+            globals: b.globals_buffer.clone(),
+            drive_scene: false,
         })
     }
 
@@ -396,6 +413,47 @@ impl Pass for SkyViewPass {
     }
 
     fn prepare(&mut self, cx: &FrameContext<'_>) {
+        self.prepare_map(cx);
+        let model = &cx.frame.sky_model;
+        // Only once a map, and so its light, exists for the model in use.
+        let kind = SkyViewParams::from((model, cx.frame.towards_sun)).model;
+        self.drive_scene = model.kind.is_physical() && model.drive_scene && self.computed.is_some_and(|k| k.params.model == kind);
+    }
+
+    fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
+        if self.dirty {
+            out.push(DrawItem { priority: 0, key: MAP });
+        } else if self.drive_scene {
+            // Nothing to dispatch, but after_phase must copy the light into this frame's globals.
+            out.push(DrawItem { priority: 0, key: LIGHT_ONLY });
+        }
+    }
+
+    fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, key: usize) {
+        if key == MAP {
+            self.dispatch_map(cpass);
+        }
+    }
+
+    fn after_phase(&self, encoder: &mut wgpu::CommandEncoder) {
+        self.copy_map(encoder);
+        if self.drive_scene {
+            encoder.copy_buffer_to_buffer(&self.sky_light, 16, &self.globals, super::globals::SCENE_LIGHT_OFFSET, 48);
+        }
+    }
+
+    fn busy(&self) -> bool {
+        self.cells_pending.is_some()
+    }
+
+    fn settled(&self) -> bool {
+        self.cells_pending.is_none()
+    }
+}
+
+impl SkyViewPass {
+    /// Decides whether this frame recomputes the map, and writes its inputs.
+    fn prepare_map(&mut self, cx: &FrameContext<'_>) {
         let model = &cx.frame.sky_model;
         self.dirty = false;
         if !model.kind.on_cpu() {
@@ -430,21 +488,7 @@ impl Pass for SkyViewPass {
         self.maps_computed += 1;
     }
 
-    fn busy(&self) -> bool {
-        self.cells_pending.is_some()
-    }
-
-    fn settled(&self) -> bool {
-        self.cells_pending.is_none()
-    }
-
-    fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
-        if self.dirty {
-            out.push(DrawItem { priority: 0, key: 0 });
-        }
-    }
-
-    fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, _key: usize) {
+    fn dispatch_map(&self, cpass: &mut wgpu::ComputePass<'_>) {
         let (w, h) = SharedResources::SKY_VIEW_SIZE;
         let [exposure, map] = self.pipeline.get();
         cpass.set_bind_group(1, &self.bind_group, &[]);
@@ -454,8 +498,8 @@ impl Pass for SkyViewPass {
         cpass.dispatch_workgroups((w * h).div_ceil(64), 1, 1);
     }
 
-    fn after_phase(&self, encoder: &mut wgpu::CommandEncoder) {
-        // Between the compute phase and the sky phase, so this frame samples this frame's map.
+    /// Between the compute phase and the sky phase, so this frame samples this frame's map.
+    fn copy_map(&self, encoder: &mut wgpu::CommandEncoder) {
         if self.dirty {
             let (w, h) = SharedResources::SKY_VIEW_SIZE;
             encoder.copy_buffer_to_texture(

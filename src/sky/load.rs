@@ -272,6 +272,7 @@ impl Validator<'_> {
                 auto_exposure: m.auto_exposure,
                 reference_paths: m.reference_paths.map_or(256, |s| s.0),
                 reference_grid: m.reference_grid.map_or([48, 27], |[a, b]| [a.0.max(2), b.0.max(2)]),
+                drive_scene: m.drive_scene,
             }
         });
         if model.cell_iterations > 32 {

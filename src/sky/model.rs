@@ -173,6 +173,10 @@ pub struct SkyModelDef {
     /// `reference`: the coarse grid of directions [azimuths, elevations] it is evaluated on.
     #[serde(default)]
     pub reference_grid: Option<[StepCount; 2]>,
+    /// The model also lights the main scene: fog colour, sun ambient and sun diffuse come from
+    /// it instead of the bitmaps.
+    #[serde(default)]
+    pub drive_scene: bool,
 }
 
 fn default_albedo() -> Unit {

@@ -86,6 +86,8 @@ pub struct SkyModel {
     pub reference_paths: u32,
     /// `reference`: the coarse grid of directions (azimuths, elevations).
     pub reference_grid: [u32; 2],
+    /// The model also lights the main scene (fog colour, sun ambient and diffuse).
+    pub drive_scene: bool,
 }
 
 impl Default for SkyModel {
@@ -102,6 +104,7 @@ impl Default for SkyModel {
             auto_exposure: false,
             reference_paths: 256,
             reference_grid: [48, 27],
+            drive_scene: false,
         }
     }
 }
