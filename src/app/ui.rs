@@ -129,7 +129,7 @@ pub struct UiInfo<'a> {
     pub frame_times_ms: &'a VecDeque<f32>,
     /// CPU time per frame section, ms.
     pub cpu_ms: &'a [(&'static str, f32)],
-    /// GPU time per pass, ms (when timestamp queries work).
+    /// GPU time per phase, ms (when timestamp queries work).
     pub gpu_ms: &'a [(&'static str, f32)],
     /// Contact sheet progress (done, total).
     pub sheet_progress: Option<(usize, usize)>,
@@ -361,7 +361,7 @@ fn stats(ui: &mut egui::Ui, info: &UiInfo<'_>) {
             }
         }
     };
-    section(ui, "GPU time per pass (timestamp queries):", info.gpu_ms);
+    section(ui, "GPU time per phase (timestamp queries):", info.gpu_ms);
     section(ui, "CPU time per frame section:", info.cpu_ms);
     let s = info.stats;
     ui.label(format!("draw calls {}, objects drawn {}, hidden {}, stars {}", s.draw_calls, s.objects_drawn, s.objects_hidden, s.stars));
