@@ -105,7 +105,8 @@ fn multiple_scattering_models_match_the_reference() {
             cases.iter().map(|c| model.radiance(c).map(|x| x as f32)).collect()
         })
         .collect();
-    let single_exact: Vec<[f64; 3]> = cases.iter().map(|c| Reference::new(atm, ReferenceSettings { max_order: 1, ..Default::default() }).radiance(c)).collect();
+    let single_reference = Reference::new(atm, ReferenceSettings { max_order: 1, ..Default::default() });
+    let single_exact: Vec<[f64; 3]> = cases.iter().map(|c| single_reference.radiance(c)).collect();
     let worst0 = worst_errors(&cases, &by_iterations[0], &single_exact);
     let worst6 = worst_errors(&cases, &by_iterations[2], &exact);
     eprintln!("cells, 0 iterations against single scattering: day {:.4}, low sun {:.4}, twilight {:.4}", worst0[0], worst0[1], worst0[2]);

@@ -199,8 +199,8 @@ pub trait Pass: Any {
         None
     }
 
-    /// Right after the pass's phase ended, if the pass had items in it: copies that later phases
-    /// of the same frame need.
+    /// Right after the pass's phase ended, every frame (whether or not the pass had items in it):
+    /// copies that later phases of the same frame need.
     fn after_phase(&self, _encoder: &mut wgpu::CommandEncoder) {}
 
     /// After every phase was recorded: resolve queries, copy results.

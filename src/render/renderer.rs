@@ -249,10 +249,7 @@ impl SkyRenderer {
         for phase in Phase::ALL {
             let list = &items[phase.index()];
             match phase {
-                Phase::Compute => {
-                    if list.is_empty() {
-                        continue;
-                    }
+                Phase::Compute if !list.is_empty() => {
                     let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("SkyRenderer::compute"),
                         timestamp_writes: self.timer.as_mut().and_then(|t| t.compute_writes(phase)),
@@ -261,16 +258,15 @@ impl SkyRenderer {
                     for (i, it) in list {
                         self.passes[*i].dispatch(&mut cpass, it.key);
                     }
-                    drop(cpass);
-                    self.after_phase(encoder, list);
                 }
+                Phase::Compute => {}
+                // The scene and sky phases always run (the scene phase clears the target); the
+                // others only when a pass has something to draw.
+                _ if list.is_empty() && phase != Phase::Scene && phase != Phase::Sky => {}
                 _ => {
-                    // The scene phase always runs: it clears the target. Without the depth split its
-                    // draws move to the end of the sky phase, painted over an already shaded sky.
+                    // Without the depth split the scene phase's draws move to the end of the sky
+                    // phase, painted over an already shaded sky.
                     let draws_here = phase != Phase::Scene || split;
-                    if list.is_empty() && phase != Phase::Scene && phase != Phase::Sky {
-                        continue;
-                    }
                     let load = if phase == Phase::Scene { (wgpu::LoadOp::Clear(wgpu::Color::BLACK), wgpu::LoadOp::Clear(1.0)) } else { (wgpu::LoadOp::Load, wgpu::LoadOp::Load) };
                     let queries = list.iter().find_map(|(i, _)| self.passes[*i].occlusion_query_set());
                     let label = format!("SkyRenderer::{}", phase.name());
@@ -294,9 +290,10 @@ impl SkyRenderer {
                             stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key);
                         }
                     }
-                    drop(rpass);
-                    self.after_phase(encoder, list);
                 }
+            }
+            for pass in self.passes.iter().filter(|p| p.phase() == phase) {
+                pass.after_phase(encoder);
             }
         }
         for pass in &self.passes {
@@ -306,17 +303,6 @@ impl SkyRenderer {
             t.resolve(encoder);
         }
         self.stats = stats;
-    }
-
-    /// Calls `after_phase` once for each pass that had items in a phase that just ended.
-    fn after_phase(&self, encoder: &mut wgpu::CommandEncoder, list: &[(usize, DrawItem)]) {
-        let mut done: Vec<usize> = Vec::new();
-        for (i, _) in list {
-            if !done.contains(i) {
-                done.push(*i);
-                self.passes[*i].after_phase(encoder);
-            }
-        }
     }
 
     /// GPU time of each phase of a recent frame, ms (empty without timestamp queries).

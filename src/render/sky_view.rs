@@ -18,10 +18,6 @@ use crate::atmosphere::reference::{Case, Reference, ReferenceSettings};
 use crate::atmosphere::Atmosphere;
 use crate::sky::resolved::{SkyModel, SkyModelKind, ToneMapper};
 
-/// Draw keys of the pass: compute the map, or only copy the scene's light.
-const MAP: usize = 0;
-const LIGHT_ONLY: usize = 1;
-
 /// Keep in sync with `SkyViewParams` in shaders/sky_view.wgsl.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
@@ -422,21 +418,17 @@ impl Pass for SkyViewPass {
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         if self.dirty {
-            out.push(DrawItem { priority: 0, key: MAP });
-        } else if self.drive_scene {
-            // Nothing to dispatch, but after_phase must copy the light into this frame's globals.
-            out.push(DrawItem { priority: 0, key: LIGHT_ONLY });
+            out.push(DrawItem { priority: 0, key: 0 });
         }
     }
 
-    fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, key: usize) {
-        if key == MAP {
-            self.dispatch_map(cpass);
-        }
+    fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, _key: usize) {
+        self.dispatch_map(cpass);
     }
 
     fn after_phase(&self, encoder: &mut wgpu::CommandEncoder) {
         self.copy_map(encoder);
+        // Every frame: the renderer rewrites the globals each frame.
         if self.drive_scene {
             encoder.copy_buffer_to_buffer(&self.sky_light, 16, &self.globals, super::globals::SCENE_LIGHT_OFFSET, 48);
         }
