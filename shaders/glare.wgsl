@@ -1,3 +1,4 @@
+//! requires: sky_model/tone
 // Sun glare: the occlusion-tested solar disc (no colour output) and the additive halo and
 // lens-flare sprites. (globals.wgsl is prepended by the loader.)
 
@@ -51,5 +52,8 @@ fn vs_sprite(
 
 @fragment
 fn fs_sprite(in: SpriteOut) -> @location(0) vec4<f32> {
-    return textureSample(sprite_texture, sprite_sampler, in.uv) * in.color;
+    let c = textureSample(sprite_texture, sprite_sampler, in.uv) * in.color;
+    // Additive with the source alpha as factor: premultiplied here (the same sum on the display
+    // target), so that on the HDR target the glare adds what it adds on a dark display.
+    return vec4<f32>(to_target(c.rgb * c.a), 1.0);
 }

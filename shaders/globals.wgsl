@@ -11,6 +11,8 @@ struct Globals {
     time: vec4<f32>,                   // hour, hours_per_day, weather, game_hours
     viewport: vec4<f32>,               // width, height, 1/width, 1/height (pixels)
     camera_position: vec4<f32>,        // world position of the main-scene camera, m
+    output: vec4<f32>,                 // x: 1 when drawing exposed linear radiance into the HDR target (0: display values), y: tone mapper
 };
 @group(0) @binding(0) var<uniform> globals: Globals;
 const PI: f32 = 3.14159265358979;
+

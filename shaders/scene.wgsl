@@ -1,3 +1,4 @@
+//! requires: sky_model/tone
 // Main-scene stand-in: terrain and buildings lit by the sun colours and fogged with the sky's
 // fog colour. Drawn first, in depth range [0, 0.95], so the sky behind it fails the depth test.
 // (globals.wgsl is prepended by the loader.)
@@ -29,7 +30,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let lit = in.albedo * light;
     let distance_m = length(in.world_position - globals.camera_position.xyz);
     let fog = 1.0 - exp(-distance_m * FOG_DENSITY);
-    return vec4<f32>(mix(lit, globals.fog_color.rgb, fog), 1.0);
+    return vec4<f32>(to_target(mix(lit, globals.fog_color.rgb, fog)), 1.0);
 }
 
 // Test occluder: a rectangle given directly in clip space, written into the scene's depth.
@@ -40,5 +41,5 @@ fn vs_occluder(@location(0) clip_xy: vec2<f32>) -> @builtin(position) vec4<f32> 
 
 @fragment
 fn fs_occluder() -> @location(0) vec4<f32> {
-    return vec4<f32>(0.05, 0.05, 0.06, 1.0);
+    return vec4<f32>(to_target(vec3<f32>(0.05, 0.05, 0.06)), 1.0);
 }

@@ -1,4 +1,4 @@
-//! requires: sky_model/sky_view_map
+//! requires: sky_model/sky_view_map, sky_model/tone
 // Sky objects: procedural shapes with a NeL-style material of up to 4 texture stages.
 // The material is a sum of terms: an `add` stage starts a term (texture x constant), a
 // `modulate` stage multiplies the current term; the result times the diffuse colour.
@@ -88,6 +88,18 @@ fn stage_uv(s: Stage, mesh_uv: vec2<f32>, dir_in: vec3<f32>) -> vec2<f32> {
     return uv * s.scale_offset.xy + s.scale_offset.zw;
 }
 
+// Adds one term of the material (display values, times the diffuse colour) to the sum. On the
+// display target as they are; on the HDR target through `to_target`, or as a factor of the sky
+// model's exposed radiance for the term that holds it.
+fn add_term(sum: vec4<f32>, term_display: vec4<f32>, view: vec3<f32>, has_view: bool) -> vec4<f32> {
+    let t = term_display * draw.diffuse;
+    var rgb = to_target(t.rgb);
+    if has_view {
+        rgb = view * linear_from_display(t.rgb);
+    }
+    return vec4<f32>(sum.rgb + rgb, max(sum.a, t.a));
+}
+
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let uv0 = stage_uv(draw.stages[0], in.uv, in.world_dir);
@@ -100,13 +112,18 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         textureSample(tex2, samp2, uv2),
         textureSample(tex3, samp3, uv3),
     );
+    // A physical model's radiance (already exposed, on the HDR target) in place of its stage; that
+    // stage's colour then counts as white in its term.
+    var view = vec3<f32>(1.0);
     if draw.misc.z < 4u {
-        samples[draw.misc.z] = textureSample(sky_view, sky_view_sampler, sky_view_uv(normalize(in.world_dir)));
+        view = textureSample(sky_view, sky_view_sampler, sky_view_uv(normalize(in.world_dir))).rgb;
+        samples[draw.misc.z] = vec4<f32>(1.0);
     }
 
     var sum = vec4<f32>(0.0);
     var term = vec4<f32>(0.0);
     var has_term = false;
+    var term_has_view = false;
     for (var i = 0u; i < draw.misc.x; i = i + 1u) {
         let s = draw.stages[i];
         var c = samples[i];
@@ -114,13 +131,15 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         if s.cfg.x == 1u {
             term = term * c;
         } else {
-            if has_term { sum = sum + vec4<f32>(term.rgb, 0.0); sum.a = max(sum.a, term.a); }
+            if has_term { sum = add_term(sum, term, view, term_has_view); }
             term = c;
             has_term = true;
+            term_has_view = false;
         }
+        term_has_view = term_has_view || i == draw.misc.z;
     }
-    if has_term { sum = sum + vec4<f32>(term.rgb, 0.0); sum.a = max(sum.a, term.a); }
-    var color = sum * draw.diffuse;
+    if has_term { sum = add_term(sum, term, view, term_has_view); }
+    var color = sum;
 
     if draw.misc.y == 1u {
         // Moon: a lit sphere seen from the dome centre; the sun side is bright, so phases show.

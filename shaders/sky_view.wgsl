@@ -1,10 +1,11 @@
 //! requires: sky_model/single, sky_model/lut_sampling, sky_model/tone, sky_model/sky_view_map
-// Sky-view pass (compute phase): the current physical model rendered into the sky-view map,
-// exposed, tone-mapped and display-encoded, for the skydome's gradient stage to sample.
+// Sky-view pass (compute phase): the current physical model rendered into the sky-view map as
+// exposed linear radiance, for the skydome's gradient stage to sample into the HDR target (the
+// display phase, tone_map.wgsl, tone-maps the frame).
 // Keep `SkyViewParams` in sync with src/render/sky_view.rs.
 struct SkyViewParams {
     towards_sun: vec4<f32>, // xyz unit vector, w: camera altitude (km)
-    exposure: vec4<f32>,    // x: radiance scale (2^EV), y: tone mapper as f32 (0 ACES, 1 neutral), zw: map size (texels)
+    exposure: vec4<f32>,    // x: radiance scale (2^EV), y: tone mapper as f32 (0 ACES, 1 neutral) for the scene's light, zw: map size (texels)
     model: vec4<f32>,       // x: 0 single, 1 lut, 2 radiance computed on the CPU (cells, reference); y: 1 automatic exposure
 };
 
@@ -13,9 +14,8 @@ struct SkyViewParams {
 // Read-only storage rather than uniform: Mesa 22 lavapipe crashes when the camera altitude is a
 // uniform-buffer value here (it runs fine as a storage value, as in radiance_probe.wgsl).
 @group(1) @binding(2) var<storage, read> params: SkyViewParams;
-// Texels as rgba8unorm (one u32 each; the colours are display-encoded, like the frame they end
-// up in), copied into the sky-view texture after the phase, so the compute phase only writes
-// buffers (as radiance_probe.wgsl does).
+// Texels as rgba16float (two u32 each: exposed linear radiance), copied into the sky-view texture
+// after the phase, so the compute phase only writes buffers (as radiance_probe.wgsl does).
 @group(1) @binding(3) var<storage, read_write> sky_view_out: array<u32>;
 // The `lut` model's tables (sky_luts.wgsl builds them earlier in the compute phase).
 @group(1) @binding(4) var<storage, read> lut_params: LutParams;
@@ -25,8 +25,9 @@ struct SkyViewParams {
 @group(1) @binding(7) var<storage, read> cpu_radiance: array<vec4<f32>>;
 // [0].x: the exposure scale of this map: 2^EV, or with automatic exposure the scale that brings the
 // sky's mean luminance to middle grey, times 2^EV as compensation. [1], [2], [3]: the main
-// scene's fog colour, sun ambient and sun diffuse from the model, in display values, laid out as
-// in `Globals` (sky_view.rs copies them there when the model drives the scene).
+// scene's fog colour, sun ambient and sun diffuse from the model, as display values (the scene
+// shades with display-referred colours; `to_target` takes them back to exposed radiance), laid out
+// as in `Globals` (sky_view.rs copies them there when the model drives the scene).
 @group(1) @binding(8) var<storage, read_write> sky_light: array<vec4<f32>, 4>;
 
 // Radiance of the frame's model along `dir` (texel `index` of the CPU map for `cells`).
@@ -42,6 +43,19 @@ fn model_radiance(dir: vec3<f32>, index: u32) -> vec3<f32> {
 fn texel_index(uv: vec2<f32>, size: vec2<u32>) -> u32 {
     let t = min(vec2<u32>(uv * vec2<f32>(size)), size - vec2<u32>(1u));
     return t.y * size.x + t.x;
+}
+
+// IEEE half-precision bits of a value in [0, 65504], rounded to nearest. (pack2x16float needs a
+// shader capability that not every adapter has; this needs none.)
+fn half_bits(x: f32) -> u32 {
+    if (x < 6.103515625e-5) {
+        // Subnormal halves: multiples of 2^-24.
+        return u32(round(x * 16777216.0));
+    }
+    let b = bitcast<u32>(x);
+    // Rebias the exponent (127 -> 15) and keep 10 mantissa bits; the rounding carry may step the
+    // exponent up, which is the correctly rounded result.
+    return ((b - (112u << 23u)) + 0x1000u) >> 13u;
 }
 
 var<workgroup> radiance_samples: array<vec3<f32>, 64>;
@@ -72,7 +86,6 @@ fn cs_exposure(@builtin(local_invocation_index) i: u32) {
         if (params.model.y > 0.5) {
             scale = params.exposure.x * 0.18 / max(dot(mean, vec3<f32>(0.2126, 0.7152, 0.0722)), 1e-6);
         }
-        let tone = u32(params.exposure.y);
         let r = atmosphere.shape.x + params.towards_sun.w;
         var sun = numeric_optical_depth(atmosphere, r, params.towards_sun.y, 64u);
         var t_sun = exp(-sun);
@@ -80,9 +93,10 @@ fn cs_exposure(@builtin(local_invocation_index) i: u32) {
             t_sun = vec3<f32>(0.0);
         }
         sky_light[0] = vec4<f32>(scale, 0.0, 0.0, 0.0);
-        sky_light[1] = vec4<f32>(display_from_radiance(horizon, scale, tone), 1.0);
-        sky_light[2] = vec4<f32>(display_from_radiance(mean, scale, tone), 1.0);
-        sky_light[3] = vec4<f32>(display_from_radiance(t_sun / PI, scale, tone), 1.0);
+        let tone = u32(params.exposure.y);
+        sky_light[1] = vec4<f32>(display_from_exposed(horizon * scale, tone), 1.0);
+        sky_light[2] = vec4<f32>(display_from_exposed(mean * scale, tone), 1.0);
+        sky_light[3] = vec4<f32>(display_from_exposed(t_sun / PI * scale, tone), 1.0);
     }
 }
 
@@ -96,6 +110,9 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let uv = (vec2<f32>(id) + 0.5) / vec2<f32>(size);
     let dir = sky_view_direction(uv);
     let radiance = model_radiance(dir, id.y * size.x + id.x);
-    let color = display_from_radiance(radiance, sky_light[0].x, u32(params.exposure.y));
-    sky_view_out[id.y * size.x + id.x] = pack4x8unorm(vec4<f32>(color, 1.0));
+    // Finite in half precision (65504) whatever the exposure.
+    let exposed = clamp(radiance * sky_light[0].x, vec3<f32>(0.0), vec3<f32>(60000.0));
+    let texel = id.y * size.x + id.x;
+    sky_view_out[2u * texel] = half_bits(exposed.r) | (half_bits(exposed.g) << 16u);
+    sky_view_out[2u * texel + 1u] = half_bits(exposed.b) | (half_bits(1.0) << 16u);
 }

@@ -1,3 +1,4 @@
+//! requires: sky_model/tone
 // Point-star field: one screen-aligned sprite per star, rotating with the celestial frame.
 // (globals.wgsl is prepended by the loader.)
 
@@ -37,5 +38,6 @@ fn vs_main(@builtin(vertex_index) vi: u32, @location(0) celestial_dir: vec3<f32>
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let falloff = exp(-dot(in.local, in.local) * 4.0);
     let a = clamp(falloff * in.brightness * params.color.a, 0.0, 1.0);
-    return vec4<f32>(params.color.rgb, a);
+    // Premultiplied (additive blending weights by the source alpha): see glare.wgsl.
+    return vec4<f32>(to_target(params.color.rgb * a), 1.0);
 }

@@ -26,6 +26,7 @@ struct Config {
     scene_ms: Vec<f32>,
     sky_ms: Vec<f32>,
     compute_ms: Vec<f32>,
+    display_ms: Vec<f32>,
 }
 
 fn median(v: &[f32]) -> f32 {
@@ -76,6 +77,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         scene_ms: Vec::new(),
         sky_ms: Vec::new(),
         compute_ms: Vec::new(),
+        display_ms: Vec::new(),
     };
     let with_model = |c: Config, model: SkyModelKind, sun_moves: bool| Config { model, sun_moves, ..c };
     let mut configs = vec![
@@ -114,6 +116,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                             "scene" => c.scene_ms.push(*ms),
                             "sky" => c.sky_ms.push(*ms),
                             "compute" => c.compute_ms.push(*ms),
+                            "display" => c.display_ms.push(*ms),
                             _ => {}
                         }
                     }
@@ -142,11 +145,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     );
     let _ =
         writeln!(md, "- scene coverage (fraction of pixels covered by the main-scene stand-in): looking down {:.1}%, looking up {:.1}%\n", cover_down * 100.0, cover_up * 100.0);
-    let _ = writeln!(md, "| configuration | frame wall ms (median) | compute phase GPU ms | scene phase GPU ms | sky phase GPU ms | frames |");
-    let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|");
+    let _ = writeln!(md, "| configuration | frame wall ms (median) | compute phase GPU ms | scene phase GPU ms | sky phase GPU ms | display phase GPU ms | frames |");
+    let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|---:|");
+    let optional = |v: &[f32]| if v.is_empty() { "-".to_string() } else { format!("{:.2}", median(v)) };
     for c in &configs {
-        let compute = if c.compute_ms.is_empty() { "-".to_string() } else { format!("{:.2}", median(&c.compute_ms)) };
-        let _ = writeln!(md, "| {} | {:.2} | {compute} | {:.2} | {:.2} | {} |", c.name, median(&c.wall_ms), median(&c.scene_ms), median(&c.sky_ms), c.wall_ms.len());
+        let (compute, display) = (optional(&c.compute_ms), optional(&c.display_ms));
+        let _ = writeln!(md, "| {} | {:.2} | {compute} | {:.2} | {:.2} | {display} | {} |", c.name, median(&c.wall_ms), median(&c.scene_ms), median(&c.sky_ms), c.wall_ms.len());
     }
     let ratio = |a: usize, b: usize| median(&configs[a].wall_ms) / median(&configs[b].wall_ms);
     let sky_ratio = |a: usize, b: usize| median(&configs[a].sky_ms) / median(&configs[b].sky_ms);
@@ -164,7 +168,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let _ = writeln!(md, "- Tier 2 fallbacks vs tier 4, sky pass: {:.2}x; tier 1 vs tier 4: {:.2}x.", sky_ratio(4, 2), sky_ratio(5, 2));
     let _ = writeln!(
         md,
-        "- Physical sky models with the sky filling the screen, frame time relative to the bitmap sky: `single` {:.2}x with the sun still (the sky-view map is reused) and {:.2}x with the sun moving every frame; `lut` {:.2}x and {:.2}x (its tables are built once; only the map follows the sun).",
+        "- Physical sky models with the sky filling the screen, frame time relative to the bitmap sky: `single` {:.2}x with the sun still (the sky-view map is reused) and {:.2}x with the sun moving every frame; `lut` {:.2}x and {:.2}x (its tables are built once; only the map follows the sun). \
+         These frames draw into the HDR target and add the display phase (tone mapping into the display target).",
         ratio(6, 2),
         ratio(7, 2),
         ratio(8, 2),

@@ -7,7 +7,7 @@ mod common;
 use std::path::Path;
 
 use skytune::render::error::RenderResult;
-use skytune::render::pass::{DrawItem, FrameContext, Pass, PassBuild, PassConstructor, Phase, Pipelines};
+use skytune::render::pass::{DrawItem, FrameContext, Pass, PassBuild, PassConstructor, Phase, Pipelines, Target};
 use skytune::render::{Camera, GpuContext, Headless, RenderOptions, ShaderLibrary, SkyRenderer, OFFSCREEN_FORMAT};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::{load_sky_file, Clock, FrameInput, Stepping};
@@ -117,7 +117,7 @@ impl Tint {
             bind_group_layouts: &[Some(b.globals_layout)],
             immediate_size: 0,
         });
-        Ok(Self { pipeline: Pipelines::new(b, layout, Self::build)? })
+        Ok(Self { pipeline: Pipelines::new_render(b, layout, Self::build)? })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
@@ -165,8 +165,8 @@ impl Pass for Tint {
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         out.push(DrawItem { priority: 0, key: 0 });
     }
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize) -> u32 {
-        rpass.set_pipeline(self.pipeline.get());
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target) -> u32 {
+        rpass.set_pipeline(self.pipeline.for_target(target));
         rpass.draw(0..3, 0..1);
         1
     }

@@ -176,7 +176,7 @@ fn broken_shader_edit_keeps_the_old_pipelines() {
 
     let file = dir.path().join("sky_objects.wgsl");
     let good = std::fs::read_to_string(&file).unwrap();
-    std::fs::write(&file, good.replace("var color = sum * draw.diffuse;", "var color = sum * draw.diffuse +;")).unwrap();
+    std::fs::write(&file, good.replace("var color = sum;", "var color = sum +;")).unwrap();
     let err = h.renderer.reload_shaders(&h.ctx).unwrap_err().to_string();
     assert!(err.contains("sky_objects"), "{err}");
     let still = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
@@ -357,4 +357,41 @@ fn a_physical_model_can_light_the_scene() {
     // Switched off again: the bitmaps light the scene exactly as before.
     let again = render(&mut h, false);
     assert_eq!(common::diff(&again, &bitmap_lit, 0).0.differing, 0.0);
+}
+
+#[test]
+fn physical_models_draw_through_the_hdr_target_and_keep_nel_layers_as_authored() {
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    let opts = RenderOptions { glare: false, ..Default::default() };
+    let mut frame = |kind, tone_mapper| {
+        let model = skytune::sky::resolved::SkyModel { kind, tone_mapper, drive_scene: false, ..sky.model };
+        let img = h.render(&sky, &FrameInput { sky_model: Some(model), ..FrameInput::new(15.0, 0.0) }, &camera(), &opts).unwrap();
+        (img, h.renderer.stats.draw_calls)
+    };
+    use skytune::sky::resolved::{SkyModelKind, ToneMapper};
+    let (bitmap, bitmap_draws) = frame(SkyModelKind::Bitmap, ToneMapper::Aces);
+    let (aces, aces_draws) = frame(SkyModelKind::Lut, ToneMapper::Aces);
+    let (neutral, _) = frame(SkyModelKind::Lut, ToneMapper::Neutral);
+    // The display phase adds one full-screen draw for the physical model only.
+    assert_eq!(aces_draws, bitmap_draws + 1);
+    let ground = |img: &image::RgbaImage| {
+        let mut out = image::RgbaImage::new(W, 20);
+        for y in 0..20 {
+            for x in 0..W {
+                out.put_pixel(x, y, *img.get_pixel(x, H - 20 + y));
+            }
+        }
+        out
+    };
+    // The scene stand-in is lit by the bitmaps here: on the HDR target its display colours go
+    // through the tone mapper's inverse and back, so it looks as authored with either mapper.
+    for (name, img) in [("aces", &aces), ("neutral", &neutral)] {
+        let (d, _) = common::diff(&ground(img), &ground(&bitmap), 3);
+        assert!(d.differing < 0.01, "{name}: the ground keeps its display colours: {d:?}");
+    }
+    // The sky itself is the model's, tone-mapped differently by the two mappers.
+    let (d, _) = common::diff(&aces, &neutral, 3);
+    assert!(d.differing > 0.2, "the tone mapper changes the sky: {d:?}");
 }

@@ -17,6 +17,28 @@ fn tone_map_aces(color: vec3<f32>) -> vec3<f32> {
     return clamp(output * fitted, vec3<f32>(0.0), vec3<f32>(1.0));
 }
 
+// Inverse of `tone_map_aces` for display values below 1: the exposed linear value the mapper
+// takes to `display_linear` (the top 2% of the curve is cut, so white maps to about 12).
+fn tone_map_aces_inverse(display_linear: vec3<f32>) -> vec3<f32> {
+    let output_inverse = transpose(mat3x3<f32>(
+        vec3<f32>(0.643038, 0.311187, 0.045775),
+        vec3<f32>(0.059269, 0.931436, 0.009295),
+        vec3<f32>(0.005962, 0.063929, 0.930118),
+    ));
+    let input_inverse = transpose(mat3x3<f32>(
+        vec3<f32>(1.764741, -0.675778, -0.088963),
+        vec3<f32>(-0.147028, 1.160252, -0.013224),
+        vec3<f32>(-0.036337, -0.162436, 1.198773),
+    ));
+    let y = clamp(output_inverse * clamp(display_linear, vec3<f32>(0.0), vec3<f32>(1.0)), vec3<f32>(0.0), vec3<f32>(0.98));
+    // The fit y = (v (v + a) - b) / (v (c v + d) + e) solved for v: a quadratic in v.
+    let qa = 1.0 - 0.983729 * y;
+    let qb = 0.0245786 - 0.4329510 * y;
+    let qc = 0.000090537 + 0.238081 * y;
+    let v = (-qb + sqrt(qb * qb + 4.0 * qa * qc)) / (2.0 * qa);
+    return max(input_inverse * v, vec3<f32>(0.0));
+}
+
 // Khronos PBR Neutral: identity below 0.76, then highlights compress and desaturate.
 fn tone_map_neutral(color_in: vec3<f32>) -> vec3<f32> {
     let start = 0.8 - 0.04;
@@ -39,18 +61,60 @@ fn tone_map_neutral(color_in: vec3<f32>) -> vec3<f32> {
     return mix(color, vec3<f32>(new_peak), g);
 }
 
+// Inverse of `tone_map_neutral` for display values below 1, up to its highlight desaturation
+// (white maps to about 6).
+fn tone_map_neutral_inverse(display_linear: vec3<f32>) -> vec3<f32> {
+    let start = 0.8 - 0.04;
+    let d = 1.0 - start;
+    var color = clamp(display_linear, vec3<f32>(0.0), vec3<f32>(0.99));
+    let new_peak = max(color.r, max(color.g, color.b));
+    if (new_peak >= start) {
+        let peak = d * d / (1.0 - new_peak) - d + start;
+        color *= peak / new_peak;
+    }
+    // The offset: x - (x - 6.25 x^2) below x = 0.08, 0.04 above.
+    let x = min(color.r, min(color.g, color.b));
+    var offset = 0.04;
+    if (x < 0.04) {
+        offset = sqrt(x / 6.25) - x;
+    }
+    return color + vec3<f32>(offset);
+}
+
+// sRGB-encoded display value to linear.
+fn linear_from_display(display: vec3<f32>) -> vec3<f32> {
+    let c = max(display, vec3<f32>(0.0));
+    return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
+}
+
+// What the frame's target holds for a display-referred colour (a bitmap, a scene colour): the
+// value itself on the display target (the 2005 look); on the HDR target, the exposed radiance that
+// the frame's tone mapper takes back to that display value, so NeL layers look as authored when
+// alone and blend with the physical sky in linear light (and a white sun over a bright sky still
+// saturates).
+fn to_target(display: vec3<f32>) -> vec3<f32> {
+    if globals.output.x < 0.5 {
+        return display;
+    }
+    let l = linear_from_display(display);
+    if globals.output.y > 0.5 {
+        return tone_map_neutral_inverse(l);
+    }
+    return tone_map_aces_inverse(l);
+}
+
 // Linear to sRGB-encoded display values.
 fn srgb_encode(linear: vec3<f32>) -> vec3<f32> {
     let c = clamp(linear, vec3<f32>(0.0), vec3<f32>(1.0));
     return select(1.055 * pow(c, vec3<f32>(1.0 / 2.4)) - 0.055, 12.92 * c, c <= vec3<f32>(0.0031308));
 }
 
-// Radiance (sr^-1 per unit of solar irradiance) to a display value: exposure scale, tone mapper
-// (0 ACES fitted, 1 Khronos PBR Neutral), sRGB encoding.
-fn display_from_radiance(radiance: vec3<f32>, exposure: f32, tone_mapper: u32) -> vec3<f32> {
-    let exposed = max(radiance, vec3<f32>(0.0)) * exposure;
+// Exposed linear radiance to a display value: tone mapper (0 ACES fitted, 1 Khronos PBR
+// Neutral), then sRGB encoding.
+fn display_from_exposed(exposed: vec3<f32>, tone_mapper: u32) -> vec3<f32> {
+    let c = max(exposed, vec3<f32>(0.0));
     if (tone_mapper == 1u) {
-        return srgb_encode(tone_map_neutral(exposed));
+        return srgb_encode(tone_map_neutral(c));
     }
-    return srgb_encode(tone_map_aces(exposed));
+    return srgb_encode(tone_map_aces(c));
 }

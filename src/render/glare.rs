@@ -12,7 +12,7 @@ use glam::{Mat4, Vec3, Vec4};
 
 use super::camera::Camera;
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
 use super::renderer::RenderOptions;
 use super::shaders;
 use super::textures::TextureCache;
@@ -209,7 +209,7 @@ impl GlarePass {
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipelines = Pipelines::new(b, pipeline_layout, Self::build)?;
+        let pipelines = Pipelines::new_render(b, pipeline_layout, Self::build)?;
         Ok(Self { bind_layout, pipelines, resources: Staged::new(None), active: false, settled: true })
     }
 
@@ -352,8 +352,8 @@ impl Pass for GlarePass {
         }
     }
 
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize) -> u32 {
-        self.resources.current.as_ref().map_or(0, |g| g.draw(rpass, self.pipelines.get()))
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target) -> u32 {
+        self.resources.current.as_ref().map_or(0, |g| g.draw(rpass, self.pipelines.for_target(target)))
     }
 
     fn occlusion_query_set(&self) -> Option<&wgpu::QuerySet> {

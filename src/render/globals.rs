@@ -30,8 +30,12 @@ pub struct Globals {
     pub viewport: [f32; 4],
     /// Main-scene camera position, m.
     pub camera_position: [f32; 4],
+    /// x: 1 when the drawing phases write exposed linear radiance into the HDR target, 0 when
+    /// they write display values (see [`super::pass::Target`]); y: the tone mapper
+    /// ([`super::tone_map::ToneMapUniform`]), which display-referred colours are inverted through.
+    pub output: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<Globals>() == 3 * 64 + 7 * 16);
+const _: () = assert!(std::mem::size_of::<Globals>() == 3 * 64 + 8 * 16);
 
 /// Byte offset of `fog_color` in [`Globals`], followed by `sun_ambient` and `sun_diffuse` (a
 /// physical sky model overwrites the three on the GPU: see `sky_view.rs`).
@@ -41,7 +45,7 @@ const _: () = assert!(std::mem::offset_of!(Globals, sun_ambient) - std::mem::off
 
 impl Globals {
     /// Globals for a frame seen by `camera` on a `width` x `height` target.
-    pub fn new(frame: &FrameSky, camera: &Camera, width: u32, height: u32) -> Self {
+    pub fn new(frame: &FrameSky, camera: &Camera, width: u32, height: u32, target: super::pass::Target) -> Self {
         let aspect = width as f32 / height.max(1) as f32;
         let (clip_from_world, clip_from_sky) = camera.matrices(aspect);
         let v = |c: [f32; 4]| c;
@@ -57,6 +61,7 @@ impl Globals {
             time: [frame.hour, frame.hours_per_day, frame.weather, frame.game_hours as f32],
             viewport: [width as f32, height as f32, 1.0 / width.max(1) as f32, 1.0 / height.max(1) as f32],
             camera_position: camera.position().extend(1.0).to_array(),
+            output: [if target == super::pass::Target::Hdr { 1.0 } else { 0.0 }, super::tone_map::ToneMapUniform::from(frame.sky_model.tone_mapper).settings[0] as f32, 0.0, 0.0],
         }
     }
 }

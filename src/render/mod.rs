@@ -20,6 +20,7 @@ pub mod sky_view;
 pub mod stars;
 pub mod textures;
 pub mod timing;
+pub mod tone_map;
 
 pub use camera::Camera;
 pub use context::{AdapterChoice, GpuContext};
@@ -29,6 +30,9 @@ pub use pass::{Pass, Phase, PASSES};
 pub use renderer::{FrameStats, RenderOptions, RenderTarget, SkyRenderer, UploadStats, SCENE_DEPTH, SKY_DEPTH};
 pub use shaders::ShaderLibrary;
 
+/// Colour format of the HDR target that frames of a physical sky model draw into (exposed linear
+/// radiance; the display phase tone-maps it into the display target).
+pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// Depth buffer format of every pass.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Colour format of offscreen renders and screenshots (display-encoded, like the 2005 pipeline).

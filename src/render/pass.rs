@@ -29,11 +29,15 @@ pub enum Phase {
     SceneAfterSky,
     /// Overlays on top of everything (glare).
     Overlay,
+    /// From the frame's HDR target to the display target: exposure was applied upstream, here the
+    /// tone mapper and display encoding (physical sky models only; the NeL bitmap path draws
+    /// display values straight into the display target and skips it).
+    Display,
 }
 
 impl Phase {
     /// Every phase, in frame order.
-    pub const ALL: [Phase; 5] = [Phase::Compute, Phase::Scene, Phase::Sky, Phase::SceneAfterSky, Phase::Overlay];
+    pub const ALL: [Phase; 6] = [Phase::Compute, Phase::Scene, Phase::Sky, Phase::SceneAfterSky, Phase::Overlay, Phase::Display];
 
     /// Name used in GPU labels and timings.
     pub fn name(self) -> &'static str {
@@ -43,6 +47,7 @@ impl Phase {
             Phase::Sky => "sky",
             Phase::SceneAfterSky => "scene_after_sky",
             Phase::Overlay => "overlay",
+            Phase::Display => "display",
         }
     }
 
@@ -52,7 +57,19 @@ impl Phase {
     }
 }
 
+/// Which colour target a frame's drawing phases write.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Target {
+    /// Display values straight into the display target (the NeL bitmap path, as in 2005).
+    #[default]
+    Display,
+    /// Exposed linear radiance into the frame's HDR target ([`super::HDR_FORMAT`]); the display
+    /// phase tone-maps it (physical sky models).
+    Hdr,
+}
+
 /// What a pass builds its layouts and pipelines with.
+#[derive(Clone, Copy)]
 pub struct PassBuild<'a> {
     /// The device.
     pub device: &'a wgpu::Device,
@@ -62,7 +79,8 @@ pub struct PassBuild<'a> {
     pub globals_buffer: &'a wgpu::Buffer,
     /// Shader sources.
     pub library: &'a ShaderLibrary,
-    /// Colour format of the target.
+    /// Colour format of the display target (render pipelines are also built for
+    /// [`super::HDR_FORMAT`]: see [`Pipelines::new_render`]).
     pub color_format: wgpu::TextureFormat,
     /// Textures one pass writes and others read.
     pub shared: &'a SharedResources,
@@ -72,8 +90,8 @@ pub struct PassBuild<'a> {
 pub struct SharedResources {
     /// The `lut` model's tables: `sky_luts` builds them, `sky_view` reads them.
     pub luts: super::sky_model::LutTables,
-    /// The sky-view map: a physical model's display colour by direction (`sky_view` writes it in
-    /// the compute phase, `sky_objects` samples it in the gradient stage).
+    /// The sky-view map: a physical model's exposed linear radiance by direction (`sky_view`
+    /// writes it in the compute phase, `sky_objects` samples it in the gradient stage).
     pub sky_view: wgpu::Texture,
     /// Its view.
     pub sky_view_view: wgpu::TextureView,
@@ -84,6 +102,8 @@ pub struct SharedResources {
 impl SharedResources {
     /// Size of the sky-view map, texels (Hillaire 2020's sky-view LUT size).
     pub const SKY_VIEW_SIZE: (u32, u32) = (192, 108);
+    /// Format of the sky-view map: linear radiance above 1 near the sun must survive.
+    pub const SKY_VIEW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
     /// Creates the shared resources.
     pub fn new(device: &wgpu::Device) -> Self {
@@ -94,7 +114,7 @@ impl SharedResources {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8Unorm,
+            format: Self::SKY_VIEW_FORMAT,
             usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
@@ -137,6 +157,11 @@ pub struct FrameContext<'a> {
     pub options: &'a RenderOptions,
     /// Target size, pixels.
     pub size: (u32, u32),
+    /// The colour target this frame's drawing phases write.
+    pub target: Target,
+    /// The frame's HDR target and a number that changes whenever it is recreated (`None` when
+    /// the frame draws display values directly).
+    pub hdr: Option<(&'a wgpu::TextureView, u64)>,
 }
 
 impl FrameContext<'_> {
@@ -186,8 +211,9 @@ pub trait Pass: Any {
     /// Draws wanted this frame (none: the pass is idle).
     fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>);
 
-    /// Records one item into the phase's render pass; returns draw calls.
-    fn draw(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize) -> u32 {
+    /// Records one item into the phase's render pass, with the pipelines built for `target`;
+    /// returns draw calls.
+    fn draw(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target) -> u32 {
         0
     }
 
@@ -246,6 +272,7 @@ pub const PASSES: &[(&str, PassConstructor)] = &[
     ("sky_objects", |b| boxed(super::sky_objects::SkyObjectsPass::new, b)),
     ("stars", |b| boxed(super::stars::StarsPass::new, b)),
     ("glare", |b| boxed(super::glare::GlarePass::new, b)),
+    ("tone_map", |b| boxed(super::tone_map::ToneMapPass::new, b)),
 ];
 
 /// A value in use and a replacement waiting for every other pass to succeed too.
@@ -285,23 +312,41 @@ impl<T> Staged<T> {
 pub type PipelineBuilder<T> = fn(&PassBuild<'_>, &wgpu::PipelineLayout) -> RenderResult<T>;
 
 /// A pass's pipelines: its layout (built once), the pipelines in use, and a rebuilt set waiting
-/// for every other pass's rebuild to succeed.
+/// for every other pass's rebuild to succeed. Render pipelines come in two sets, one per
+/// [`Target`] format; compute pipelines in one.
 pub struct Pipelines<T> {
     layout: wgpu::PipelineLayout,
     build: PipelineBuilder<T>,
-    staged: Staged<T>,
+    per_target: bool,
+    staged: Staged<(T, Option<T>)>,
 }
 
 impl<T> Pipelines<T> {
-    /// Builds the pipelines once with `layout`.
+    /// Builds one set of pipelines with `layout`: compute pipelines, or render pipelines that
+    /// only ever draw into the display target.
     pub fn new(b: &PassBuild<'_>, layout: wgpu::PipelineLayout, build: PipelineBuilder<T>) -> RenderResult<Self> {
-        let current = build(b, &layout)?;
-        Ok(Self { layout, build, staged: Staged::new(current) })
+        Self::with_targets(b, layout, build, false)
+    }
+
+    /// Builds render pipelines with `layout` for the display format and for [`super::HDR_FORMAT`].
+    pub fn new_render(b: &PassBuild<'_>, layout: wgpu::PipelineLayout, build: PipelineBuilder<T>) -> RenderResult<Self> {
+        Self::with_targets(b, layout, build, true)
+    }
+
+    fn with_targets(b: &PassBuild<'_>, layout: wgpu::PipelineLayout, build: PipelineBuilder<T>, per_target: bool) -> RenderResult<Self> {
+        let current = Self::build_all(b, &layout, build, per_target)?;
+        Ok(Self { layout, build, per_target, staged: Staged::new(current) })
+    }
+
+    fn build_all(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, build: PipelineBuilder<T>, per_target: bool) -> RenderResult<(T, Option<T>)> {
+        let display = build(b, layout)?;
+        let hdr = if per_target { Some(build(&PassBuild { color_format: super::HDR_FORMAT, ..*b }, layout)?) } else { None };
+        Ok((display, hdr))
     }
 
     /// Rebuilds from `b.library` into the pending slot ([`Pass::stage_pipelines`]).
     pub fn stage(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
-        let next = (self.build)(b, &self.layout)?;
+        let next = Self::build_all(b, &self.layout, self.build, self.per_target)?;
         self.staged.stage(next);
         Ok(())
     }
@@ -311,8 +356,16 @@ impl<T> Pipelines<T> {
         self.staged.commit(accept);
     }
 
-    /// The pipelines in use.
+    /// The pipelines in use (for the display format).
     pub fn get(&self) -> &T {
-        &self.staged.current
+        &self.staged.current.0
+    }
+
+    /// The pipelines in use for `target`.
+    pub fn for_target(&self, target: Target) -> &T {
+        match (&self.staged.current, target) {
+            ((_, Some(hdr)), Target::Hdr) => hdr,
+            ((display, _), _) => display,
+        }
     }
 }

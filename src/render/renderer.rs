@@ -5,7 +5,7 @@
 use super::camera::Camera;
 use super::error::RenderResult;
 use super::globals::{Globals, GlobalsBinding};
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SharedResources, SkyUpload, PASSES};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SharedResources, SkyUpload, Target, PASSES};
 use super::shaders::{self, ShaderLibrary};
 use super::textures::TextureCache;
 use super::timing::GpuTimer;
@@ -69,6 +69,15 @@ pub struct RenderTarget<'a> {
     pub size: (u32, u32),
 }
 
+/// The HDR colour target of physical-model frames, sized like the display target.
+struct HdrTarget {
+    _texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    size: (u32, u32),
+    /// Changes whenever the target is recreated (passes that bind it rebuild their bind groups).
+    generation: u64,
+}
+
 /// Records frames of a sky.
 pub struct SkyRenderer {
     globals: GlobalsBinding,
@@ -78,6 +87,7 @@ pub struct SkyRenderer {
     shared: SharedResources,
     passes: Vec<Box<dyn Pass>>,
     has_sky: bool,
+    hdr: Option<HdrTarget>,
     timer: Option<GpuTimer>,
     /// Counters of the last recorded frame.
     pub stats: FrameStats,
@@ -107,6 +117,7 @@ impl SkyRenderer {
             color_format,
             passes,
             has_sky: false,
+            hdr: None,
             timer: ctx.timestamps.then(|| GpuTimer::new(device, &ctx.queue)),
             stats: FrameStats::default(),
             upload_stats: UploadStats::default(),
@@ -217,12 +228,17 @@ impl SkyRenderer {
     /// Call [`Self::after_submit`] once the encoder is submitted.
     pub fn render(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &RenderTarget<'_>, frame: &FrameSky, camera: &Camera, options: &RenderOptions) {
         let (w, h) = target.size;
-        let globals = Globals::new(frame, camera, w, h);
+        let kind = if self.has_sky && frame.sky_model.kind.is_physical() { Target::Hdr } else { Target::Display };
+        let globals = Globals::new(frame, camera, w, h, kind);
         ctx.queue.write_buffer(&self.globals.buffer, 0, bytemuck::bytes_of(&globals));
         if !self.has_sky {
             return;
         }
-        let cx = FrameContext { device: &ctx.device, queue: &ctx.queue, frame, camera, options, size: target.size };
+        if kind == Target::Hdr {
+            self.ensure_hdr(&ctx.device, target.size);
+        }
+        let hdr = self.hdr.as_ref().filter(|_| kind == Target::Hdr).map(|t| (&t.view, t.generation));
+        let cx = FrameContext { device: &ctx.device, queue: &ctx.queue, frame, camera, options, size: target.size, target: kind, hdr };
         for pass in &mut self.passes {
             pass.prepare(&cx);
         }
@@ -263,6 +279,26 @@ impl SkyRenderer {
                 // The scene and sky phases always run (the scene phase clears the target); the
                 // others only when a pass has something to draw.
                 _ if list.is_empty() && phase != Phase::Scene && phase != Phase::Sky => {}
+                Phase::Display => {
+                    let writes = self.timer.as_mut().and_then(|t| t.render_writes(phase));
+                    let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                        label: Some("SkyRenderer::display"),
+                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                            view: target.color,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                        })],
+                        depth_stencil_attachment: None,
+                        timestamp_writes: writes,
+                        occlusion_query_set: None,
+                        multiview_mask: None,
+                    });
+                    rpass.set_bind_group(0, &self.globals.bind_group, &[]);
+                    for (i, it) in list {
+                        stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key, Target::Display);
+                    }
+                }
                 _ => {
                     // Without the depth split the scene phase's draws move to the end of the sky
                     // phase, painted over an already shaded sky.
@@ -271,7 +307,11 @@ impl SkyRenderer {
                     let queries = list.iter().find_map(|(i, _)| self.passes[*i].occlusion_query_set());
                     let label = format!("SkyRenderer::{}", phase.name());
                     let writes = self.timer.as_mut().and_then(|t| t.render_writes(phase));
-                    let mut rpass = begin_pass(encoder, &label, target, load, writes, queries);
+                    let color = match &self.hdr {
+                        Some(t) if kind == Target::Hdr => &t.view,
+                        _ => target.color,
+                    };
+                    let mut rpass = begin_pass(encoder, &label, (color, target.depth), load, writes, queries);
                     rpass.set_bind_group(0, &self.globals.bind_group, &[]);
                     let range = match phase {
                         Phase::Sky | Phase::Overlay if split || phase == Phase::Overlay => SKY_DEPTH,
@@ -281,13 +321,13 @@ impl SkyRenderer {
                     rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
                     if draws_here {
                         for (i, it) in list {
-                            stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key);
+                            stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key, kind);
                         }
                     }
                     if phase == Phase::Sky && !split {
                         rpass.set_viewport(0.0, 0.0, wf, hf, 0.0, 1.0);
                         for (i, it) in &items[Phase::Scene.index()] {
-                            stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key);
+                            stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key, kind);
                         }
                     }
                 }
@@ -303,6 +343,26 @@ impl SkyRenderer {
             t.resolve(encoder);
         }
         self.stats = stats;
+    }
+
+    /// Creates the HDR target, or recreates it at a new size.
+    fn ensure_hdr(&mut self, device: &wgpu::Device, (width, height): (u32, u32)) {
+        if self.hdr.as_ref().is_some_and(|t| t.size == (width, height)) {
+            return;
+        }
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("SkyRenderer::hdr_target"),
+            size: wgpu::Extent3d { width: width.max(1), height: height.max(1), depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: super::HDR_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let generation = self.hdr.as_ref().map_or(0, |t| t.generation + 1);
+        self.hdr = Some(HdrTarget { _texture: texture, view, size: (width, height), generation });
     }
 
     /// GPU time of each phase of a recent frame, ms (empty without timestamp queries).
@@ -325,7 +385,7 @@ impl SkyRenderer {
 fn begin_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     label: &str,
-    target: &RenderTarget<'_>,
+    (color, depth): (&wgpu::TextureView, &wgpu::TextureView),
     (load_color, load_depth): (wgpu::LoadOp<wgpu::Color>, wgpu::LoadOp<f32>),
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     occlusion_query_set: Option<&wgpu::QuerySet>,
@@ -333,13 +393,13 @@ fn begin_pass<'e>(
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: target.color,
+            view: color,
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations { load: load_color, store: wgpu::StoreOp::Store },
         })],
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: target.depth,
+            view: depth,
             depth_ops: Some(wgpu::Operations { load: load_depth, store: wgpu::StoreOp::Store }),
             stencil_ops: None,
         }),

@@ -6,7 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Target};
 use super::shaders;
 
 /// Vertex of the stand-in scene. Keep in sync with `vs_main` in shaders/scene.wgsl.
@@ -111,7 +111,7 @@ impl ScenePass {
             bind_group_layouts: &[Some(b.globals_layout)],
             immediate_size: 0,
         });
-        let pipelines = Pipelines::new(b, pipeline_layout, Self::build)?;
+        let pipelines = Pipelines::new_render(b, pipeline_layout, Self::build)?;
         let (v, i) = scene_geometry();
         let vertices =
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("Scene::vertices"), contents: bytemuck::cast_slice(&v), usage: wgpu::BufferUsages::VERTEX });
@@ -204,8 +204,8 @@ impl Pass for ScenePass {
         }
     }
 
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize) -> u32 {
-        let p = self.pipelines.get();
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
+        let p = self.pipelines.for_target(target);
         if key == TERRAIN {
             rpass.set_pipeline(&p.scene);
             rpass.set_vertex_buffer(0, self.vertices.slice(..));

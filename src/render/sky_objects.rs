@@ -9,7 +9,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use super::camera::Camera;
 use super::error::RenderResult;
 use super::mesh::{shape_key, shape_mesh, GpuMesh, SkyVertex};
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
 use super::renderer::FrameStats;
 use super::shaders;
 use super::textures::{self, TextureCache};
@@ -147,7 +147,7 @@ impl SkyObjectsPass {
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipelines = Pipelines::new(b, pipeline_layout, Self::build)?;
+        let pipelines = Pipelines::new_render(b, pipeline_layout, Self::build)?;
         let sky_view = (b.shared.sky_view_view.clone(), b.shared.sky_view_sampler.clone());
         Ok(Self { bind_layout, pipelines, draws: Staged::new(None), sky_view, visible: Vec::new(), hidden: 0 })
     }
@@ -223,11 +223,11 @@ impl Pass for SkyObjectsPass {
         out.extend(self.visible.iter().enumerate().map(|(key, (_, priority, _))| DrawItem { priority: *priority, key }));
     }
 
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize) -> u32 {
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
         let (Some(draws), Some((index, _, versions))) = (&self.draws.current, self.visible.get(key)) else { return 0 };
         for &v in versions {
             let d = &draws.objects[*index][v];
-            rpass.set_pipeline(&self.pipelines.get()[blend_index(d.blend)]);
+            rpass.set_pipeline(&self.pipelines.for_target(target)[blend_index(d.blend)]);
             rpass.set_bind_group(1, &d.bind_group, &[]);
             rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
             rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);

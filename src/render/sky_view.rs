@@ -1,5 +1,6 @@
 //! Sky-view pass (compute phase): renders the frame's physical sky model into the shared sky-view
-//! map, exposed and tone-mapped, which the skydome's gradient stage then samples. Idle with the
+//! map as exposed linear radiance, which the skydome's gradient stage then samples into the HDR
+//! target (the display phase tone-maps it: `tone_map.rs`). Idle with the
 //! NeL bitmap model; recomputed only when the sun, the model or the atmosphere changes. The
 //! `cells` model is solved and marched on a CPU worker thread; its radiance reaches the GPU when
 //! ready, and until then the previous map stays.
@@ -16,7 +17,10 @@ use std::sync::Arc;
 use crate::atmosphere::cells::{CellModel, CellSettings};
 use crate::atmosphere::reference::{Case, Reference, ReferenceSettings};
 use crate::atmosphere::Atmosphere;
-use crate::sky::resolved::{SkyModel, SkyModelKind, ToneMapper};
+use crate::sky::resolved::{SkyModel, SkyModelKind};
+
+/// Bytes of one sky-view texel ([`SharedResources::SKY_VIEW_FORMAT`]).
+const TEXEL_BYTES: u32 = 8;
 
 /// Keep in sync with `SkyViewParams` in shaders/sky_view.wgsl.
 #[repr(C)]
@@ -24,7 +28,8 @@ use crate::sky::resolved::{SkyModel, SkyModelKind, ToneMapper};
 pub struct SkyViewParams {
     /// Unit vector towards the sun (xyz), viewer altitude in km (w).
     pub towards_sun: [f32; 4],
-    /// Radiance scale 2^EV (x), tone mapper (y: 0 ACES, 1 neutral), map size in texels (zw).
+    /// Radiance scale 2^EV (x), tone mapper of the scene's light (y: 0 ACES, 1 neutral), map size
+    /// in texels (zw).
     pub exposure: [f32; 4],
     /// Model (x: 0 single, 1 lut, 2 radiance from the CPU), automatic exposure (y: 1).
     pub model: [f32; 4],
@@ -33,10 +38,6 @@ const _: () = assert!(std::mem::size_of::<SkyViewParams>() == 48);
 
 impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
     fn from((model, towards_sun): (&SkyModel, glam::Vec3)) -> Self {
-        let tone = match model.tone_mapper {
-            ToneMapper::Aces => 0.0,
-            ToneMapper::Neutral => 1.0,
-        };
         let (w, h) = SharedResources::SKY_VIEW_SIZE;
         let kind = match model.kind {
             SkyModelKind::Lut => 1.0,
@@ -45,7 +46,7 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
         };
         Self {
             towards_sun: towards_sun.extend(model.camera_km).to_array(),
-            exposure: [model.exposure_ev.exp2(), tone, w as f32, h as f32],
+            exposure: [model.exposure_ev.exp2(), super::tone_map::ToneMapUniform::from(model.tone_mapper).settings[0] as f32, w as f32, h as f32],
             model: [kind, if model.auto_exposure { 1.0 } else { 0.0 }, 0.0, 0.0],
         }
     }
@@ -205,7 +206,7 @@ pub struct SkyViewPass {
     atmosphere: wgpu::Buffer,
     single: wgpu::Buffer,
     params: wgpu::Buffer,
-    /// The map's texels (rgba8unorm), copied into the shared texture after the dispatch.
+    /// The map's texels (rgba16float), copied into the shared texture after the dispatch.
     texels: wgpu::Buffer,
     map: wgpu::Texture,
     bind_group: wgpu::BindGroup,
@@ -276,7 +277,7 @@ impl SkyViewPass {
         });
         let texels = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::texels"),
-            size: (w * h * 4) as u64,
+            size: (w * h * TEXEL_BYTES) as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
@@ -495,7 +496,10 @@ impl SkyViewPass {
         if self.dirty {
             let (w, h) = SharedResources::SKY_VIEW_SIZE;
             encoder.copy_buffer_to_texture(
-                wgpu::TexelCopyBufferInfo { buffer: &self.texels, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * 4), rows_per_image: Some(h) } },
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &self.texels,
+                    layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * TEXEL_BYTES), rows_per_image: Some(h) },
+                },
                 self.map.as_image_copy(),
                 wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
             );

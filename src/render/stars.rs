@@ -4,7 +4,7 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
 use super::renderer::FrameStats;
 use super::shaders;
 use crate::sky::starfield;
@@ -49,7 +49,7 @@ impl StarsPass {
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipeline = Pipelines::new(b, pipeline_layout, Self::build)?;
+        let pipeline = Pipelines::new_render(b, pipeline_layout, Self::build)?;
         Ok(Self { bind_layout, pipeline, field: Staged::new(None), visible: false })
     }
 
@@ -125,9 +125,9 @@ impl Pass for StarsPass {
         }
     }
 
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize) -> u32 {
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target) -> u32 {
         let Some(field) = &self.field.current else { return 0 };
-        rpass.set_pipeline(self.pipeline.get());
+        rpass.set_pipeline(self.pipeline.for_target(target));
         rpass.set_bind_group(1, &field.bind_group, &[]);
         rpass.set_vertex_buffer(0, field.instances.slice(..));
         rpass.draw(0..4, 0..field.count);

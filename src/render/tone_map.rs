@@ -1,0 +1,137 @@
+//! Tone-map pass (display phase): reads the frame's HDR target and writes display values through
+//! the sky model's tone mapper and sRGB encoding. Only frames of a physical sky model draw into
+//! the HDR target; the NeL bitmap path draws display values directly and this pass is idle.
+
+use bytemuck::{Pod, Zeroable};
+
+use super::error::RenderResult;
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Target};
+use super::shaders;
+use crate::sky::resolved::ToneMapper;
+
+/// Keep in sync with `ToneMapParams` in shaders/tone_map.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct ToneMapUniform {
+    /// x: tone mapper (0 ACES fitted, 1 Khronos PBR Neutral); yzw unused.
+    pub settings: [u32; 4],
+}
+const _: () = assert!(std::mem::size_of::<ToneMapUniform>() == 16);
+
+impl From<ToneMapper> for ToneMapUniform {
+    fn from(t: ToneMapper) -> Self {
+        let index = match t {
+            ToneMapper::Aces => 0,
+            ToneMapper::Neutral => 1,
+        };
+        Self { settings: [index, 0, 0, 0] }
+    }
+}
+
+/// The tone-map pass: its pipeline, uniform and the bind group of the current HDR target.
+pub struct ToneMapPass {
+    layout: wgpu::BindGroupLayout,
+    pipeline: Pipelines<wgpu::RenderPipeline>,
+    uniform: wgpu::Buffer,
+    /// The bind group and the generation of the HDR target it reads.
+    bound: Option<(wgpu::BindGroup, u64)>,
+    active: bool,
+}
+
+impl ToneMapPass {
+    /// Builds the pipeline.
+    pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
+        let device = b.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("ToneMap::layout"),
+            entries: &[super::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), super::texture_entry(1)],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("ToneMap::pipeline_layout"),
+            bind_group_layouts: &[Some(b.globals_layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ToneMap::uniform"),
+            size: std::mem::size_of::<ToneMapUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        // Only ever drawn into the display target.
+        let pipeline = Pipelines::new(b, pipeline_layout, Self::build)?;
+        Ok(Self { layout, pipeline, uniform, bound: None, active: false })
+    }
+
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
+        let (device, format) = (b.device, b.color_format);
+        let module = shaders::module(device, b.library, "tone_map")?;
+        shaders::validated(device, "ToneMap::pipeline", || {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("ToneMap::pipeline"),
+                layout: Some(layout),
+                vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
+                    compilation_options: Default::default(),
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
+    }
+}
+
+impl Pass for ToneMapPass {
+    fn name(&self) -> &'static str {
+        "tone_map"
+    }
+
+    fn phase(&self) -> Phase {
+        Phase::Display
+    }
+
+    fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
+        self.pipeline.stage(b)
+    }
+
+    fn commit_pipelines(&mut self, accept: bool) {
+        self.pipeline.commit(accept);
+    }
+
+    fn prepare(&mut self, cx: &FrameContext<'_>) {
+        self.active = false;
+        let Some((view, generation)) = cx.hdr.filter(|_| cx.target == Target::Hdr) else { return };
+        if self.bound.as_ref().is_none_or(|(_, g)| *g != generation) {
+            let bind_group = cx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("ToneMap::bind_group"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: self.uniform.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(view) },
+                ],
+            });
+            self.bound = Some((bind_group, generation));
+        }
+        cx.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&ToneMapUniform::from(cx.frame.sky_model.tone_mapper)));
+        self.active = true;
+    }
+
+    fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
+        if self.active {
+            out.push(DrawItem { priority: 0, key: 0 });
+        }
+    }
+
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target) -> u32 {
+        let Some((bind_group, _)) = &self.bound else { return 0 };
+        rpass.set_pipeline(self.pipeline.get());
+        rpass.set_bind_group(1, bind_group, &[]);
+        rpass.draw(0..3, 0..1);
+        1
+    }
+}
