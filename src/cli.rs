@@ -52,6 +52,49 @@ pub enum Command {
     Bench(BenchArgs),
     /// Sky radiance of a list of cases (CSV in, CSV out) from a physical sky model.
     Radiance(RadianceArgs),
+    /// Render the same view twice (two skies, models, tiers or times), print the difference
+    /// (FLIP and channel figures) and write A, B and the heat map; exit status 1 above a threshold.
+    Compare(CompareArgs),
+}
+
+/// `compare` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct CompareArgs {
+    /// Side A, the reference: SKY, SKY@key=value,... or @key=value,... (keys: hour, weather, tier,
+    /// model, season, exposure_ev), e.g. `skies/desert/sky.toml@model=reference`.
+    pub a: String,
+    /// Side B, the one measured against A, in the same form.
+    pub b: String,
+    /// Sky or continent file of the sides that name none (default: the built-in sky).
+    #[arg(long)]
+    pub sky: Option<PathBuf>,
+    /// Frame settings shared by both sides (a side's keys override them).
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    /// Image size of each side, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x360")]
+    pub size: String,
+    /// Output PNG.
+    #[arg(long, short, default_value = "compare.png")]
+    pub out: PathBuf,
+    /// Picture: side (A, B, heat map), split (A left, B right) or diff (heat map alone).
+    #[arg(long, default_value = "side")]
+    pub layout: String,
+    /// Position of the split, 0..1 of the width (layout split).
+    #[arg(long, default_value_t = 0.5)]
+    pub split: f32,
+    /// Channel tolerance of the pixel figures, of 255.
+    #[arg(long, default_value_t = 12)]
+    pub tolerance: u8,
+    /// Leave the sun glare out of both sides.
+    #[arg(long)]
+    pub no_glare: bool,
+    /// Exit with status 1 when the FLIP mean is above this.
+    #[arg(long)]
+    pub max_flip_mean: Option<f32>,
+    /// Exit with status 1 when more than this fraction of pixels differ beyond --tolerance.
+    #[arg(long)]
+    pub max_differing: Option<f64>,
 }
 
 /// Physical sky models that `radiance` can evaluate.

@@ -4,11 +4,13 @@
 //!   (no GPU types).
 //! - [`render`]: the wgpu renderer (no UI types).
 //! - [`atmosphere`]: physical atmospheres and the double-precision reference (no GPU types).
+//! - [`compare`]: differences between two renders (FLIP and channel figures, heat maps, layouts).
 //! - [`live`]: hot reload of sky files.
 //! - [`watch`]: file watching, shared by sky and shader hot reload.
 
 pub mod app;
 pub mod atmosphere;
+pub mod compare;
 pub mod live;
 pub mod render;
 pub mod sky;

@@ -47,6 +47,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Radiance(args)) => radiance(&args),
+        Some(Command::Compare(args)) => compare(&args),
     }
 }
 
@@ -191,25 +192,7 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
     let (input, camera) = frame_from_args(&args.frame)?;
     let options = RenderOptions { scene: !args.frame.no_scene, ..Default::default() };
     let mut input = input;
-    if args.frame.sky_model.is_some() || args.frame.exposure_ev.is_some() || args.frame.auto_exposure || args.frame.drive_scene {
-        let mut model = sky.model;
-        if let Some(name) = &args.frame.sky_model {
-            model.kind = SkyModelKind::ALL
-                .into_iter()
-                .find(|k| k.name() == name)
-                .ok_or_else(|| anyhow!("--sky-model: unknown model \"{name}\"; expected one of {}", SkyModelKind::ALL.map(|k| k.name()).join(", ")))?;
-        }
-        model.drive_scene |= args.frame.drive_scene;
-        if args.frame.auto_exposure {
-            model.auto_exposure = true;
-            model.exposure_ev = 0.0;
-        }
-        if let Some(ev) = args.frame.exposure_ev {
-            anyhow::ensure!(ev.is_finite(), "--exposure-ev: expected a finite number of stops");
-            model.exposure_ev = ev;
-        }
-        input.sky_model = Some(model);
-    }
+    input.sky_model = model_override(sky, &args.frame)?;
     let frame = sky.evaluate(&input);
     for o in &frame.objects {
         if let Err(why) = &o.versions {
@@ -229,6 +212,90 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
         input.tier.stages()
     );
     Ok(())
+}
+
+/// The sky model the frame arguments ask for instead of the sky file's, if they ask.
+fn model_override(sky: &Sky, f: &cli::FrameArgs) -> anyhow::Result<Option<skytune::sky::resolved::SkyModel>> {
+    if f.sky_model.is_none() && f.exposure_ev.is_none() && !f.auto_exposure && !f.drive_scene {
+        return Ok(None);
+    }
+    let mut model = sky.model;
+    if let Some(name) = &f.sky_model {
+        model.kind = SkyModelKind::ALL
+            .into_iter()
+            .find(|k| k.name() == name)
+            .ok_or_else(|| anyhow!("--sky-model: unknown model \"{name}\"; expected one of {}", SkyModelKind::ALL.map(|k| k.name()).join(", ")))?;
+    }
+    model.drive_scene |= f.drive_scene;
+    if f.auto_exposure {
+        model.auto_exposure = true;
+        model.exposure_ev = 0.0;
+    }
+    if let Some(ev) = f.exposure_ev {
+        anyhow::ensure!(ev.is_finite(), "--exposure-ev: expected a finite number of stops");
+        model.exposure_ev = ev;
+    }
+    Ok(Some(model))
+}
+
+/// `skytune compare`: renders both sides, prints the figures, writes the picture.
+fn compare(args: &cli::CompareArgs) -> anyhow::Result<()> {
+    use skytune::compare::{self, Layout, SideSpec};
+    let sides: [SideSpec; 2] = [args.a.parse()?, args.b.parse()?];
+    let layout = Layout::ALL.into_iter().find(|l| l.name() == args.layout).ok_or_else(|| anyhow!("--layout: expected side, split or diff, found \"{}\"", args.layout))?;
+    anyhow::ensure!(args.split.is_finite(), "--split: expected a number in 0..1");
+    let (w, h) = cli::parse_size(&args.size)?;
+    let ctx = GpuContext::headless(adapter(args.frame.cpu))?;
+    println!("adapter: {}", ctx.adapter_line());
+    let options = RenderOptions { scene: !args.frame.no_scene, glare: !args.no_glare, ..Default::default() };
+    let mut images = Vec::new();
+    for (label, side) in ["A", "B"].iter().zip(&sides) {
+        let path = side.sky.as_deref().or(args.sky.as_deref());
+        let sky = spec_for(path, side.season.as_deref().or(args.frame.season.as_deref()))?.load().map_err(|e| anyhow!("side {label}: {e}"))?;
+        let (mut input, camera) = frame_from_args(&args.frame)?;
+        input.sky_model = model_override(&sky, &args.frame)?;
+        if let Some(hour) = side.hour {
+            // As `skytune render --hour`: the panners' game time is the hour.
+            input.hour = hour;
+            input.game_hours = hour as f64;
+        }
+        input.weather = side.weather.unwrap_or(input.weather);
+        if let Some(t) = side.tier {
+            input.tier = Tier::new(t).ok_or_else(|| anyhow!("side {label}: tier {t}"))?;
+        }
+        if side.model.is_some() || side.exposure_ev.is_some() {
+            let mut model = input.sky_model.unwrap_or(sky.model);
+            model.kind = side.model.unwrap_or(model.kind);
+            model.exposure_ev = side.exposure_ev.unwrap_or(model.exposure_ev);
+            input.sky_model = Some(model);
+        }
+        let mut headless = Headless::new(ctx.clone(), w, h)?;
+        headless.set_sky(&sky)?;
+        let model = input.sky_model.unwrap_or(sky.model).kind;
+        images.push(headless.render(&sky, &input, &camera, &options)?);
+        println!("{label}: sky \"{}\" ({}), hour {}, weather {}, tier {}, model {}", sky.name, sky.source_name, input.hour, input.weather, input.tier.stages(), model.name());
+    }
+    let diff = compare::difference(&images[0], &images[1], args.tolerance);
+    let picture = compare::compose(&images[0], &images[1], &diff, layout, args.split);
+    save_png(&picture, &args.out)?;
+    println!("{}", diff.summary());
+    println!("wrote {} ({})", args.out.display(), layout.name());
+    if let Some(limit) = args.max_flip_mean {
+        anyhow::ensure!(diff.flip.mean <= limit, "FLIP mean {:.4} is above --max-flip-mean {limit}", diff.flip.mean);
+    }
+    if let Some(limit) = args.max_differing {
+        anyhow::ensure!(diff.pixels.differing <= limit, "{:.4} of pixels differ, above --max-differing {limit}", diff.pixels.differing);
+    }
+    Ok(())
+}
+
+/// Writes a PNG through a temporary file in the same folder, so a failed write never leaves a
+/// truncated image where a good one was.
+fn save_png(image: &image::RgbaImage, path: &Path) -> anyhow::Result<()> {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("image.png");
+    let tmp = path.with_file_name(format!(".{name}.tmp"));
+    image.save_with_format(&tmp, image::ImageFormat::Png).with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
 }
 
 fn render(args: &RenderArgs) -> anyhow::Result<()> {

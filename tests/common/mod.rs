@@ -28,36 +28,13 @@ pub const CHANNEL_TOLERANCE: u8 = 10;
 /// Budget: the comparison fails when more than this fraction of pixels differ.
 pub const PIXEL_BUDGET: f64 = 0.01;
 
-/// Result of comparing two images.
-#[derive(Debug, Clone, Copy)]
-pub struct Diff {
-    /// Fraction of pixels beyond `CHANNEL_TOLERANCE`.
-    pub differing: f64,
-    /// Largest channel difference.
-    pub max: u8,
-    /// Mean absolute channel difference (of 255).
-    pub mean: f64,
-}
+/// Result of comparing two images (the library's measure, also behind `skytune compare`).
+pub type Diff = skytune::compare::PixelDiff;
 
-/// Compares two equally sized images.
+/// Compares two equally sized images: pixels whose largest channel difference exceeds
+/// `tolerance`, and an image marking them.
 pub fn diff(a: &image::RgbaImage, b: &image::RgbaImage, tolerance: u8) -> (Diff, image::RgbaImage) {
-    assert_eq!(a.dimensions(), b.dimensions(), "image sizes differ");
-    let mut out = image::RgbaImage::new(a.width(), a.height());
-    let (mut differing, mut max, mut sum) = (0u64, 0u8, 0u64);
-    for ((pa, pb), po) in a.pixels().zip(b.pixels()).zip(out.pixels_mut()) {
-        let d = (0..3).map(|i| pa[i].abs_diff(pb[i])).max().unwrap_or(0);
-        sum += (0..3).map(|i| pa[i].abs_diff(pb[i]) as u64).sum::<u64>();
-        max = max.max(d);
-        if d > tolerance {
-            differing += 1;
-            *po = image::Rgba([255, 0, 255, 255]);
-        } else {
-            let g = (d as u32 * 20).min(255) as u8;
-            *po = image::Rgba([g, g, g, 255]);
-        }
-    }
-    let n = (a.width() * a.height()) as f64;
-    (Diff { differing: differing as f64 / n, max, mean: sum as f64 / (n * 3.0) }, out)
+    skytune::compare::pixel_diff(a, b, tolerance)
 }
 
 /// Compares with `tests/reference/NAME.png`. `SKYTUNE_ACCEPT=1` writes the reference instead.
