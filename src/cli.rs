@@ -256,6 +256,9 @@ pub struct AppArgs {
     /// Read shaders from this folder and hot-reload them (default: the checkout's shaders/, if any).
     #[arg(long)]
     pub shader_dir: Option<PathBuf>,
+    /// Open the compare view with B: last-good, model=NAME, tier=N, hour=H, weather=W or snapshot=NAME.
+    #[arg(long)]
+    pub compare: Option<String>,
 }
 
 /// `bench` arguments.

@@ -6,6 +6,7 @@
 //! - [`atmosphere`]: physical atmospheres and the double-precision reference (no GPU types).
 //! - [`compare`]: differences between two renders (FLIP and channel figures, heat maps, layouts).
 //! - [`live`]: hot reload of sky files.
+//! - [`snapshot`]: snapshots of a sky's files for before/after comparisons.
 //! - [`watch`]: file watching, shared by sky and shader hot reload.
 
 pub mod app;
@@ -14,4 +15,5 @@ pub mod compare;
 pub mod live;
 pub mod render;
 pub mod sky;
+pub mod snapshot;
 pub mod watch;

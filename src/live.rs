@@ -111,6 +111,9 @@ pub struct LiveSky {
     pub error: Option<SkyErrors>,
     /// Incremented on every successful swap.
     pub generation: u64,
+    /// The sky before the last successful swap of the same spec, and its generation (what "last
+    /// good version" compares against).
+    pub previous: Option<(Arc<Sky>, u64)>,
     shared: Arc<Mutex<Shared>>,
     trigger: Sender<u64>,
     results: Receiver<LoadResult>,
@@ -147,7 +150,10 @@ impl LiveSky {
         let handler_shared = shared.clone();
         let handler_trigger = trigger.clone();
         let watcher = FileWatcher::new(move |changed| {
-            let relevant = handler_shared.lock().is_ok_and(|s| changed.iter().any(|p| s.files.contains(p) || p.parent().is_some_and(|d| s.sky_dirs.contains(d))));
+            // Snapshots (`.skytune-snapshots/`) are copies, never the sky's own files.
+            let snapshot = |p: &PathBuf| p.components().any(|c| c.as_os_str() == crate::snapshot::SNAPSHOT_DIR);
+            let relevant =
+                handler_shared.lock().is_ok_and(|s| changed.iter().filter(|p| !snapshot(p)).any(|p| s.files.contains(p) || p.parent().is_some_and(|d| s.sky_dirs.contains(d))));
             if relevant {
                 let _ = handler_trigger.send(0);
             }
@@ -159,7 +165,7 @@ impl LiveSky {
                 None
             }
         };
-        let mut live = Self { current: Arc::new(sky), error: None, generation: 0, shared, trigger, results, requested: 0, watcher };
+        let mut live = Self { current: Arc::new(sky), error: None, generation: 0, previous: None, shared, trigger, results, requested: 0, watcher };
         live.refresh_watches();
         Ok(live)
     }
@@ -167,6 +173,15 @@ impl LiveSky {
     /// The last good sky.
     pub fn sky(&self) -> &Arc<Sky> {
         &self.current
+    }
+
+    /// The sky file shown (for a continent, its current season's), if any.
+    pub fn sky_file(&self) -> Option<PathBuf> {
+        match self.spec() {
+            SkySpec::Builtin => None,
+            SkySpec::File(p) => Some(p),
+            SkySpec::Continent { path, season } => load_continent(&path).ok().map(|c| c.skies[season].clone()),
+        }
     }
 
     /// What is being shown.
@@ -211,7 +226,9 @@ impl LiveSky {
     fn apply(&mut self, result: Result<Sky, SkyErrors>) -> ReloadEvent {
         match result {
             Ok(sky) => {
-                self.current = Arc::new(sky);
+                let same_source = sky.source_name == self.current.source_name;
+                let old = std::mem::replace(&mut self.current, Arc::new(sky));
+                self.previous = same_source.then_some((old, self.generation));
                 self.error = None;
                 self.generation += 1;
                 self.refresh_watches();

@@ -35,6 +35,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             shots: cli.app.shots,
             cpu: cli.app.cpu,
             shader_dir: cli.app.shader_dir,
+            compare: cli.app.compare,
         }),
         Some(Command::Render(args)) => render(&args),
         Some(Command::Check { sky }) => check(&sky),

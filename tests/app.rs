@@ -34,6 +34,14 @@ fn run_panels(controls: &mut Controls, events: Vec<egui::Event>) -> Vec<UiAction
         sheet_progress: Some((3, 32)),
         last_capture: "",
         model_progress: Some(0.4),
+        compare: controls.compare.open.then(|| ui::CompareInfo {
+            texture: None,
+            summary: Some(("model lut".into(), "FLIP mean 0.1".into(), skytune::compare::FlipSummary { mean: 0.1, p95: 0.2, max: 0.5 })),
+            progress: Some(0.5),
+            error: Some("no earlier version yet".into()),
+            snapshots: Vec::new(),
+            has_file: true,
+        }),
     };
     let ctx = egui::Context::default();
     let mut actions = Vec::new();
@@ -54,6 +62,49 @@ fn panels_lay_out_with_every_section_and_no_action_by_default() {
     let actions = run_panels(&mut c, Vec::new());
     assert!(actions.is_empty(), "{actions:?}");
     assert!(c.show_help, "help stays open until closed");
+}
+
+#[test]
+fn the_compare_window_lays_out_and_saves_snapshots() {
+    let mut c = Controls::default();
+    c.compare.open = true;
+    let actions = run_panels(&mut c, Vec::new());
+    assert!(actions.is_empty(), "{actions:?}");
+    assert!(c.compare.open);
+}
+
+#[test]
+fn window_compares_the_sky_with_a_snapshot_under_xvfb() {
+    let (dir, sky_file) = common::default_sky_folder();
+    let sky = skytune::sky::load_sky_file(&sky_file).unwrap();
+    skytune::snapshot::save(&sky_file, &sky, "before").unwrap();
+    // The edit after the snapshot: darker gradients.
+    let gradient = sky_file.parent().unwrap().join("gradient_clear.png");
+    let mut img = image::open(&gradient).unwrap().to_rgba8();
+    for p in img.pixels_mut() {
+        for c in 0..3 {
+            p[c] /= 2;
+        }
+    }
+    img.save(&gradient).unwrap();
+    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
+    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
+        .arg(&sky_file)
+        .args(["--cpu", "--frames", "8", "--compare", "snapshot=before"])
+        .env("DISPLAY", &display)
+        .env("SKYTUNE_CONFIG", dir.path().join("state.toml"))
+        .env("RUST_LOG", "info")
+        .output()
+        .expect("running skytune");
+    let _ = server.kill();
+    let _ = server.wait();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let line = stderr.lines().find(|l| l.contains("compare: B = snapshot before:")).unwrap_or_else(|| panic!("no comparison logged: {stderr}"));
+    let mean: f64 = line.split("FLIP mean ").nth(1).and_then(|r| r.split_whitespace().next()).and_then(|v| v.parse().ok()).unwrap();
+    assert!(mean > 0.01, "the darker gradient shows against the snapshot: {line}");
+    // The snapshot was only read; the artist's folder holds it in the hidden folder alone.
+    assert!(sky_file.parent().unwrap().join(".skytune-snapshots/before/sky.toml").is_file());
 }
 
 #[test]

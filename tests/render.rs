@@ -327,6 +327,17 @@ fn reference_model_renders_in_the_background() {
         }
     }
     assert!(blue > red, "red {red} blue {blue}");
+
+    // Another hour needs new work; coming back to 13 h is served from the cache at once, with
+    // the same picture.
+    let later = FrameInput { hour: 15.0, game_hours: 15.0, ..input.clone() };
+    h.frame(&sky, &later, &camera(), &opts, 0.0);
+    assert!(h.renderer.busy(), "15 h is new");
+    h.render(&sky, &later, &camera(), &opts).unwrap();
+    h.frame(&sky, &input, &camera(), &opts, 0.0);
+    assert!(!h.renderer.busy(), "13 h comes from the cache");
+    let again = h.try_render(&sky, &input, &camera(), &opts).unwrap().expect("nothing to wait for");
+    assert_eq!(common::diff(&again, &img, 0).0.differing, 0.0);
 }
 
 #[test]

@@ -31,6 +31,9 @@ impl App {
         }
         let sky = self.live.sky().clone();
         let input = self.advance_clock(&sky);
+        if self.controls.compare.open {
+            self.step_compare();
+        }
         let frame = sky.evaluate(&input);
         let t_eval = t0.elapsed();
         let Some((actions, paint)) = self.run_panels(&sky, &frame) else { return Ok(()) };
@@ -148,7 +151,21 @@ impl App {
             sheet_progress: self.sheet.as_ref().map(|s| (s.done, s.total())),
             last_capture: &self.last_capture,
             model_progress: gpu.renderer.pass::<crate::render::sky_view::SkyViewPass>().and_then(|p| p.progress()),
+            compare: None,
         };
+        let compare = self.controls.compare.open.then(|| {
+            let c = &self.controls.compare;
+            let texture = self.compare.picture(gpu.egui_state.egui_ctx(), c.layout, c.split);
+            ui::CompareInfo {
+                texture,
+                summary: self.compare.result.as_ref().map(|r| (r.b_label.clone(), r.diff.summary(), r.diff.flip)),
+                progress: self.compare.pending.then_some(self.compare.progress.unwrap_or(0.0)),
+                error: self.compare.error.clone(),
+                snapshots: self.snapshots.clone(),
+                has_file: self.live.sky_file().is_some(),
+            }
+        });
+        let info = UiInfo { compare, ..info };
         let mut actions = Vec::new();
         let controls = &mut self.controls;
         let full = gpu.egui_state.egui_ctx().clone().run_ui(raw, |ui| actions = ui::draw(ui, controls, &info, inspector_id));
@@ -172,6 +189,8 @@ impl App {
             UiAction::Reload => self.live.request_reload(),
             UiAction::ReloadShaders => self.reload_shaders(),
             UiAction::Screenshot => self.take_screenshot(),
+            UiAction::Snapshot => self.save_snapshot(),
+            UiAction::RefreshSnapshots => self.refresh_snapshots(),
             UiAction::ContactSheet => {
                 let (cols, rows) = self.controls.sheet_grid;
                 let dir = self.shots_dir();
@@ -194,6 +213,11 @@ impl App {
             Key::Named(NamedKey::F5) => self.live.request_reload(),
             Key::Named(NamedKey::F6) => self.reload_shaders(),
             Key::Named(NamedKey::F12) => self.take_screenshot(),
+            Key::Named(NamedKey::F7) => {
+                c.compare.open = !c.compare.open;
+                self.refresh_snapshots();
+            }
+            Key::Named(NamedKey::F8) => self.save_snapshot(),
             Key::Named(NamedKey::Escape) => event_loop.exit(),
             Key::Character(s) => match s.as_str() {
                 "[" => c.hour = (c.hour - 0.25).rem_euclid(hpd),
@@ -232,6 +256,8 @@ impl App {
     }
 
     fn reload_shaders(&mut self) {
+        // The compare renderers rebuild from the new sources on their next comparison.
+        self.compare.reset();
         let Some(gpu) = self.gpu.as_mut() else { return };
         match gpu.reload_shaders() {
             Ok(()) => {
@@ -247,6 +273,40 @@ impl App {
                 self.shader_error = Some(e);
             }
         }
+    }
+
+    /// Renders and measures the compare view again if its inputs changed.
+    fn step_compare(&mut self) {
+        let Some(gpu) = self.gpu.as_ref() else { return };
+        let previous = self.live.previous.as_ref().map(|(s, g)| (s.as_ref(), *g));
+        let inputs = super::compare::CompareInputs {
+            sky: (self.live.sky().as_ref(), self.live.generation),
+            previous,
+            input: self.frame_input(),
+            camera: self.controls.camera,
+            options: self.controls.options,
+        };
+        self.compare.step(&gpu.ctx, gpu.renderer.library(), &self.controls.compare, &inputs);
+    }
+
+    /// Saves the sky file shown and its bitmaps as a snapshot named by the time.
+    fn save_snapshot(&mut self) {
+        let result = match self.live.sky_file() {
+            Some(file) => crate::snapshot::save(&file, self.live.sky(), &crate::snapshot::timestamp_name()).map_err(|e| e.to_string()),
+            None => Err(crate::snapshot::SnapshotError::NoFile.to_string()),
+        };
+        match result {
+            Ok(snap) => {
+                self.last_capture = format!("snapshot \"{}\" saved to {}", snap.name, snap.sky_file.display());
+                println!("{}", self.last_capture);
+                self.refresh_snapshots();
+            }
+            Err(e) => self.gpu_error = Some(format!("snapshot failed: {e}")),
+        }
+    }
+
+    pub(super) fn refresh_snapshots(&mut self) {
+        self.snapshots = self.live.sky_file().map(|f| crate::snapshot::list(&f)).unwrap_or_default();
     }
 
     fn shots_dir(&self) -> PathBuf {

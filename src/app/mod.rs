@@ -5,9 +5,11 @@
 //! - [`frame`]: one redraw, step by step (reloads, clock, evaluation, panels, present, actions);
 //! - [`window`]: the GPU side of the window;
 //! - [`capture`]: screenshots and contact sheets (through [`crate::render::Headless`]);
+//! - [`compare`]: the compare view (two renders, their difference) and snapshots;
 //! - [`ui`]: the panels.
 
 pub mod capture;
+pub mod compare;
 pub mod frame;
 pub mod settings;
 pub mod ui;
@@ -52,6 +54,8 @@ pub struct AppConfig {
     pub cpu: bool,
     /// Shader folder to hot-reload from.
     pub shader_dir: Option<PathBuf>,
+    /// Open the compare view with this B (see [`compare::CompareB::parse`]).
+    pub compare: Option<String>,
 }
 
 /// Whether a display server is reachable (X11 or Wayland).
@@ -91,6 +95,11 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
     if let SkySpec::Continent { season, .. } = spec {
         controls.season = season;
     }
+    if let Some(b) = &config.compare {
+        let file = live.sky_file();
+        controls.compare.b = compare::CompareB::parse(b, file.as_deref()).map_err(|e| anyhow!("--compare: {e}"))?;
+        controls.compare.open = true;
+    }
     let mut app = App {
         config,
         settings,
@@ -108,6 +117,8 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         drag: None,
         shader_watch: None,
         shaders_changed: Arc::new(AtomicBool::new(false)),
+        compare: compare::CompareView::default(),
+        snapshots: Vec::new(),
     };
     event_loop.run_app(&mut app).context("running the window")?;
     app.settings.save();
@@ -152,6 +163,9 @@ pub struct App {
     drag: Option<(f64, f64)>,
     shader_watch: Option<FileWatcher>,
     shaders_changed: Arc<AtomicBool>,
+    compare: compare::CompareView,
+    /// Snapshots of the sky file shown (refreshed when the compare view opens and after saving one).
+    snapshots: Vec<crate::snapshot::Snapshot>,
 }
 
 impl App {
@@ -174,6 +188,7 @@ impl App {
         let (gpu, shader_error) = WindowGpu::new(event_loop, &title, self.settings.window_size, adapter, library, self.live.sky())?;
         self.shader_error = shader_error;
         self.gpu = Some(gpu);
+        self.refresh_snapshots();
         Ok(())
     }
 

@@ -52,6 +52,8 @@ pub struct Controls {
     pub freeze_glare: bool,
     /// Skydome colour source chosen in the panel instead of the sky file's (None: the file's).
     pub sky_model: Option<SkyModel>,
+    /// The compare view.
+    pub compare: super::compare::CompareControls,
 }
 
 impl Default for Controls {
@@ -73,6 +75,7 @@ impl Default for Controls {
             sheet_grid: (8, 4),
             freeze_glare: false,
             sky_model: None,
+            compare: Default::default(),
         }
     }
 }
@@ -103,6 +106,26 @@ pub enum UiAction {
     Screenshot,
     /// Start a contact sheet.
     ContactSheet,
+    /// Save the sky file and its bitmaps as a snapshot.
+    Snapshot,
+    /// Read the list of snapshots again.
+    RefreshSnapshots,
+}
+
+/// What the compare window shows.
+pub struct CompareInfo {
+    /// The composed picture and its size, once a comparison exists.
+    pub texture: Option<(egui::TextureId, [usize; 2])>,
+    /// What B was, the summary line and the FLIP figures of the latest comparison.
+    pub summary: Option<(String, String, crate::compare::FlipSummary)>,
+    /// Progress of B computing in the background.
+    pub progress: Option<f32>,
+    /// Why the comparison could not be made.
+    pub error: Option<String>,
+    /// Snapshots of the sky file.
+    pub snapshots: Vec<crate::snapshot::Snapshot>,
+    /// Whether the sky shown has a file (snapshots need one).
+    pub has_file: bool,
 }
 
 /// Read-only facts for the panels.
@@ -137,10 +160,12 @@ pub struct UiInfo<'a> {
     pub last_capture: &'a str,
     /// Progress (0..1) of a sky model computed in the background, while it runs.
     pub model_progress: Option<f32>,
+    /// The compare window's content, when it is open.
+    pub compare: Option<CompareInfo>,
 }
 
 /// Keyboard shortcuts, shown in the help overlay.
-pub const SHORTCUTS: [(&str, &str); 13] = [
+pub const SHORTCUTS: [(&str, &str); 15] = [
     ("Space", "play / pause time"),
     ("[ / ]", "hour -0.25 / +0.25"),
     ("- / =", "weather -0.05 / +0.05"),
@@ -151,6 +176,8 @@ pub const SHORTCUTS: [(&str, &str); 13] = [
     ("Z", "look at the zenith"),
     ("F5", "reload the sky now"),
     ("F6", "reload the shaders now"),
+    ("F7", "compare view (A: the sky now, B: another version, model, tier or hour)"),
+    ("F8", "save a snapshot of the sky file and its bitmaps"),
     ("F12", "screenshot"),
     ("F1", "this help"),
     ("Esc", "quit"),
@@ -290,9 +317,18 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
             }
 
             ui.separator();
+            if ui.button(if c.compare.open { "Close compare (F7)" } else { "Compare (F7)" }).clicked() {
+                c.compare.open = !c.compare.open;
+                actions.push(UiAction::RefreshSnapshots);
+            }
+
+            ui.separator();
             stats(ui, info);
         });
     });
+    if let Some(info) = &info.compare {
+        compare_window(ui, c, info, &mut actions);
+    }
 
     egui::Panel::right("objects").default_size(280.0).show(ui, |ui| {
         egui::ScrollArea::vertical().show(ui, |ui| objects(ui, c, info));
@@ -497,4 +533,86 @@ fn inspect_button(ui: &mut egui::Ui, c: &mut Controls, color: &crate::sky::resol
             c.inspect = Some(InspectTarget { label, bitmap: b.clone() });
         }
     }
+}
+
+/// The compare window: what B is, the layout, the picture and its figures.
+fn compare_window(ui: &mut egui::Ui, c: &mut Controls, info: &CompareInfo, actions: &mut Vec<UiAction>) {
+    use super::compare::CompareB;
+    use crate::compare::Layout;
+    let mut open = c.compare.open;
+    egui::Window::new("Compare").open(&mut open).default_width(520.0).show(ui.ctx(), |ui| {
+        let cc = &mut c.compare;
+        ui.horizontal(|ui| {
+            ui.label("A: the sky now.  B:");
+            egui::ComboBox::from_id_salt("compare_b").selected_text(cc.b.label()).show_ui(ui, |ui| {
+                ui.selectable_value(&mut cc.b, CompareB::LastGood, "last good version");
+                for s in &info.snapshots {
+                    ui.selectable_value(&mut cc.b, CompareB::Snapshot(s.sky_file.clone()), format!("snapshot {}", s.name));
+                }
+                for k in SkyModelKind::ALL {
+                    ui.selectable_value(&mut cc.b, CompareB::Model(k), format!("model {}", k.name()));
+                }
+                for t in Tier::ALL {
+                    ui.selectable_value(&mut cc.b, CompareB::Tier(t), format!("tier {}", t.stages()));
+                }
+                if ui.selectable_label(matches!(cc.b, CompareB::Hour(_)), "another hour").clicked() && !matches!(cc.b, CompareB::Hour(_)) {
+                    cc.b = CompareB::Hour((c.hour + 6.0).rem_euclid(24.0));
+                }
+                if ui.selectable_label(matches!(cc.b, CompareB::Weather(_)), "another weather").clicked() && !matches!(cc.b, CompareB::Weather(_)) {
+                    cc.b = CompareB::Weather(if c.weather < 0.5 { 1.0 } else { 0.0 });
+                }
+            });
+        });
+        match &mut cc.b {
+            CompareB::Hour(h) => {
+                ui.add(egui::Slider::new(h, 0.0..=23.99).text("B's hour"));
+            }
+            CompareB::Weather(w) => {
+                ui.add(egui::Slider::new(w, 0.0..=1.0).text("B's weather"));
+            }
+            _ => {}
+        }
+        ui.horizontal(|ui| {
+            for (l, name) in [(Layout::Split, "split"), (Layout::SideBySide, "side by side"), (Layout::Difference, "difference (FLIP)")] {
+                ui.radio_value(&mut cc.layout, l, name);
+            }
+        });
+        if cc.layout == Layout::Split {
+            ui.add(egui::Slider::new(&mut cc.split, 0.0..=1.0).text("split (A left, B right)"));
+        }
+        ui.horizontal(|ui| {
+            if ui.add_enabled(info.has_file, egui::Button::new("Save snapshot (F8)")).on_disabled_hover_text("the built-in sky has no file").clicked() {
+                actions.push(UiAction::Snapshot);
+            }
+            ui.label(RichText::new(format!("{} snapshot(s) in .skytune-snapshots/", info.snapshots.len())).small().weak());
+        });
+        if let Some(p) = info.progress {
+            ui.add(egui::ProgressBar::new(p).show_percentage().text("B is computing in the background"));
+        }
+        if let Some(e) = &info.error {
+            ui.colored_label(Color32::from_rgb(255, 120, 100), e);
+        }
+        if let Some((texture, size)) = info.texture {
+            let width = ui.available_width().min(size[0] as f32 * 2.0);
+            let height = width * size[1] as f32 / size[0].max(1) as f32;
+            let response = ui.add(egui::Image::new((texture, egui::vec2(width, height))).sense(egui::Sense::drag()));
+            // Dragging on the picture moves the split.
+            if cc.layout == Layout::Split {
+                if let Some(pos) = response.interact_pointer_pos() {
+                    cc.split = ((pos.x - response.rect.left()) / response.rect.width()).clamp(0.0, 1.0);
+                }
+            }
+            if cc.layout != Layout::Split {
+                ui.horizontal(|ui| {
+                    ui.label(RichText::new("FLIP heat map: 0 (black) .. 1 (yellow), ticks every 0.25").small());
+                });
+            }
+        }
+        if let Some((b, summary, flip)) = &info.summary {
+            ui.label(format!("B = {b}"));
+            ui.label(RichText::new(summary).small());
+            ui.label(format!("FLIP mean {:.4}, 95th percentile {:.4}, max {:.4}", flip.mean, flip.p95, flip.max));
+        }
+    });
+    c.compare.open = open;
 }

@@ -171,4 +171,26 @@ impl Headless {
         }
         self.target.read(&self.ctx)
     }
+
+    /// Like [`Self::render`], for an interactive caller that must not block: while a pass has
+    /// background work in flight (a CPU sky model), renders one frame and returns `None` (call
+    /// again later); otherwise settles and reads the still back.
+    pub fn try_render(&mut self, sky: &Sky, input: &FrameInput, camera: &Camera, options: &RenderOptions) -> RenderResult<Option<image::RgbaImage>> {
+        let dt = self.renderer.settle_dt_s(options).unwrap_or(0.0);
+        self.frame(sky, input, camera, options, dt);
+        for _ in 0..STILL_SETTLE_FRAMES {
+            if self.renderer.busy() {
+                return Ok(None);
+            }
+            if self.renderer.settled() {
+                break;
+            }
+            self.ctx.wait_idle()?;
+            self.frame(sky, input, camera, options, dt);
+        }
+        if self.renderer.busy() {
+            return Ok(None);
+        }
+        self.target.read(&self.ctx).map(Some)
+    }
 }

@@ -19,6 +19,9 @@ use crate::atmosphere::reference::{Case, Reference, ReferenceSettings};
 use crate::atmosphere::Atmosphere;
 use crate::sky::resolved::{SkyModel, SkyModelKind};
 
+/// Maps of CPU models kept (each 192 x 108 texels of 16 bytes: 330 KiB).
+const CPU_CACHE_MAPS: usize = 16;
+
 /// Bytes of one sky-view texel ([`SharedResources::SKY_VIEW_FORMAT`]).
 const TEXEL_BYTES: u32 = 8;
 
@@ -221,6 +224,9 @@ pub struct SkyViewPass {
     cells: Option<CpuWorker>,
     /// The job in flight: its id and the key it answers.
     cells_pending: Option<(u64, Key)>,
+    /// Maps the CPU worker finished, newest last: going back to an hour, weather or atmosphere
+    /// seen recently (a compare view toggling, a scrubbed slider) costs no recomputation.
+    cpu_cache: Vec<(Key, Arc<Vec<[f32; 4]>>)>,
     next_job: u64,
     /// Exposure (16 bytes), then the scene's fog, ambient and diffuse in the layout of `Globals`.
     sky_light: wgpu::Buffer,
@@ -325,6 +331,7 @@ impl SkyViewPass {
             cpu_radiance,
             cells: None,
             cells_pending: None,
+            cpu_cache: Vec::new(),
             next_job: 0,
             sky_light,
             globals: b.globals_buffer.clone(),
@@ -356,6 +363,11 @@ impl SkyViewPass {
         if self.cells.is_none() {
             self.cells = CpuWorker::spawn();
         }
+        if let Some(map) = self.cpu_cache.iter().find(|(k, _)| *k == key).map(|(_, m)| m.clone()) {
+            cx.queue.write_buffer(&self.cpu_radiance, 0, bytemuck::cast_slice(&map));
+            self.cells_pending = None;
+            return true;
+        }
         let Some(worker) = &self.cells else { return false };
         if self.cells_pending.is_none_or(|(_, k)| k != key) {
             self.next_job += 1;
@@ -386,6 +398,10 @@ impl SkyViewPass {
         let Some(map) = ready else { return false };
         cx.queue.write_buffer(&self.cpu_radiance, 0, bytemuck::cast_slice(&map));
         self.cells_pending = None;
+        if self.cpu_cache.len() >= CPU_CACHE_MAPS {
+            self.cpu_cache.remove(0);
+        }
+        self.cpu_cache.push((key, Arc::new(map)));
         true
     }
 }
