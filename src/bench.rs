@@ -6,7 +6,7 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use anyhow::{anyhow, Context as _};
+use anyhow::anyhow;
 
 use crate::cli::{self, BenchArgs};
 use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions};
@@ -175,7 +175,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         ratio(8, 2),
         ratio(9, 2)
     );
-    std::fs::write(&args.out, &md).with_context(|| format!("writing {}", args.out.display()))?;
+    skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
     print!("{md}");
     println!("\nwrote {}", args.out.display());
     if configs.iter().any(|c| c.wall_ms.is_empty()) {

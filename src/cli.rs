@@ -47,6 +47,9 @@ pub enum Command {
         /// Seed of the procedural textures.
         #[arg(long, default_value_t = 7)]
         seed: u64,
+        /// Write into an existing folder (its files of the same names are replaced).
+        #[arg(long)]
+        force: bool,
     },
     /// Measure the sky passes (depth split and tiers) and write a Markdown report.
     Bench(BenchArgs),

@@ -5,6 +5,7 @@
 //! - [`render`]: the wgpu renderer (no UI types).
 //! - [`atmosphere`]: physical atmospheres and the double-precision reference (no GPU types).
 //! - [`compare`]: differences between two renders (FLIP and channel figures, heat maps, layouts).
+//! - [`fsx`]: writes through a temporary file and a rename.
 //! - [`live`]: hot reload of sky files.
 //! - [`snapshot`]: snapshots of a sky's files for before/after comparisons.
 //! - [`watch`]: file watching, shared by sky and shader hot reload.
@@ -12,6 +13,7 @@
 pub mod app;
 pub mod atmosphere;
 pub mod compare;
+pub mod fsx;
 pub mod live;
 pub mod render;
 pub mod sky;

@@ -40,9 +40,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Render(args)) => render(&args),
         Some(Command::Check { sky }) => check(&sky),
         Some(Command::Watch { render, max_reloads }) => watch(&render, max_reloads),
-        Some(Command::NewSky { dir, preset, seed }) => {
+        Some(Command::NewSky { dir, preset, seed, force }) => {
             let palette = procedural::preset(&preset).ok_or_else(|| anyhow!("unknown preset \"{preset}\"; expected one of {}", procedural::PRESETS.map(|p| p.name).join(", ")))?;
-            let sky = skytune::sky::builtin::write_sky_folder(&dir, palette, seed).with_context(|| format!("writing {}", dir.display()))?;
+            let sky = new_sky_folder(&dir, palette, seed, force)?;
             println!("wrote {} and its bitmaps; open it with `skytune {}`", sky.display(), sky.display());
             Ok(())
         }
@@ -50,6 +50,27 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Radiance(args)) => radiance(&args),
         Some(Command::Compare(args)) => compare(&args),
     }
+}
+
+/// `skytune new-sky`: a new folder is written under a temporary name and renamed when complete;
+/// an existing folder is refused unless `force`.
+fn new_sky_folder(dir: &Path, palette: &procedural::Palette, seed: u64, force: bool) -> anyhow::Result<std::path::PathBuf> {
+    let occupied = dir.exists() && (dir.is_file() || std::fs::read_dir(dir).map(|mut d| d.next().is_some()).unwrap_or(true));
+    if occupied && !force {
+        bail!("{} exists already; choose another folder, or pass --force to write the sky into it (files of the same names are replaced)", dir.display());
+    }
+    if dir.is_dir() {
+        return skytune::sky::builtin::write_sky_folder(dir, palette, seed).with_context(|| format!("writing {}", dir.display()));
+    }
+    let name = dir.file_name().map_or_else(|| "sky".into(), |n| n.to_string_lossy().into_owned());
+    let staging = dir.with_file_name(format!(".{name}.partial-{}", std::process::id()));
+    let result = skytune::sky::builtin::write_sky_folder(&staging, palette, seed)
+        .with_context(|| format!("writing {}", staging.display()))
+        .and_then(|_| std::fs::rename(&staging, dir).with_context(|| format!("renaming {} to {}", staging.display(), dir.display())));
+    if result.is_err() {
+        let _ = std::fs::remove_dir_all(&staging);
+    }
+    result.map(|_| dir.join("sky.toml"))
 }
 
 /// `skytune radiance`: evaluates a model on every case of a CSV file.
@@ -201,7 +222,7 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
         }
     }
     let image = headless.render(sky, &input, &camera, &options)?;
-    image.save(&args.out).with_context(|| format!("writing {}", args.out.display()))?;
+    skytune::fsx::save_png(&image, &args.out)?;
     println!(
         "wrote {} ({}x{}, sky \"{}\", hour {}, weather {}, tier {})",
         args.out.display(),
@@ -278,7 +299,7 @@ fn compare(args: &cli::CompareArgs) -> anyhow::Result<()> {
     }
     let diff = compare::difference(&images[0], &images[1], args.tolerance);
     let picture = compare::compose(&images[0], &images[1], &diff, layout, args.split);
-    save_png(&picture, &args.out)?;
+    skytune::fsx::save_png(&picture, &args.out)?;
     println!("{}", diff.summary());
     println!("wrote {} ({})", args.out.display(), layout.name());
     if let Some(limit) = args.max_flip_mean {
@@ -288,15 +309,6 @@ fn compare(args: &cli::CompareArgs) -> anyhow::Result<()> {
         anyhow::ensure!(diff.pixels.differing <= limit, "{:.4} of pixels differ, above --max-differing {limit}", diff.pixels.differing);
     }
     Ok(())
-}
-
-/// Writes a PNG through a temporary file in the same folder, so a failed write never leaves a
-/// truncated image where a good one was.
-fn save_png(image: &image::RgbaImage, path: &Path) -> anyhow::Result<()> {
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("image.png");
-    let tmp = path.with_file_name(format!(".{name}.tmp"));
-    image.save_with_format(&tmp, image::ImageFormat::Png).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
 }
 
 fn render(args: &RenderArgs) -> anyhow::Result<()> {

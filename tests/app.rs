@@ -207,6 +207,29 @@ fn window_runs_a_fixed_number_of_frames() {
 }
 
 #[test]
+fn a_corrupt_settings_file_is_reported_and_replaced() {
+    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
+    let dir = tempfile::tempdir().unwrap();
+    let state = dir.path().join("state.toml");
+    std::fs::write(&state, b"window_size = [\xff\xfe not toml").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
+        .args(["--cpu", "--frames", "3"])
+        .env("DISPLAY", &display)
+        .env("SKYTUNE_CONFIG", &state)
+        .env("RUST_LOG", "info")
+        .output()
+        .expect("running skytune");
+    let _ = server.kill();
+    let _ = server.wait();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("was unusable") && stderr.contains("replaced by defaults"), "{stderr}");
+    assert!(dir.path().join("state.toml.corrupt").is_file());
+    let text = std::fs::read_to_string(&state).unwrap();
+    assert!(text.contains("window_size"), "replaced by a readable file: {text}");
+}
+
+#[test]
 fn without_a_display_it_says_so_and_renders_headless() {
     let dir = tempfile::tempdir().unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_skytune"))

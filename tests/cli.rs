@@ -169,3 +169,39 @@ fn radiance_answers_every_case_and_locates_bad_rows() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && stderr.contains("cases.csv:2: column 3:"), "{stderr}");
 }
+
+#[test]
+fn new_sky_refuses_an_existing_folder_and_writes_never_leave_half_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("my_sky");
+    let o = skytune().arg("new-sky").arg(&target).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(target.join("sky.toml").is_file());
+    // Again: refused, the artist's folder untouched.
+    std::fs::write(target.join("sky.toml"), "# my edits\n").unwrap();
+    let o = skytune().arg("new-sky").arg(&target).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("exists already") && stderr.contains("--force"), "{stderr}");
+    assert_eq!(std::fs::read_to_string(target.join("sky.toml")).unwrap(), "# my edits\n");
+    let o = skytune().arg("new-sky").arg(&target).arg("--force").output().unwrap();
+    assert!(o.status.success());
+    assert!(std::fs::read_to_string(target.join("sky.toml")).unwrap().contains("[[object]]"));
+    // A folder that cannot be created (a file is in the way): a clear error, nothing left behind.
+    let blocker = dir.path().join("blocker");
+    std::fs::write(&blocker, "x").unwrap();
+    let o = skytune().arg("new-sky").arg(blocker.join("sky")).output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("blocker"));
+    // A screenshot that cannot be written names its path; an existing one is never truncated.
+    let shot = dir.path().join("shot.png");
+    std::fs::write(&shot, "previous").unwrap();
+    let o = skytune().args(["render", "--size", "32x18", "--out"]).arg(blocker.join("shot.png")).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("blocker/shot.png"), "{stderr}");
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp") || e.file_name().to_string_lossy().contains(".partial"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}

@@ -6,7 +6,7 @@ use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::{anyhow, Context as _};
+use anyhow::anyhow;
 use winit::event_loop::ActiveEventLoop;
 use winit::keyboard::{Key, NamedKey};
 
@@ -325,7 +325,7 @@ impl App {
         let path = free_path(&self.shots_dir(), &screenshot_name(&self.live.sky().name, input.hour, input.weather))?;
         let size = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU yet"))?.size();
         let img = self.capture_image(&input, size)?;
-        img.save(&path).with_context(|| format!("writing {}", path.display()))?;
+        crate::fsx::save_png(&img, &path)?;
         Ok(path)
     }
 
@@ -344,7 +344,7 @@ impl App {
         let Some(sheet) = self.sheet.as_mut() else { return Ok(()) };
         let Some((hour, weather, col, row)) = sheet.next_cell() else {
             let sheet = self.sheet.take().expect("present");
-            sheet.image.save(&sheet.path).with_context(|| format!("writing {}", sheet.path.display()))?;
+            crate::fsx::save_png(&sheet.image, &sheet.path)?;
             self.last_capture = format!("contact sheet saved to {}", sheet.path.display());
             println!("{}", self.last_capture);
             return Ok(());

@@ -66,7 +66,7 @@ pub fn display_available() -> bool {
 /// Runs the window until it is closed. Without a display, says so, renders the sky headless to
 /// `skytune-default.png` (or the sky's name) instead and points to `skytune render`.
 pub fn run(config: AppConfig) -> anyhow::Result<()> {
-    let mut settings = Settings::load();
+    let (mut settings, settings_report) = Settings::load();
     let spec = match &config.sky {
         Some(p) => SkySpec::from_path(p, config.season.as_deref()).map_err(|e| anyhow!("{e}"))?,
         None => match &settings.last_sky {
@@ -111,7 +111,7 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         frame_times: VecDeque::new(),
         cpu_ms: Vec::new(),
         shader_error: None,
-        gpu_error: None,
+        gpu_error: settings_report,
         sheet: None,
         last_capture: String::new(),
         drag: None,
@@ -140,7 +140,7 @@ fn headless_fallback(spec: &SkySpec, config: &AppConfig) -> anyhow::Result<()> {
     let input = FrameInput::new(c.hour, c.weather);
     let img = h.render(&sky, &input, &c.camera, &RenderOptions::default())?;
     let out = PathBuf::from(if matches!(spec, SkySpec::Builtin) { "skytune-default.png".to_string() } else { screenshot_name(&sky.name, c.hour, c.weather) });
-    img.save(&out).with_context(|| format!("writing {}", out.display()))?;
+    crate::fsx::save_png(&img, &out)?;
     println!("wrote {} (sky \"{}\", hour {}, weather {})", out.display(), sky.name, c.hour, c.weather);
     Ok(())
 }

@@ -35,25 +35,34 @@ impl Settings {
         Some(base.join("skytune").join("state.toml"))
     }
 
-    /// Loads the settings; a missing or unreadable file gives the defaults (with a warning).
-    pub fn load() -> Self {
-        let Some(path) = Self::path() else { return Self::default() };
-        match std::fs::read_to_string(&path) {
-            Ok(text) => toml::from_str(&text).unwrap_or_else(|e| {
-                log::warn!("ignoring {}: {e}", path.display());
-                Self::default()
-            }),
-            Err(_) => Self::default(),
-        }
+    /// Loads the settings; never a reason not to start. A missing file gives the defaults; a
+    /// corrupt one (not TOML, not UTF-8, wrong types, absurd sizes) is reported, kept beside as
+    /// `state.toml.corrupt` for inspection, and replaced by the defaults. Returns the settings and
+    /// the report, if any.
+    pub fn load() -> (Self, Option<String>) {
+        let Some(path) = Self::path() else { return (Self::default(), None) };
+        let problem = match std::fs::read(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return (Self::default(), None),
+            Err(e) => format!("cannot read it: {e}"),
+            Ok(bytes) => match std::str::from_utf8(&bytes).map_err(|e| e.to_string()).and_then(|t| toml::from_str::<Settings>(t).map_err(|e| e.to_string())) {
+                Ok(s) if s.window_size.iter().all(|v| (1..=16384).contains(v)) => return (s, None),
+                Ok(s) => format!("window_size {:?} is out of range 1..=16384", s.window_size),
+                Err(e) => e.trim().to_string(),
+            },
+        };
+        let kept = path.with_extension("toml.corrupt");
+        let _ = std::fs::rename(&path, &kept);
+        let defaults = Self::default();
+        defaults.save();
+        let report = format!("the settings file {} was unusable ({problem}); it was moved to {} and replaced by defaults", path.display(), kept.display());
+        log::warn!("{report}");
+        (defaults, Some(report))
     }
 
     /// Saves the settings; failures are logged, never fatal.
     pub fn save(&self) {
         let Some(path) = Self::path() else { return };
-        let result = path.parent().map_or(Ok(()), std::fs::create_dir_all).and_then(|_| {
-            let text = toml::to_string(self).map_err(std::io::Error::other)?;
-            std::fs::write(&path, text)
-        });
+        let result = toml::to_string(self).map_err(std::io::Error::other).and_then(|text| crate::fsx::write_atomic(&path, text.as_bytes()).map_err(|e| e.source));
         if let Err(e) = result {
             log::warn!("cannot save {}: {e}", path.display());
         }
