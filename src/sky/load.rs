@@ -78,6 +78,11 @@ impl AssetSource for FsSource {
         self.path.display().to_string()
     }
     fn sky_text(&self) -> Result<String, String> {
+        // Checked before reading: a huge file (a wrong path, a binary) is refused without loading it.
+        let len = std::fs::metadata(&self.path).map_err(|e| format!("cannot read the sky file: {e}"))?.len();
+        if len > MAX_SKY_FILE_BYTES as u64 {
+            return Err(format!("the sky file is {len} bytes; at most {MAX_SKY_FILE_BYTES} are accepted"));
+        }
         std::fs::read_to_string(&self.path).map_err(|e| format!("cannot read the sky file: {e}"))
     }
     fn image(&self, rel: &str) -> Result<image::RgbaImage, String> {
@@ -102,6 +107,19 @@ impl AssetSource for FsSource {
 pub const MAX_IMAGE_SIDE: u32 = 4096;
 /// Most stars a field may generate.
 pub const MAX_STARS: u32 = 200_000;
+/// Largest sky file, bytes (a sky file is a few hundred lines of text; this is 25,000 or so).
+pub const MAX_SKY_FILE_BYTES: usize = 1 << 20;
+/// Most objects in a sky.
+pub const MAX_OBJECTS: usize = 256;
+/// Most fallback passes of one object (for GPUs with fewer texture stages).
+pub const MAX_FALLBACKS: usize = 2;
+/// Most paths in a sky.
+pub const MAX_PATHS: usize = 64;
+/// Most keys of one path.
+pub const MAX_PATH_KEYS: usize = 1024;
+/// Most memory the distinct images of a sky may take once decoded (RGBA8), bytes: 512 MiB, eight
+/// textures of 4096 x 4096.
+pub const MAX_TEXTURE_BYTES: u64 = 512 << 20;
 
 /// Loads and validates a sky file from disk.
 pub fn load_sky_file(path: &Path) -> Result<Sky, SkyErrors> {
@@ -112,8 +130,11 @@ pub fn load_sky_file(path: &Path) -> Result<Sky, SkyErrors> {
 pub fn load_sky(source: &dyn AssetSource) -> Result<Sky, SkyErrors> {
     let file = source.sky_name();
     let text = source.sky_text().map_err(|message| one(&file, 1, 1, "<file>", message))?;
+    if text.len() > MAX_SKY_FILE_BYTES {
+        return Err(one(&file, 1, 1, "<file>", format!("the sky file is {} bytes; at most {MAX_SKY_FILE_BYTES} are accepted", text.len())));
+    }
     let parsed: SkyFile = parse_toml(&file, &text)?;
-    let mut v = Validator { source, file, text: &text, errors: Vec::new(), images: HashMap::new(), bitmaps: HashMap::new(), watched: HashSet::new() };
+    let mut v = Validator { source, file, text: &text, errors: Vec::new(), images: HashMap::new(), bitmaps: HashMap::new(), watched: HashSet::new(), texture_bytes: 0 };
     let sky = v.sky(parsed);
     match sky {
         Some(sky) if v.errors.is_empty() => Ok(sky),
@@ -139,6 +160,11 @@ fn one(file: &str, line: usize, column: usize, field: &str, message: impl Into<S
     SkyErrors(vec![SkyError { file: file.to_string(), line, column, field: field.to_string(), message: message.into() }])
 }
 
+/// Byte offset of the `n`th (0-based) occurrence of `needle`, or 0.
+fn nth_offset(text: &str, needle: &str, n: usize) -> usize {
+    text.match_indices(needle).nth(n).map_or(0, |(i, _)| i)
+}
+
 /// 1-based line and column of a byte offset.
 pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
     let before = &text[..offset.min(text.len())];
@@ -155,6 +181,8 @@ struct Validator<'a> {
     images: HashMap<String, Arc<TextureImage>>,
     bitmaps: HashMap<String, Arc<ColorBitmap>>,
     watched: HashSet<PathBuf>,
+    /// Decoded bytes of the distinct images so far ([`MAX_TEXTURE_BYTES`]).
+    texture_bytes: u64,
 }
 
 impl Validator<'_> {
@@ -190,6 +218,18 @@ impl Validator<'_> {
                     self.err_at(r.span(), field, format!("{} is {w}x{h}; expected sides in 1..={MAX_IMAGE_SIDE}", self.source.display(&key)));
                     return None;
                 }
+                self.texture_bytes += u64::from(w) * u64::from(h) * 4;
+                if self.texture_bytes > MAX_TEXTURE_BYTES {
+                    let mib = |b: u64| b as f64 / (1 << 20) as f64;
+                    let message = format!(
+                        "{} ({w}x{h}) brings the sky's decoded images to {:.1} MiB; at most {:.0} MiB are accepted",
+                        self.source.display(&key),
+                        mib(self.texture_bytes),
+                        mib(MAX_TEXTURE_BYTES)
+                    );
+                    self.err_at(r.span(), field, message);
+                    return None;
+                }
                 let tex = Arc::new(TextureImage { key: self.source.display(&key), width: w, height: h, rgba8: img.into_raw() });
                 self.images.insert(key, tex.clone());
                 Some(tex)
@@ -220,6 +260,15 @@ impl Validator<'_> {
         let path_index: HashMap<&str, usize> = f.paths.iter().enumerate().map(|(i, p)| (p.name.as_str(), i)).collect();
         let sun_path = self.path_ref(&path_index, &f.sun_path, "sun_path");
 
+        if f.paths.len() > MAX_PATHS {
+            let at = nth_offset(self.text, "[[path]]", MAX_PATHS);
+            self.err_at(at..at, &format!("path[{MAX_PATHS}]"), format!("a sky has at most {MAX_PATHS} paths; this one has {}", f.paths.len()));
+        }
+        if f.objects.len() > MAX_OBJECTS {
+            let at = nth_offset(self.text, "[[object]]", MAX_OBJECTS);
+            self.err_at(at..at, &format!("object[{MAX_OBJECTS}]"), format!("a sky has at most {MAX_OBJECTS} objects; this one has {}", f.objects.len()));
+            return None;
+        }
         let mut names = HashSet::new();
         let mut objects = Vec::new();
         for (i, o) in f.objects.iter().enumerate() {
@@ -349,6 +398,11 @@ impl Validator<'_> {
         let mut seen = HashSet::new();
         for (i, p) in defs.iter().enumerate() {
             let field = format!("path[{i}]");
+            if p.keys.len() > MAX_PATH_KEYS {
+                self.err_near(&format!("\"{}\"", p.name), &format!("{field}.keys"), format!("a path has at most {MAX_PATH_KEYS} keys; this one has {}", p.keys.len()));
+                ok = false;
+                continue;
+            }
             if !seen.insert(p.name.as_str()) {
                 self.err_near(&format!("\"{}\"", p.name), &format!("{field}.name"), format!("duplicate path name \"{}\"", p.name));
                 ok = false;
@@ -418,8 +472,13 @@ impl Validator<'_> {
             None => None,
         };
         let standard = self.version(&o.standard, &format!("{field}.standard"), &o.name, path.is_some());
-        if o.fallback.len() > 2 {
-            self.err_in(&format!("\"{}\"", o.name), "[[object.fallback]]", &format!("{field}.fallback"), format!("at most 2 fallback passes, found {}", o.fallback.len()));
+        if o.fallback.len() > MAX_FALLBACKS {
+            self.err_in(
+                &format!("\"{}\"", o.name),
+                "[[object.fallback]]",
+                &format!("{field}.fallback"),
+                format!("at most {MAX_FALLBACKS} fallback passes, found {}", o.fallback.len()),
+            );
         }
         let fallback: Vec<Option<Version>> = o.fallback.iter().enumerate().map(|(k, v)| self.version(v, &format!("{field}.fallback[{k}]"), &o.name, path.is_some())).collect();
         let fallback: Option<Vec<Version>> = fallback.into_iter().collect();
