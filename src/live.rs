@@ -92,9 +92,29 @@ pub enum ReloadEvent {
     Reloaded,
     /// The edit was invalid; the previous sky stays.
     Failed(SkyErrors),
+    /// A load failed on files that changed while it ran or since (a save in progress): its error
+    /// is not shown, and a new load was requested.
+    Superseded,
 }
 
-type LoadResult = (u64, Result<Sky, SkyErrors>);
+/// Length and modification time of each file a load depends on, taken before it read them.
+type Fingerprint = Vec<(PathBuf, Option<(u64, std::time::SystemTime)>)>;
+
+type LoadResult = (u64, Result<Sky, SkyErrors>, Fingerprint);
+
+/// The fingerprint of `files` now.
+fn fingerprint(files: impl IntoIterator<Item = PathBuf>) -> Fingerprint {
+    let mut out: Fingerprint = files
+        .into_iter()
+        .map(|p| {
+            let meta = std::fs::metadata(&p).ok().and_then(|m| Some((m.len(), m.modified().ok()?)));
+            (p, meta)
+        })
+        .collect();
+    out.sort_by(|a, b| a.0.cmp(&b.0));
+    out.dedup_by(|a, b| a.0 == b.0);
+    out
+}
 
 struct Shared {
     spec: SkySpec,
@@ -137,10 +157,11 @@ impl LiveSky {
                     while let Ok(next) = trigger_rx.try_recv() {
                         id = next;
                     }
-                    let spec = loader_shared.lock().map(|s| s.spec.clone());
-                    let Ok(spec) = spec else { break };
+                    let state = loader_shared.lock().map(|s| (s.spec.clone(), s.files.clone()));
+                    let Ok((spec, files)) = state else { break };
+                    let before = fingerprint(files.into_iter().chain(spec.own_files().iter().map(|p| normalize(p))));
                     let result = spec.load();
-                    if result_tx.send((id, result)).is_err() {
+                    if result_tx.send((id, result, before)).is_err() {
                         break;
                     }
                 }
@@ -206,24 +227,39 @@ impl LiveSky {
     /// Applies finished reloads without blocking. Returns the last event, if any.
     pub fn poll(&mut self) -> Option<ReloadEvent> {
         let mut last = None;
-        while let Ok((_, result)) = self.results.try_recv() {
-            last = Some(self.apply(result));
+        while let Ok((_, result, before)) = self.results.try_recv() {
+            last = Some(self.apply(result, before));
         }
         last
     }
 
     /// Waits up to `timeout` for the next reload result (watch mode and tests).
+    /// Superseded failures are skipped: the load they asked for is waited for instead.
     pub fn wait(&mut self, timeout: Duration) -> Option<ReloadEvent> {
-        match self.results.recv_timeout(timeout) {
-            Ok((_, result)) => {
-                let event = self.apply(result);
-                Some(self.poll().unwrap_or(event))
+        let deadline = std::time::Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            match self.results.recv_timeout(left) {
+                Ok((_, result, before)) => {
+                    let event = self.apply(result, before);
+                    match self.poll().unwrap_or(event) {
+                        ReloadEvent::Superseded => continue,
+                        event => return Some(event),
+                    }
+                }
+                Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => return None,
             }
-            Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => None,
         }
     }
 
-    fn apply(&mut self, result: Result<Sky, SkyErrors>) -> ReloadEvent {
+    fn apply(&mut self, result: Result<Sky, SkyErrors>, before: Fingerprint) -> ReloadEvent {
+        if result.is_err() && fingerprint(before.iter().map(|(p, _)| p.clone())) != before {
+            // A save in progress (truncated file, bitmap half written): the error may be of a
+            // state the artist never meant; load what is there now instead.
+            log::debug!("a reload failed on files that changed since it read them; loading again");
+            self.request_reload();
+            return ReloadEvent::Superseded;
+        }
         match result {
             Ok(sky) => {
                 let same_source = sky.source_name == self.current.source_name;

@@ -400,7 +400,7 @@ fn watch(args: &RenderArgs, max_reloads: Option<u32>) -> anyhow::Result<()> {
                 reloads += 1;
                 eprintln!("reload failed; {} still shows the last good sky:\n{e}", args.out.display());
             }
-            None => {}
+            Some(ReloadEvent::Superseded) | None => {}
         }
     }
     Ok(())

@@ -81,3 +81,70 @@ fn reading_the_files_does_not_trigger_reloads() {
     let _ = std::fs::read_to_string(&sky_path).unwrap();
     assert_eq!(live.wait(Duration::from_millis(1000)), None, "reading the sky file is not an edit");
 }
+
+#[test]
+fn rapid_saves_end_on_the_final_content_and_never_show_a_stale_error() {
+    let (dir, sky_path) = common::default_sky_folder();
+    let mut live = LiveSky::new(SkySpec::File(sky_path.clone())).unwrap();
+    let good = std::fs::read_to_string(&sky_path).unwrap();
+    let version = {
+        let good = good.clone();
+        move |k: usize| good.replacen("name = \"default\"", &format!("name = \"rapid {k}\""), 1)
+    };
+    let final_text = good.replacen("name = \"default\"", "name = \"final\"", 1);
+    let writer = {
+        let (sky_path, dir) = (sky_path.clone(), dir.path().to_path_buf());
+        let final_text = final_text.clone();
+        std::thread::spawn(move || {
+            // 200 saves in about 2 seconds, the ways editors save.
+            for k in 0..200 {
+                let text = version(k);
+                match k % 4 {
+                    0 => std::fs::write(&sky_path, &text).unwrap(),
+                    1 => {
+                        // Truncated, completed 10 ms later.
+                        std::fs::write(&sky_path, &text[..text.len() / 2]).unwrap();
+                        std::thread::sleep(Duration::from_millis(10));
+                        std::fs::write(&sky_path, &text).unwrap();
+                    }
+                    2 => {
+                        let tmp = dir.join(format!(".sky.toml.{k}.tmp"));
+                        std::fs::write(&tmp, &text).unwrap();
+                        std::fs::rename(&tmp, &sky_path).unwrap();
+                    }
+                    _ => {
+                        // Deleted and created again.
+                        std::fs::remove_file(&sky_path).unwrap();
+                        std::thread::sleep(Duration::from_millis(2));
+                        std::fs::write(&sky_path, &text).unwrap();
+                    }
+                }
+                std::thread::sleep(Duration::from_millis(8));
+            }
+            std::fs::write(&sky_path, &final_text).unwrap();
+        })
+    };
+    // The window's loop: poll every frame while the saves go on.
+    let started = std::time::Instant::now();
+    while !writer.is_finished() {
+        let _ = live.poll();
+        assert!(started.elapsed() < Duration::from_secs(60), "the writer hangs");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    writer.join().unwrap();
+    let final_written = std::time::Instant::now();
+    // From now on the file is good: no error may show, and the final content arrives.
+    let mut errors_after_final = Vec::new();
+    while started.elapsed() < Duration::from_secs(60) {
+        if let Some(ReloadEvent::Failed(e)) = live.poll() {
+            errors_after_final.push(e.to_string());
+        }
+        if live.sky().name == "final" && live.error.is_none() && final_written.elapsed() > Duration::from_millis(800) {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert_eq!(live.sky().name, "final", "ends on the final content");
+    assert!(live.error.is_none(), "{:?}", live.error.as_ref().map(|e| e.to_string()));
+    assert!(errors_after_final.is_empty(), "a half-written file's error showed after the final save: {errors_after_final:?}");
+}
