@@ -42,6 +42,7 @@ fn run_panels(controls: &mut Controls, events: Vec<egui::Event>) -> Vec<UiAction
             snapshots: Vec::new(),
             has_file: true,
         }),
+        device_lost: true,
     };
     let ctx = egui::Context::default();
     let mut actions = Vec::new();
@@ -204,6 +205,28 @@ fn window_runs_a_fixed_number_of_frames() {
     assert!(stderr.contains("rendered 5 frames, exiting"), "{stderr}");
     // Reading the shaders must not look like an edit of them (that would reload in a loop).
     assert!(!stderr.contains("shaders reloaded"), "{stderr}");
+}
+
+#[test]
+fn a_lost_device_is_reported_and_recreated_in_the_window() {
+    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
+        .args(["--cpu", "--frames", "12"])
+        .env("DISPLAY", &display)
+        .env("SKYTUNE_CONFIG", dir.path().join("state.toml"))
+        .env("SKYTUNE_TEST_LOSE_DEVICE_AT", "4")
+        .env("RUST_LOG", "info")
+        .output()
+        .expect("running skytune");
+    let _ = server.kill();
+    let _ = server.wait();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("the GPU device was lost"), "{stderr}");
+    assert!(stderr.contains("GPU device recreated"), "{stderr}");
+    assert!(stderr.contains("rendered 12 frames, exiting"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
 #[test]

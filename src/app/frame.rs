@@ -24,6 +24,13 @@ impl App {
     /// One frame: reloads, the clock, evaluation, the panels, the surface, then the UI's actions.
     pub(super) fn redraw(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
         let t0 = Instant::now();
+        if std::mem::take(&mut self.recreate_device) {
+            self.rebuild_gpu()?;
+        }
+        if let Some(gpu) = self.gpu.as_ref() {
+            // Non-blocking: runs finished callbacks, among them the device-lost one.
+            let _ = gpu.ctx.device.poll(wgpu::PollType::Poll);
+        }
         self.apply_reloads();
         if let Err(e) = self.step_contact_sheet() {
             self.sheet = None;
@@ -52,6 +59,18 @@ impl App {
             self.apply_action(action, &sky);
         }
         let frames = self.clock.frames();
+        // Test hook (SKYTUNE_TEST_LOSE_DEVICE_AT=N): lose the device at frame N, then press
+        // "Recreate the GPU device" three frames later, as a user would.
+        if let Some(n) = self.test_lose_device_at {
+            if frames == n {
+                if let Some(gpu) = self.gpu.as_ref() {
+                    log::warn!("test hook: destroying the GPU device");
+                    gpu.ctx.device.destroy();
+                }
+            } else if frames == n + 3 {
+                self.apply_action(UiAction::RecreateDevice, &sky);
+            }
+        }
         if self.config.screenshot_and_exit && frames == 3 {
             self.take_screenshot();
             event_loop.exit();
@@ -103,6 +122,9 @@ impl App {
     /// Every error to show, newest state of each source.
     fn errors(&self) -> Vec<String> {
         let mut errors = Vec::new();
+        if let Some(reason) = self.gpu.as_ref().and_then(|g| g.ctx.lost_reason()) {
+            errors.push(format!("the GPU device was lost ({reason}); the sky and your files are safe: recreate the device to go on"));
+        }
         if let Some(e) = &self.live.error {
             errors.push(format!("sky reload failed; showing the last good sky:\n{e}"));
         }
@@ -152,6 +174,7 @@ impl App {
             last_capture: &self.last_capture,
             model_progress: gpu.renderer.pass::<crate::render::sky_view::SkyViewPass>().and_then(|p| p.progress()),
             compare: None,
+            device_lost: gpu.ctx.lost_reason().is_some(),
         };
         let compare = self.controls.compare.open.then(|| {
             let c = &self.controls.compare;
@@ -190,6 +213,7 @@ impl App {
             UiAction::ReloadShaders => self.reload_shaders(),
             UiAction::Screenshot => self.take_screenshot(),
             UiAction::Snapshot => self.save_snapshot(),
+            UiAction::RecreateDevice => self.recreate_device = true,
             UiAction::RefreshSnapshots => self.refresh_snapshots(),
             UiAction::ContactSheet => {
                 let (cols, rows) = self.controls.sheet_grid;
@@ -273,6 +297,21 @@ impl App {
                 self.shader_error = Some(e);
             }
         }
+    }
+
+    /// A new device, renderer and surface for the same window (after the device was lost).
+    fn rebuild_gpu(&mut self) -> anyhow::Result<()> {
+        let Some(old) = self.gpu.take() else { return Ok(()) };
+        let window = old.window.clone();
+        drop(old);
+        self.compare.reset();
+        let adapter = if self.config.cpu { crate::render::AdapterChoice::Cpu } else { crate::render::AdapterChoice::from_env() };
+        let (gpu, shader_error) = super::window::WindowGpu::with_window(window, adapter, self.shader_library(), self.live.sky())?;
+        log::info!("GPU device recreated");
+        self.shader_error = shader_error;
+        self.gpu_error = None;
+        self.gpu = Some(gpu);
+        Ok(())
     }
 
     /// Renders and measures the compare view again if its inputs changed.

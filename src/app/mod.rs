@@ -118,6 +118,8 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         shader_watch: None,
         shaders_changed: Arc::new(AtomicBool::new(false)),
         compare: compare::CompareView::default(),
+        recreate_device: false,
+        test_lose_device_at: std::env::var("SKYTUNE_TEST_LOSE_DEVICE_AT").ok().and_then(|v| v.parse().ok()),
         snapshots: Vec::new(),
     };
     event_loop.run_app(&mut app).context("running the window")?;
@@ -164,12 +166,16 @@ pub struct App {
     shader_watch: Option<FileWatcher>,
     shaders_changed: Arc<AtomicBool>,
     compare: compare::CompareView,
+    /// The user asked for a new GPU device (done at the start of the next frame).
+    recreate_device: bool,
+    /// Test hook: frame at which to destroy the device (`SKYTUNE_TEST_LOSE_DEVICE_AT`).
+    test_lose_device_at: Option<u64>,
     /// Snapshots of the sky file shown (refreshed when the compare view opens and after saving one).
     snapshots: Vec<crate::snapshot::Snapshot>,
 }
 
 impl App {
-    fn shader_library(&self) -> ShaderLibrary {
+    pub(crate) fn shader_library(&self) -> ShaderLibrary {
         match &self.config.shader_dir {
             Some(d) => ShaderLibrary { dir: Some(d.clone()) },
             // Development builds hot-reload the checkout's shaders; release builds use the embedded copies.

@@ -110,6 +110,8 @@ pub enum UiAction {
     Snapshot,
     /// Read the list of snapshots again.
     RefreshSnapshots,
+    /// Build a new GPU device (after the old one was lost).
+    RecreateDevice,
 }
 
 /// What the compare window shows.
@@ -162,6 +164,8 @@ pub struct UiInfo<'a> {
     pub model_progress: Option<f32>,
     /// The compare window's content, when it is open.
     pub compare: Option<CompareInfo>,
+    /// The GPU device was lost (the errors panel offers to recreate it).
+    pub device_lost: bool,
 }
 
 /// Keyboard shortcuts, shown in the help overlay.
@@ -338,6 +342,9 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
         egui::Panel::bottom("errors").show(ui, |ui| {
             for e in info.errors {
                 ui.colored_label(Color32::from_rgb(255, 110, 110), e);
+            }
+            if info.device_lost && ui.button("Recreate the GPU device").clicked() {
+                actions.push(UiAction::RecreateDevice);
             }
         });
     }

@@ -49,6 +49,12 @@ impl WindowGpu {
     pub fn new(event_loop: &ActiveEventLoop, title: &str, size: [u32; 2], adapter: AdapterChoice, library: ShaderLibrary, sky: &Sky) -> anyhow::Result<(Self, Option<String>)> {
         let attrs = Window::default_attributes().with_title(title).with_inner_size(winit::dpi::LogicalSize::new(size[0].max(320), size[1].max(240)));
         let window = Arc::new(event_loop.create_window(attrs).context("creating the window")?);
+        Self::with_window(window, adapter, library, sky)
+    }
+
+    /// Builds the device and everything on it for an existing window (start-up, and after the
+    /// device was lost).
+    pub fn with_window(window: Arc<Window>, adapter: AdapterChoice, library: ShaderLibrary, sky: &Sky) -> anyhow::Result<(Self, Option<String>)> {
         let instance = crate::render::context::new_instance();
         let surface = instance.create_surface(window.clone()).context("creating the window surface")?;
         let ctx = GpuContext::new(instance, adapter, Some(&surface))?;
@@ -89,11 +95,14 @@ impl WindowGpu {
         Ok((Self { window, surface, surface_config, ctx, renderer, depth, egui_state, egui_renderer, capture: None, inspector: None }, shader_error))
     }
 
-    /// Follows a new window size (a zero size, minimised, keeps the old surface).
+    /// Follows a new window size (a zero size, minimised, keeps the old surface; sizes beyond
+    /// the device's largest texture are clamped, the window's edge then stretches).
     pub fn resize(&mut self, width: u32, height: u32) {
         if width == 0 || height == 0 {
             return;
         }
+        let max = self.ctx.device.limits().max_texture_dimension_2d;
+        let (width, height) = (width.min(max), height.min(max));
         self.surface_config.width = width;
         self.surface_config.height = height;
         self.surface.configure(&self.ctx.device, &self.surface_config);

@@ -36,6 +36,8 @@ pub struct GpuContext {
     pub queue: wgpu::Queue,
     /// Whether GPU timestamp queries work (per-pass GPU timings).
     pub timestamps: bool,
+    /// Why the device was lost, once it is (driver reset, GPU removed, `destroy`).
+    lost: std::sync::Arc<std::sync::Mutex<Option<String>>>,
 }
 
 /// Default time to wait for the GPU; lavapipe on 2 cores can take seconds for a big frame.
@@ -65,7 +67,21 @@ impl GpuContext {
         }))?;
         // Errors outside an error scope are bugs of ours; log them rather than abort the artist's session.
         device.on_uncaptured_error(std::sync::Arc::new(|e| log::error!("wgpu: {e}")));
-        Ok(Self { instance, adapter, device, queue, timestamps })
+        let lost = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let flag = lost.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            log::error!("the GPU device was lost ({reason:?}): {message}");
+            if let Ok(mut l) = flag.lock() {
+                *l = Some(format!("{reason:?}: {message}"));
+            }
+        });
+        Ok(Self { instance, adapter, device, queue, timestamps, lost })
+    }
+
+    /// Why the device was lost, if it was: everything made from it is dead, and a new context
+    /// (and renderer) must replace it.
+    pub fn lost_reason(&self) -> Option<String> {
+        self.lost.lock().ok().and_then(|l| l.clone())
     }
 
     /// A headless context (no surface).
