@@ -58,6 +58,44 @@ pub enum Command {
     /// Render the same view twice (two skies, models, tiers or times), print the difference
     /// (FLIP and channel figures) and write A, B and the heat map; exit status 1 above a threshold.
     Compare(CompareArgs),
+    /// Render many frames with random changes, sky reloads (good and broken) and shader rebuilds;
+    /// fail on memory growth or any unexpected error; write a report.
+    Soak(SoakArgs),
+}
+
+/// `soak` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct SoakArgs {
+    /// Frames to render.
+    #[arg(long, default_value_t = 10_000)]
+    pub frames: u64,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "160x90")]
+    pub size: String,
+    /// Seed of the random changes.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Largest accepted growth of GPU memory and buffers after warm-up, percent.
+    #[arg(long, default_value_t = 5.0)]
+    pub max_growth_percent: f64,
+    /// Largest accepted growth of resident memory after warm-up, percent (default: --max-growth-percent).
+    #[arg(long)]
+    pub max_rss_growth_percent: Option<f64>,
+    /// Frames of warm-up before growth is measured (default: a quarter of the run).
+    #[arg(long)]
+    pub warm_up_frames: Option<u64>,
+    /// Folder of the sky to soak (sky.toml and its bitmaps; copied first). Default: the built-in sky.
+    #[arg(long)]
+    pub sky_dir: Option<PathBuf>,
+    /// Markdown report to write (none: print only).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// SVG plot of memory over frames to write (linked from the report).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Force the software adapter (lavapipe).
+    #[arg(long)]
+    pub cpu: bool,
 }
 
 /// `compare` arguments.
@@ -259,6 +297,11 @@ pub struct AppArgs {
     /// Read shaders from this folder and hot-reload them (default: the checkout's shaders/, if any).
     #[arg(long)]
     pub shader_dir: Option<PathBuf>,
+    /// Soak the window: random hour, weather, tier, view and model every frame, the sky file (a
+    /// temporary copy) rewritten every 100 frames alternating good and broken, shaders rebuilt
+    /// every 500; memory logged every 100 frames. Use with --frames.
+    #[arg(long)]
+    pub soak: bool,
     /// Open the compare view with B: last-good, model=NAME, tier=N, hour=H, weather=W or snapshot=NAME.
     #[arg(long)]
     pub compare: Option<String>,

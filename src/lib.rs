@@ -7,6 +7,7 @@
 //! - [`compare`]: differences between two renders (FLIP and channel figures, heat maps, layouts).
 //! - [`fsx`]: writes through a temporary file and a rename.
 //! - [`live`]: hot reload of sky files.
+//! - [`soak`]: long runs with random changes and reloads, measuring memory growth.
 //! - [`snapshot`]: snapshots of a sky's files for before/after comparisons.
 //! - [`watch`]: file watching, shared by sky and shader hot reload.
 
@@ -18,4 +19,5 @@ pub mod live;
 pub mod render;
 pub mod sky;
 pub mod snapshot;
+pub mod soak;
 pub mod watch;

@@ -36,6 +36,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             cpu: cli.app.cpu,
             shader_dir: cli.app.shader_dir,
             compare: cli.app.compare,
+            soak: cli.app.soak,
         }),
         Some(Command::Render(args)) => render(&args),
         Some(Command::Check { sky }) => check(&sky),
@@ -49,6 +50,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Radiance(args)) => radiance(&args),
         Some(Command::Compare(args)) => compare(&args),
+        Some(Command::Soak(args)) => soak(&args),
     }
 }
 
@@ -234,6 +236,59 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
         input.tier.stages()
     );
     Ok(())
+}
+
+/// `skytune soak`: runs, prints progress and the verdict, writes the report and the plot.
+fn soak(args: &cli::SoakArgs) -> anyhow::Result<()> {
+    let settings = skytune::soak::SoakSettings {
+        frames: args.frames,
+        size: cli::parse_size(&args.size)?,
+        seed: args.seed,
+        max_growth: args.max_growth_percent / 100.0,
+        max_rss_growth: args.max_rss_growth_percent.unwrap_or(args.max_growth_percent) / 100.0,
+        warm_up_frames: args.warm_up_frames.unwrap_or(args.frames / 4),
+        sky_dir: args.sky_dir.clone(),
+    };
+    let ctx = GpuContext::headless(adapter(args.cpu))?;
+    println!("adapter: {}", ctx.adapter_line());
+    let report = skytune::soak::run(ctx, &settings, |s| {
+        println!(
+            "frame {:>6}: resident {:>7.1} MiB, GPU {} buffers {} textures {:.1} MiB",
+            s.frame,
+            s.rss_bytes as f64 / 1048576.0,
+            s.gpu_buffers,
+            s.gpu_textures,
+            s.gpu_bytes as f64 / 1048576.0
+        )
+    })?;
+    skytune::soak::require_samples(&report)?;
+    if let Some(plot) = &args.plot {
+        report.plot_svg(plot)?;
+        println!("wrote {}", plot.display());
+    }
+    let plot_link = match (&args.plot, &args.report) {
+        (Some(p), Some(r)) => Some(p.strip_prefix(r.parent().unwrap_or(Path::new(""))).unwrap_or(p).display().to_string()),
+        _ => None,
+    };
+    let md = report.markdown(&settings, plot_link.as_deref());
+    if let Some(path) = &args.report {
+        // The report may hold other, hand-written sections: only the soak's is replaced.
+        let existing = std::fs::read_to_string(path).unwrap_or_default();
+        skytune::fsx::write_atomic(path, skytune::soak::splice_section(&existing, &md).as_bytes())?;
+        println!("wrote {}", path.display());
+    }
+    println!(
+        "soak: {} frames in {:.0} s; growth after warm-up: resident {:+.2}%, GPU memory {:+.2}%, GPU objects {:+.2}%; reloads {} good, {} broken, {} shader",
+        settings.frames,
+        report.seconds,
+        report.rss_growth * 100.0,
+        report.gpu_growth * 100.0,
+        report.gpu_object_growth * 100.0,
+        report.good_reloads,
+        report.broken_reloads,
+        report.shader_reloads
+    );
+    report.verdict(&settings).map_err(|e| anyhow!("soak failed:\n{e}"))
 }
 
 /// The sky model the frame arguments ask for instead of the sky file's, if they ask.

@@ -230,6 +230,31 @@ fn a_lost_device_is_reported_and_recreated_in_the_window() {
 }
 
 #[test]
+fn window_soak_changes_everything_and_keeps_running() {
+    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
+    let dir = tempfile::tempdir().unwrap();
+    let state = dir.path().join("state.toml");
+    std::fs::write(&state, "window_size = [320, 180]\n").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
+        .args(["--cpu", "--soak", "--frames", "520"])
+        .env("DISPLAY", &display)
+        .env("SKYTUNE_CONFIG", &state)
+        .env("RUST_LOG", "info")
+        .output()
+        .expect("running skytune");
+    let _ = server.kill();
+    let _ = server.wait();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("soak: working on a copy"), "{stderr}");
+    assert!(stderr.contains("reloaded sky \"soak 100"), "the good edit at frame 100 loaded: {stderr}");
+    assert!(stderr.contains("object[10].name"), "the broken edit at frame 200 was rejected with its location: {stderr}");
+    assert!(stderr.contains("shaders reloaded"), "{stderr}");
+    assert!(stderr.contains("soak: frame 500 resident"), "{stderr}");
+    assert!(stderr.contains("rendered 520 frames, exiting") && !stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
 fn a_corrupt_settings_file_is_reported_and_replaced() {
     let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
     let dir = tempfile::tempdir().unwrap();

@@ -6,7 +6,7 @@ use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::anyhow;
+use anyhow::{anyhow, Context as _};
 use winit::event_loop::ActiveEventLoop;
 use winit::keyboard::{Key, NamedKey};
 
@@ -20,7 +20,78 @@ use crate::sky::{FrameInput, FrameSky, Sky, Tier};
 /// Frame times kept for the stats graph.
 const FRAME_TIMES_KEPT: usize = 240;
 
+/// The window's soak: a temporary copy of the sky, the random driver, memory samples.
+pub struct WindowSoak {
+    /// The temporary sky file being rewritten.
+    pub sky_file: PathBuf,
+    good: String,
+    driver: crate::soak::Driver,
+    dir: PathBuf,
+    /// Resident memory samples (frame, bytes).
+    samples: Vec<(u64, u64)>,
+}
+
+impl WindowSoak {
+    /// Copies the sky of `spec` (its folder's files, or the built-in sky) to a temporary folder.
+    pub fn new(spec: &SkySpec) -> anyhow::Result<Self> {
+        let dir = std::env::temp_dir().join(format!("skytune-window-soak-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        let source = match spec {
+            SkySpec::File(p) => Some(p.clone()),
+            SkySpec::Continent { path, season } => crate::sky::load::load_continent(path).ok().map(|c| c.skies[*season].clone()),
+            SkySpec::Builtin => None,
+        };
+        let sky_file = match source {
+            Some(p) => {
+                for entry in std::fs::read_dir(p.parent().unwrap_or(Path::new("."))).with_context(|| format!("reading {}", p.display()))? {
+                    let f = entry?.path();
+                    if f.is_file() {
+                        std::fs::copy(&f, dir.join(f.file_name().unwrap_or_default()))?;
+                    }
+                }
+                dir.join(p.file_name().unwrap_or_default())
+            }
+            None => crate::sky::builtin::write_sky_folder(&dir, crate::sky::procedural::preset("default").ok_or_else(|| anyhow!("no default preset"))?, 7)?,
+        };
+        let good = std::fs::read_to_string(&sky_file).with_context(|| format!("reading {}", sky_file.display()))?;
+        log::info!("soak: working on a copy of the sky in {}", dir.display());
+        Ok(Self { sky_file, good, driver: crate::soak::Driver::new(1), dir, samples: Vec::new() })
+    }
+}
+
+impl Drop for WindowSoak {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
 impl App {
+    /// Soak mode: random controls every frame, sky rewrites every 100 frames, shader rebuilds every
+    /// 500, memory logged every 100.
+    fn step_soak(&mut self) {
+        let Some(soak) = self.soak.as_mut() else { return };
+        let frame = self.clock.frames() + 1;
+        let (input, camera) = soak.driver.frame(self.live.sky());
+        let c = &mut self.controls;
+        (c.hour, c.game_hours, c.weather, c.tier, c.sky_model, c.camera) = (input.hour, input.game_hours, input.weather, input.tier, input.sky_model, camera);
+        if frame % crate::soak::RELOAD_EVERY == 0 {
+            let n = frame / crate::soak::RELOAD_EVERY;
+            let text = if n % 2 == 0 { crate::soak::broken_version(&soak.good) } else { crate::soak::good_version(&soak.good, frame) };
+            if let Err(e) = crate::fsx::write_atomic(&soak.sky_file, text.as_bytes()) {
+                self.gpu_error = Some(format!("soak: {e}"));
+            }
+        }
+        if frame % crate::soak::SAMPLE_EVERY == 0 {
+            let rss = crate::soak::resident_bytes();
+            soak.samples.push((frame, rss));
+            log::info!("soak: frame {frame} resident {:.1} MiB", rss as f64 / 1048576.0);
+        }
+        if frame % crate::soak::SHADERS_EVERY == 0 {
+            self.reload_shaders();
+        }
+    }
+
     /// One frame: reloads, the clock, evaluation, the panels, the surface, then the UI's actions.
     pub(super) fn redraw(&mut self, event_loop: &ActiveEventLoop) -> anyhow::Result<()> {
         let t0 = Instant::now();
@@ -32,6 +103,7 @@ impl App {
             let _ = gpu.ctx.device.poll(wgpu::PollType::Poll);
         }
         self.apply_reloads();
+        self.step_soak();
         if let Err(e) = self.step_contact_sheet() {
             self.sheet = None;
             self.gpu_error = Some(format!("contact sheet failed: {e:#}"));
@@ -76,6 +148,13 @@ impl App {
             event_loop.exit();
         }
         if self.config.frames.is_some_and(|n| frames >= n) {
+            if let Some(soak) = &self.soak {
+                // Growth after the first tenth of the run (warm-up), as `skytune soak` measures it.
+                let steady = &soak.samples[(soak.samples.len() / 10).min(soak.samples.len().saturating_sub(1))..];
+                if let (Some(first), Some(last)) = (steady.first(), steady.last()) {
+                    log::info!("soak: resident memory {:+.1}% after warm-up ({} samples)", (last.1 as f64 / first.1.max(1) as f64 - 1.0) * 100.0, steady.len());
+                }
+            }
             log::info!("rendered {frames} frames, exiting");
             event_loop.exit();
         }

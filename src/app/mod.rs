@@ -56,6 +56,8 @@ pub struct AppConfig {
     pub shader_dir: Option<PathBuf>,
     /// Open the compare view with this B (see [`compare::CompareB::parse`]).
     pub compare: Option<String>,
+    /// Soak mode (see `skytune --help`).
+    pub soak: bool,
 }
 
 /// Whether a display server is reachable (X11 or Wayland).
@@ -70,10 +72,13 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
     let spec = match &config.sky {
         Some(p) => SkySpec::from_path(p, config.season.as_deref()).map_err(|e| anyhow!("{e}"))?,
         None => match &settings.last_sky {
-            Some(p) if p.is_file() => SkySpec::from_path(p, config.season.as_deref()).unwrap_or(SkySpec::Builtin),
+            Some(p) if p.is_file() && !config.soak => SkySpec::from_path(p, config.season.as_deref()).unwrap_or(SkySpec::Builtin),
             _ => SkySpec::Builtin,
         },
     };
+    // A soak rewrites the sky file: it works on a temporary copy, never on the artist's.
+    let soak = if config.soak { Some(frame::WindowSoak::new(&spec)?) } else { None };
+    let spec = soak.as_ref().map_or(spec, |s| SkySpec::File(s.sky_file.clone()));
     if !display_available() {
         return headless_fallback(&spec, &config);
     }
@@ -119,6 +124,7 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         shaders_changed: Arc::new(AtomicBool::new(false)),
         compare: compare::CompareView::default(),
         recreate_device: false,
+        soak,
         test_lose_device_at: std::env::var("SKYTUNE_TEST_LOSE_DEVICE_AT").ok().and_then(|v| v.parse().ok()),
         snapshots: Vec::new(),
     };
@@ -168,6 +174,8 @@ pub struct App {
     compare: compare::CompareView,
     /// The user asked for a new GPU device (done at the start of the next frame).
     recreate_device: bool,
+    /// Soak mode's state.
+    soak: Option<frame::WindowSoak>,
     /// Test hook: frame at which to destroy the device (`SKYTUNE_TEST_LOSE_DEVICE_AT`).
     test_lose_device_at: Option<u64>,
     /// Snapshots of the sky file shown (refreshed when the compare view opens and after saving one).

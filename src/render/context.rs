@@ -38,6 +38,8 @@ pub struct GpuContext {
     pub timestamps: bool,
     /// Why the device was lost, once it is (driver reset, GPU removed, `destroy`).
     lost: std::sync::Arc<std::sync::Mutex<Option<String>>>,
+    /// wgpu errors raised outside any error scope so far (bugs of ours: logged, counted).
+    uncaptured: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
 /// Default time to wait for the GPU; lavapipe on 2 cores can take seconds for a big frame.
@@ -66,7 +68,12 @@ impl GpuContext {
             ..Default::default()
         }))?;
         // Errors outside an error scope are bugs of ours; log them rather than abort the artist's session.
-        device.on_uncaptured_error(std::sync::Arc::new(|e| log::error!("wgpu: {e}")));
+        let uncaptured = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let count = uncaptured.clone();
+        device.on_uncaptured_error(std::sync::Arc::new(move |e| {
+            count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            log::error!("wgpu: {e}");
+        }));
         let lost = std::sync::Arc::new(std::sync::Mutex::new(None));
         let flag = lost.clone();
         device.set_device_lost_callback(move |reason, message| {
@@ -75,13 +82,18 @@ impl GpuContext {
                 *l = Some(format!("{reason:?}: {message}"));
             }
         });
-        Ok(Self { instance, adapter, device, queue, timestamps, lost })
+        Ok(Self { instance, adapter, device, queue, timestamps, lost, uncaptured })
     }
 
     /// Why the device was lost, if it was: everything made from it is dead, and a new context
     /// (and renderer) must replace it.
     pub fn lost_reason(&self) -> Option<String> {
         self.lost.lock().ok().and_then(|l| l.clone())
+    }
+
+    /// wgpu errors raised outside any error scope so far.
+    pub fn uncaptured_errors(&self) -> u64 {
+        self.uncaptured.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// A headless context (no surface).

@@ -160,6 +160,7 @@ impl SkyRenderer {
         for pass in &mut self.passes {
             pass.commit_pipelines(result.is_ok());
         }
+        release_freed_memory();
         result
     }
 
@@ -377,6 +378,23 @@ impl SkyRenderer {
         }
         for pass in &mut self.passes {
             pass.after_submit();
+        }
+    }
+}
+
+/// Hands heap memory freed so far back to the system. A shader compiler (lavapipe's LLVM, a
+/// driver's) makes large short-lived allocations for every pipeline; glibc keeps freed heap in its
+/// arenas, so without this the resident size ratchets up with every shader rebuild of a long
+/// session (measured by `skytune soak`: docs/reliability.md).
+pub fn release_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        extern "C" {
+            fn malloc_trim(pad: usize) -> std::ffi::c_int;
+        }
+        // SAFETY: malloc_trim only releases free heap pages; it has no preconditions.
+        unsafe {
+            malloc_trim(0);
         }
     }
 }
