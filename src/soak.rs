@@ -211,7 +211,7 @@ pub fn run(ctx: GpuContext, settings: &SoakSettings, mut progress: impl FnMut(&S
 
         if frame % RELOAD_EVERY == 0 {
             reloads += 1;
-            let broken = reloads % 2 == 0;
+            let broken = reloads.is_multiple_of(2);
             if broken {
                 let before = headless.render(&sky, &still_input, &Camera::default(), &still_options)?;
                 crate::fsx::write_atomic(&sky_file, broken_text.as_bytes())?;

@@ -75,19 +75,19 @@ impl App {
         let (input, camera) = soak.driver.frame(self.live.sky());
         let c = &mut self.controls;
         (c.hour, c.game_hours, c.weather, c.tier, c.sky_model, c.camera) = (input.hour, input.game_hours, input.weather, input.tier, input.sky_model, camera);
-        if frame % crate::soak::RELOAD_EVERY == 0 {
+        if frame.is_multiple_of(crate::soak::RELOAD_EVERY) {
             let n = frame / crate::soak::RELOAD_EVERY;
-            let text = if n % 2 == 0 { crate::soak::broken_version(&soak.good) } else { crate::soak::good_version(&soak.good, frame) };
+            let text = if n.is_multiple_of(2) { crate::soak::broken_version(&soak.good) } else { crate::soak::good_version(&soak.good, frame) };
             if let Err(e) = crate::fsx::write_atomic(&soak.sky_file, text.as_bytes()) {
                 self.gpu_error = Some(format!("soak: {e}"));
             }
         }
-        if frame % crate::soak::SAMPLE_EVERY == 0 {
+        if frame.is_multiple_of(crate::soak::SAMPLE_EVERY) {
             let rss = crate::soak::resident_bytes();
             soak.samples.push((frame, rss));
             log::info!("soak: frame {frame} resident {:.1} MiB", rss as f64 / 1048576.0);
         }
-        if frame % crate::soak::SHADERS_EVERY == 0 {
+        if frame.is_multiple_of(crate::soak::SHADERS_EVERY) {
             self.reload_shaders();
         }
     }
