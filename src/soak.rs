@@ -115,7 +115,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Growth of `value` from the first samples after warm-up to the last ones (medians of up to 5).
 fn growth(samples: &[Sample], value: impl Fn(&Sample) -> f64) -> f64 {
-    let n = samples.len().min(5).max(1);
+    let n = samples.len().clamp(1, 5);
     if samples.len() < 2 {
         return 0.0;
     }
