@@ -37,7 +37,10 @@ done
 echo "smoke: $count sky files rendered at 4 (hour, weather) pairs each, plus the built-in sky"
 
 echo "soak: 1000 frames of random changes, sky reloads (good and broken) and shader rebuilds"
-./target/debug/skytune soak --frames 1000 --size 96x54 --warm-up-frames 500 --max-rss-growth-percent 15 --report "$out/reliability.md" >/dev/null
+./target/debug/skytune soak --frames 1000 --size 96x54 --warm-up-frames 500 --max-rss-growth-percent 10 --report "$out/reliability.md" >/dev/null
+
+echo "smoke: skytune bench frame --quick (every sky against the fill-rate floor)"
+./target/debug/skytune bench frame --quick --out "$out/performance.md" | tail -1
 
 echo "smoke: skytune bench (a few frames; the report goes to a temporary file)"
 ./target/debug/skytune bench --frames 3 --size 160x90 --out "$out/benchmarks.md" >/dev/null

@@ -51,8 +51,9 @@ pub enum Command {
         #[arg(long)]
         force: bool,
     },
-    /// Measure the sky passes (depth split and tiers) and write a Markdown report.
-    Bench(BenchArgs),
+    /// Measure the sky passes (depth split and tiers) and write a Markdown report;
+    /// `skytune bench frame` compares whole frames with the adapter's fill-rate floor.
+    Bench(BenchCommand),
     /// Sky radiance of a list of cases (CSV in, CSV out) from a physical sky model.
     Radiance(RadianceArgs),
     /// Render the same view twice (two skies, models, tiers or times), print the difference
@@ -305,6 +306,49 @@ pub struct AppArgs {
     /// Open the compare view with B: last-good, model=NAME, tier=N, hour=H, weather=W or snapshot=NAME.
     #[arg(long)]
     pub compare: Option<String>,
+}
+
+/// `bench` and its subcommands.
+#[derive(Debug, Args, Clone)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct BenchCommand {
+    /// What to measure (none: the sky passes).
+    #[command(subcommand)]
+    pub what: Option<BenchWhat>,
+    /// Settings of the sky-pass benchmark.
+    #[command(flatten)]
+    pub args: BenchArgs,
+}
+
+/// Benchmarks besides the sky passes.
+#[derive(Debug, Subcommand, Clone)]
+pub enum BenchWhat {
+    /// Every sky at several hours, weathers and two views against a full-screen pass sampling one
+    /// texture (the fill-rate floor), measured side by side; per-object and CPU costs; reload latency.
+    Frame(FrameBenchArgs),
+}
+
+/// `bench frame` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct FrameBenchArgs {
+    /// Measured frames per case (after 2 warm-up frames).
+    #[arg(long, default_value_t = 9)]
+    pub frames: u32,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Folder of the skies to measure besides the built-in one (each SUBFOLDER/sky.toml).
+    #[arg(long, default_value = "skies")]
+    pub skies: PathBuf,
+    /// Markdown report to write.
+    #[arg(long, default_value = "docs/performance.md")]
+    pub out: PathBuf,
+    /// Few frames at a small size (CI).
+    #[arg(long)]
+    pub quick: bool,
+    /// Force the software adapter (lavapipe).
+    #[arg(long)]
+    pub cpu: bool,
 }
 
 /// `bench` arguments.

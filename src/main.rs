@@ -1,6 +1,7 @@
 //! The `skytune` binary: window (default), `render`, `check`, `watch`, `new-sky`, `bench`, `radiance`.
 
 mod bench;
+mod bench_frame;
 mod cli;
 
 use std::path::Path;
@@ -47,7 +48,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             println!("wrote {} and its bitmaps; open it with `skytune {}`", sky.display(), sky.display());
             Ok(())
         }
-        Some(Command::Bench(args)) => bench::run(&args),
+        Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Frame(args)), .. })) => bench_frame::run(&args),
+        Some(Command::Bench(cmd)) => bench::run(&cmd.args),
         Some(Command::Radiance(args)) => radiance(&args),
         Some(Command::Compare(args)) => compare(&args),
         Some(Command::Soak(args)) => soak(&args),

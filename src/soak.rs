@@ -115,7 +115,8 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Growth of `value` from the first samples after warm-up to the last ones (medians of up to 5).
 fn growth(samples: &[Sample], value: impl Fn(&Sample) -> f64) -> f64 {
-    let n = samples.len().clamp(1, 5);
+    // The first and last third of the samples (at most 5 each): short runs compare something.
+    let n = (samples.len() / 3).clamp(1, 5);
     if samples.len() < 2 {
         return 0.0;
     }
@@ -241,12 +242,8 @@ pub fn run(ctx: GpuContext, settings: &SoakSettings, mut progress: impl FnMut(&S
                 }
             }
         }
-        if frame % SHADERS_EVERY == 0 {
-            match headless.renderer.reload_shaders(&headless.ctx) {
-                Ok(()) => report.shader_reloads += 1,
-                Err(e) => report.errors.push(format!("frame {frame}: shader rebuild: {e}")),
-            }
-        }
+        // Sampled before this frame's shader rebuild: the old pipelines' memory is freed over the
+        // next frames, and a sample right after a rebuild would measure that transient.
         if frame % SAMPLE_EVERY == 0 {
             headless.ctx.wait_idle()?;
             // What the allocator holds but nobody uses is not growth.
@@ -254,6 +251,12 @@ pub fn run(ctx: GpuContext, settings: &SoakSettings, mut progress: impl FnMut(&S
             let sample = gpu_sample(&headless.ctx, frame);
             progress(&sample);
             report.samples.push(sample);
+        }
+        if frame % SHADERS_EVERY == 0 {
+            match headless.renderer.reload_shaders(&headless.ctx) {
+                Ok(()) => report.shader_reloads += 1,
+                Err(e) => report.errors.push(format!("frame {frame}: shader rebuild: {e}")),
+            }
         }
     }
     let uncaptured = headless.ctx.uncaptured_errors();
@@ -337,7 +340,7 @@ impl SoakReport {
         use std::fmt::Write;
         let mib = |b: f64| b / (1u64 << 20) as f64;
         let mut md = String::new();
-        let _ = writeln!(md, "## Soak\n");
+        let _ = writeln!(md, "### Measured run\n");
         let _ = writeln!(
             md,
             "Written by `skytune soak --frames {} --size {}x{} --seed {} --warm-up-frames {}` ({}); re-run it to refresh this section.\n",
@@ -361,7 +364,7 @@ impl SoakReport {
         let _ = writeln!(md, "- errors other than the broken file's: {}", if self.errors.is_empty() { "none".to_string() } else { self.errors.join("; ") });
         let _ = writeln!(
             md,
-            "- growth after warm-up ({} of {} samples dropped; medians of the first and last 5 samples; resident memory sampled after handing freed heap back): resident memory {:+.2}% (limit {:.0}%), GPU memory {:+.2}%, live GPU buffers {:+.2}% (limit {:.0}%); GPU memory is wgpu-hal's count of buffer and texture memory (its texture object counter is not balanced on Vulkan and is listed for information only)\n",
+            "- growth after warm-up ({} of {} samples dropped; medians of the first and last third of the samples, at most 5 each; resident memory sampled after handing freed heap back): resident memory {:+.2}% (limit {:.0}%), GPU memory {:+.2}%, live GPU buffers {:+.2}% (limit {:.0}%); GPU memory is wgpu-hal's count of buffer and texture memory (its texture object counter is not balanced on Vulkan and is listed for information only)\n",
             self.warm_up,
             self.samples.len(),
             self.rss_growth * 100.0,
@@ -426,7 +429,7 @@ pub const SECTION_END: &str = "<!-- soak:end -->";
 
 /// `existing` with its soak section replaced by `section` (appended when it has none).
 pub fn splice_section(existing: &str, section: &str) -> String {
-    let block = format!("{SECTION_BEGIN}\n{section}{SECTION_END}\n");
+    let block = format!("{SECTION_BEGIN}\n{section}\n{SECTION_END}\n\n");
     match (existing.find(SECTION_BEGIN), existing.find(SECTION_END)) {
         (Some(a), Some(b)) if b > a => format!("{}{block}{}", &existing[..a], existing[b + SECTION_END.len()..].trim_start_matches('\n')),
         _ if existing.trim().is_empty() => format!("# Reliability\n\n{block}"),

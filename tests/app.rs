@@ -43,6 +43,7 @@ fn run_panels(controls: &mut Controls, events: Vec<egui::Event>) -> Vec<UiAction
             has_file: true,
         }),
         device_lost: true,
+        floor_ms: Some(6.0),
     };
     let ctx = egui::Context::default();
     let mut actions = Vec::new();

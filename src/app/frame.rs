@@ -254,6 +254,7 @@ impl App {
             model_progress: gpu.renderer.pass::<crate::render::sky_view::SkyViewPass>().and_then(|p| p.progress()),
             compare: None,
             device_lost: gpu.ctx.lost_reason().is_some(),
+            floor_ms: gpu.floor_ms(self.clock.frames()),
         };
         let compare = self.controls.compare.open.then(|| {
             let c = &self.controls.compare;

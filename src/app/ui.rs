@@ -166,6 +166,8 @@ pub struct UiInfo<'a> {
     pub compare: Option<CompareInfo>,
     /// The GPU device was lost (the errors panel offers to recreate it).
     pub device_lost: bool,
+    /// The fill-rate floor at the window's size, ms (see `render::baseline`), once measured.
+    pub floor_ms: Option<f32>,
 }
 
 /// Keyboard shortcuts, shown in the help overlay.
@@ -405,6 +407,11 @@ fn stats(ui: &mut egui::Ui, info: &UiInfo<'_>) {
         }
     };
     section(ui, "GPU time per phase (timestamp queries):", info.gpu_ms);
+    if let Some(floor) = info.floor_ms.filter(|f| *f > 0.0 && !info.gpu_ms.is_empty()) {
+        let sky: f32 = info.gpu_ms.iter().map(|(_, ms)| ms).sum();
+        ui.label(format!("fill-limit ratio {:.1} (sky {sky:.2} ms / floor {floor:.2} ms: one full-screen pass sampling one texture)", sky / floor))
+            .on_hover_text("skytune bench frame measures it for every sky; the goal is 3");
+    }
     section(ui, "CPU time per frame section:", info.cpu_ms);
     let s = info.stats;
     ui.label(format!("draw calls {}, objects drawn {}, hidden {}, stars {}", s.draw_calls, s.objects_drawn, s.objects_hidden, s.stars));

@@ -41,7 +41,12 @@ pub struct WindowGpu {
     capture: Option<(Headless, u64)>,
     /// Bitmap inspector texture and the bitmap it shows.
     pub inspector: Option<(usize, egui::TextureHandle)>,
+    /// The fill-rate floor pass, its target, and its last measurement (ms, frame).
+    floor: Option<FloorProbe>,
 }
+
+/// The fill-rate floor pass, its target at the window's size, and its last measurement (ms, frame).
+type FloorProbe = (crate::render::baseline::Baseline, crate::render::Offscreen, Option<(f32, u64)>);
 
 impl WindowGpu {
     /// Opens the window and its device, builds the renderer (falling back to the embedded shaders
@@ -92,7 +97,7 @@ impl WindowGpu {
         );
         let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, format, egui_wgpu::RendererOptions::default());
         let depth = depth_view(&ctx.device, surface_config.width, surface_config.height);
-        Ok((Self { window, surface, surface_config, ctx, renderer, depth, egui_state, egui_renderer, capture: None, inspector: None }, shader_error))
+        Ok((Self { window, surface, surface_config, ctx, renderer, depth, egui_state, egui_renderer, capture: None, inspector: None, floor: None }, shader_error))
     }
 
     /// Follows a new window size (a zero size, minimised, keeps the old surface; sizes beyond
@@ -143,6 +148,31 @@ impl WindowGpu {
         }
         h.resize(size.0, size.1);
         Ok(h.render(sky, input, camera, options)?)
+    }
+
+    /// The fill-rate floor at the window's size (ms), measured again every 300 frames (a few ms
+    /// of blocking on a software rasteriser, rarely).
+    pub fn floor_ms(&mut self, frame: u64) -> Option<f32> {
+        let (w, h) = self.size();
+        let stale = match &self.floor {
+            Some((_, target, last)) => (target.width, target.height) != (w, h) || last.is_none_or(|(_, at)| frame >= at + 300),
+            None => frame > 10,
+        };
+        if stale {
+            if self.floor.as_ref().is_none_or(|(_, t, _)| (t.width, t.height) != (w, h)) {
+                let baseline = crate::render::baseline::Baseline::new(&self.ctx.device, &self.ctx.queue, self.renderer.library(), crate::render::OFFSCREEN_FORMAT).ok()?;
+                self.floor = Some((baseline, crate::render::Offscreen::new(&self.ctx.device, w, h), None));
+            }
+            let (baseline, target, last) = self.floor.as_mut()?;
+            let _ = self.ctx.wait_idle();
+            let t = std::time::Instant::now();
+            let mut encoder = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("App::floor") });
+            baseline.record(&mut encoder, &target.color_view);
+            self.ctx.queue.submit([encoder.finish()]);
+            let _ = self.ctx.wait_idle();
+            *last = Some((t.elapsed().as_secs_f32() * 1000.0, frame));
+        }
+        self.floor.as_ref().and_then(|(_, _, last)| last.map(|(ms, _)| ms))
     }
 
     /// Uploads egui's texture changes; they do not need the surface, so none is ever lost.

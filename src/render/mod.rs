@@ -1,6 +1,7 @@
 //! wgpu renderer of sky scenes, organised as an ordered list of phases (see [`pass`]). One pass =
 //! one module here + one `.wgsl` file in `shaders/` of the same name.
 
+pub mod baseline;
 pub mod camera;
 pub mod context;
 pub mod error;

@@ -1,0 +1,267 @@
+//! `skytune bench frame`: whole frames of every sky against the adapter's fill-rate floor (one
+//! full-screen triangle sampling one 128 x 128 texture into the same target), measured side by
+//! side: floor and sky frames alternate, so a noisy machine's drifts hit both alike. Also the
+//! per-object cost (each object left out in turn), the CPU cost of evaluating a sky of 50 objects,
+//! and the latency from a file write to the first frame showing it.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, Context as _};
+
+use crate::cli::{self, FrameBenchArgs};
+use skytune::live::{LiveSky, ReloadEvent, SkySpec};
+use skytune::render::baseline::Baseline;
+use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions, ShaderLibrary, OFFSCREEN_FORMAT};
+use skytune::sky::builtin::default_sky;
+use skytune::sky::{FrameInput, Sky};
+
+fn median(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s[s.len() / 2]
+}
+
+/// (hour, weather) pairs measured for every sky: noon, dusk, night, storm.
+const TIMES: [(f32, f32); 4] = [(12.0, 0.0), (18.5, 0.3), (23.0, 0.0), (15.0, 1.0)];
+
+/// One measured case.
+struct Case {
+    sky: String,
+    hour: f32,
+    weather: f32,
+    view: &'static str,
+    sky_ms: f64,
+    floor_ms: f64,
+    phases: Vec<(&'static str, f64)>,
+}
+
+/// Wall time of one frame recorded by `record`, submitted and waited for, ms.
+fn timed(ctx: &GpuContext, record: impl FnOnce(&mut wgpu::CommandEncoder)) -> anyhow::Result<f64> {
+    let t = Instant::now();
+    let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("BenchFrame::encoder") });
+    record(&mut encoder);
+    ctx.queue.submit([encoder.finish()]);
+    ctx.wait_idle()?;
+    Ok(t.elapsed().as_secs_f64() * 1000.0)
+}
+
+/// The skies: the built-in one and every `DIR/*/sky.toml`.
+fn skies(dir: &Path) -> anyhow::Result<Vec<(String, Sky)>> {
+    let mut out = vec![("built-in".to_string(), default_sky())];
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir).map(|d| d.filter_map(|e| e.ok()).map(|e| e.path().join("sky.toml")).filter(|p| p.is_file()).collect()).unwrap_or_default();
+    files.sort();
+    for f in files {
+        let sky = skytune::sky::load_sky_file(&f).map_err(|e| anyhow!("{e}"))?;
+        let name = f.parent().and_then(|p| p.file_name()).map_or_else(|| f.display().to_string(), |n| n.to_string_lossy().into_owned());
+        out.push((name, sky));
+    }
+    Ok(out)
+}
+
+pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
+    let (w, h) = if args.quick { (160, 90) } else { cli::parse_size(&args.size)? };
+    let frames = if args.quick { 2 } else { args.frames.max(1) };
+    let ctx = GpuContext::headless(if args.cpu { AdapterChoice::Cpu } else { AdapterChoice::from_env() })?;
+    let adapter = ctx.adapter_line();
+    println!("adapter: {adapter}");
+    let mut hl = Headless::new(ctx.clone(), w, h)?;
+    let floor = Baseline::new(&ctx.device, &ctx.queue, &ShaderLibrary::embedded(), OFFSCREEN_FORMAT)?;
+    let skies = skies(&args.skies)?;
+    let views: [(&str, Camera); 2] =
+        [("horizon", Camera { yaw_deg: 180.0, pitch_deg: 10.0, ..Camera::default() }), ("zenith", Camera::preset("zenith").ok_or_else(|| anyhow!("no zenith view"))?)];
+    let options = RenderOptions::default();
+
+    let mut cases = Vec::new();
+    for (name, sky) in &skies {
+        hl.set_sky(sky)?;
+        for (hour, weather) in TIMES {
+            for (view, camera) in &views {
+                let input = FrameInput::new(hour, weather);
+                let frame = sky.evaluate(&input);
+                let (mut sky_ms, mut floor_ms) = (Vec::new(), Vec::new());
+                let mut phases: Vec<Vec<(&'static str, f32)>> = Vec::new();
+                for i in 0..frames + 2 {
+                    let f = timed(&ctx, |e| floor.record(e, &hl.target.color_view))?;
+                    let target = hl.target.target();
+                    let s = timed(&ctx, |e| hl.renderer.render(&ctx, e, &target, &frame, camera, &options))?;
+                    hl.renderer.after_submit();
+                    if i >= 2 {
+                        floor_ms.push(f);
+                        sky_ms.push(s);
+                        phases.push(hl.renderer.gpu_pass_ms().to_vec());
+                    }
+                }
+                let names: Vec<&'static str> = phases.first().map(|p| p.iter().map(|(n, _)| *n).collect()).unwrap_or_default();
+                let phase_medians =
+                    names.iter().map(|n| (*n, median(&phases.iter().filter_map(|p| p.iter().find(|(m, _)| m == n).map(|(_, ms)| *ms as f64)).collect::<Vec<_>>()))).collect();
+                let case = Case { sky: name.clone(), hour, weather, view, sky_ms: median(&sky_ms), floor_ms: median(&floor_ms), phases: phase_medians };
+                println!(
+                    "{:<10} {:>5.1} h weather {:.1} {:<7}: frame {:>8.2} ms, floor {:>6.2} ms, ratio {:>5.1}",
+                    case.sky,
+                    hour,
+                    weather,
+                    view,
+                    case.sky_ms,
+                    case.floor_ms,
+                    case.sky_ms / case.floor_ms
+                );
+                cases.push(case);
+            }
+        }
+    }
+    let ratios: Vec<f64> = cases.iter().map(|c| c.sky_ms / c.floor_ms).collect();
+    let worst = ratios.iter().copied().fold(0.0, f64::max);
+    let med = median(&ratios);
+
+    // Per object: the built-in sky at dusk, horizon view, each object left out in turn.
+    let (_, builtin) = &skies[0];
+    hl.set_sky(builtin)?;
+    let dusk = FrameInput::new(18.5, 0.3);
+    let camera = views[0].1;
+    let frame_ms = |hl: &mut Headless, input: &FrameInput| -> anyhow::Result<f64> {
+        let frame = builtin.evaluate(input);
+        let mut v = Vec::new();
+        for i in 0..frames + 2 {
+            let target = hl.target.target();
+            let ms = timed(&ctx, |e| hl.renderer.render(&ctx, e, &target, &frame, &camera, &options))?;
+            hl.renderer.after_submit();
+            if i >= 2 {
+                v.push(ms);
+            }
+        }
+        Ok(median(&v))
+    };
+    let all = frame_ms(&mut hl, &dusk)?;
+    let mut per_object = Vec::new();
+    for o in &builtin.objects {
+        let without = frame_ms(&mut hl, &FrameInput { disabled: vec![o.name.clone()], ..dusk.clone() })?;
+        per_object.push((o.name.clone(), all - without));
+    }
+    let nothing = frame_ms(&mut hl, &FrameInput { disabled: builtin.objects.iter().map(|o| o.name.clone()).collect(), ..dusk.clone() })?;
+
+    // CPU: evaluating a sky of 50 objects.
+    let (eval_us, objects) = evaluation_cost(if args.quick { 200 } else { 2000 })?;
+    // Reload latency: a file written to the first frame that shows it.
+    let latency = reload_latency(&mut hl, if args.quick { 2 } else { 7 })?;
+
+    let mut md = String::new();
+    let _ = writeln!(md, "# Performance\n\nWritten by `skytune bench frame` (`cargo run --release -- bench frame`); re-run it to refresh this file.\n");
+    let _ = writeln!(md, "- adapter: {adapter}");
+    let _ = writeln!(
+        md,
+        "- machine: {} logical CPUs; release build; {w}x{h}; {} measured frames per case after 2 warm-up frames",
+        std::thread::available_parallelism().map_or(1, |n| n.get()),
+        frames
+    );
+    let _ = writeln!(
+        md,
+        "- method: each frame is recorded, submitted and waited for (wall time: on lavapipe the rasterisation itself). The floor is one render pass that clears the same target (rgba8) and draws one full-screen triangle sampling one 128 x 128 texture (`shaders/baseline.wgsl`); floor and sky frames alternate within each case, and the ratio is sky over floor of the same case. Phase columns are GPU timestamp medians."
+    );
+    let _ = writeln!(md, "\n**fill_limit_ratio worst={worst:.1} median={med:.1}** (goal: 3)\n");
+    let phase_names: Vec<&str> = cases.first().map(|c| c.phases.iter().map(|(n, _)| *n).collect()).unwrap_or_default();
+    let _ = write!(md, "| sky | hour | weather | view | frame ms | floor ms | ratio |");
+    for n in &phase_names {
+        let _ = write!(md, " {n} ms |");
+    }
+    let _ = write!(md, "\n|---|---:|---:|---|---:|---:|---:|");
+    for _ in &phase_names {
+        let _ = write!(md, "---:|");
+    }
+    let _ = writeln!(md);
+    for c in &cases {
+        let _ = write!(md, "| {} | {} | {} | {} | {:.2} | {:.2} | {:.1} |", c.sky, c.hour, c.weather, c.view, c.sky_ms, c.floor_ms, c.sky_ms / c.floor_ms);
+        for n in &phase_names {
+            let _ = write!(md, " {:.2} |", c.phases.iter().find(|(m, _)| m == n).map_or(f64::NAN, |(_, v)| *v));
+        }
+        let _ = writeln!(md);
+    }
+    let _ = writeln!(md, "\n## Where the time goes\n\nThe built-in sky at 18.5 h, weather 0.3, horizon view: {all:.2} ms a frame; with every object left out {nothing:.2} ms. Each object's cost is the frame time minus the frame time without it (side by side, medians):\n");
+    let _ = writeln!(md, "| object | ms | share of the frame |\n|---|---:|---:|");
+    for (name, ms) in &per_object {
+        let _ = writeln!(md, "| {name} | {ms:.2} | {:.0}% |", 100.0 * ms / all);
+    }
+    let _ = writeln!(md, "\n## CPU: evaluating the sky\n\n`Sky::evaluate` for a sky of {objects} objects (the built-in sky plus billboards on its paths): median {eval_us:.1} us per frame (target: 50 us).\n");
+    let _ = writeln!(md, "## Hot-reload latency\n\nFrom the end of a file write to the end of the first frame rendered with the change (file watcher with its debounce of {} ms, off-thread load, upload, one frame at {w}x{h}), medians of {} edits (target: 100 ms plus the debounce):\n", skytune::watch::DEBOUNCE.as_millis(), latency.0.len().min(latency.1.len()));
+    let _ = writeln!(md, "| edit | median ms |\n|---|---:|\n| sky file | {:.0} |\n| bitmap | {:.0} |", median(&latency.0), median(&latency.1));
+    skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
+    println!("per object (built-in sky, dusk, horizon): {}", per_object.iter().map(|(n, ms)| format!("{n} {ms:.2} ms")).collect::<Vec<_>>().join(", "));
+    println!("evaluate: {eval_us:.1} us for {objects} objects; reload latency: sky file {:.0} ms, bitmap {:.0} ms", median(&latency.0), median(&latency.1));
+    println!("wrote {}", args.out.display());
+    println!("fill_limit_ratio worst={worst:.2} median={med:.2}");
+    Ok(())
+}
+
+/// Median CPU time of `Sky::evaluate` for a sky of 50 objects, microseconds, and the object count.
+fn evaluation_cost(runs: u32) -> anyhow::Result<(f64, usize)> {
+    let dir = std::env::temp_dir().join(format!("skytune-bench-eval-{}", std::process::id()));
+    let palette = skytune::sky::procedural::preset("default").ok_or_else(|| anyhow!("no default preset"))?;
+    let file = skytune::sky::builtin::write_sky_folder(&dir, palette, 7)?;
+    let base = skytune::sky::load_sky_file(&file).map_err(|e| anyhow!("{e}"))?;
+    let mut text = std::fs::read_to_string(&file)?;
+    for i in base.objects.len()..50 {
+        let path = ["sun", "moon", "small_moon", "planet"][i % 4];
+        let _ = write!(
+            text,
+            "\n[[object]]\nname = \"extra_{i}\"\npriority = 30\npath = \"{path}\"\n[object.standard]\nshape = {{ kind = \"billboard\", size_deg = 2 }}\nblend = \"additive\"\ndiffuse = {{ mode = \"bitmap\", bitmap = \"sun_color.png\" }}\nref_color = \"diffuse\"\n[[object.standard.stage]]\ntexture = \"sun.png\"\n"
+        );
+    }
+    std::fs::write(&file, text)?;
+    let sky = skytune::sky::load_sky_file(&file).map_err(|e| anyhow!("{e}"))?;
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut times = Vec::new();
+    for i in 0..runs {
+        let input = FrameInput::new((i as f32 * 0.37) % 24.0, (i as f32 * 0.13) % 1.0);
+        let t = Instant::now();
+        let frame = sky.evaluate(&input);
+        times.push(t.elapsed().as_secs_f64() * 1e6);
+        std::hint::black_box(frame);
+    }
+    Ok((median(&times), sky.objects.len()))
+}
+
+/// Latencies (ms) of sky-file edits and bitmap edits: write, then poll and render a frame per
+/// loop as the window does, until the frame shows the change.
+fn reload_latency(hl: &mut Headless, edits: u32) -> anyhow::Result<(Vec<f64>, Vec<f64>)> {
+    let dir = std::env::temp_dir().join(format!("skytune-bench-reload-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let palette = skytune::sky::procedural::preset("default").ok_or_else(|| anyhow!("no default preset"))?;
+    let file = skytune::sky::builtin::write_sky_folder(&dir, palette, 7)?;
+    let mut live = LiveSky::new(SkySpec::File(file.clone())).map_err(|e| anyhow!("{e}"))?;
+    hl.set_sky(live.sky())?;
+    let text = std::fs::read_to_string(&file)?;
+    let camera = Camera::default();
+    let options = RenderOptions { glare: false, ..Default::default() };
+    let frame_until = |live: &mut LiveSky, hl: &mut Headless, started: Instant| -> anyhow::Result<f64> {
+        loop {
+            anyhow::ensure!(started.elapsed() < Duration::from_secs(30), "no reload within 30 s");
+            if let Some(ReloadEvent::Reloaded) = live.poll() {
+                hl.set_sky(live.sky())?;
+                hl.frame(live.sky(), &FrameInput::new(12.0, 0.0), &camera, &options, 0.0);
+                hl.ctx.wait_idle()?;
+                return Ok(started.elapsed().as_secs_f64() * 1000.0);
+            }
+            hl.frame(live.sky(), &FrameInput::new(12.0, 0.0), &camera, &options, 0.0);
+            hl.ctx.wait_idle()?;
+        }
+    };
+    let (mut sky_ms, mut bitmap_ms) = (Vec::new(), Vec::new());
+    for k in 0..edits {
+        // Let the previous edit's events pass.
+        std::thread::sleep(Duration::from_millis(400));
+        while live.poll().is_some() {}
+        std::fs::write(&file, text.replacen("name = \"", &format!("name = \"edit {k} "), 1)).context("writing the sky file")?;
+        sky_ms.push(frame_until(&mut live, hl, Instant::now())?);
+        std::thread::sleep(Duration::from_millis(400));
+        while live.poll().is_some() {}
+        let fog = image::RgbaImage::from_pixel(24, 3, image::Rgba([(k * 30 % 255) as u8, 40, 90, 255]));
+        fog.save(dir.join("fog.png")).context("writing the bitmap")?;
+        bitmap_ms.push(frame_until(&mut live, hl, Instant::now())?);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok((sky_ms, bitmap_ms))
+}
