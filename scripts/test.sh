@@ -40,7 +40,9 @@ echo "soak: 1000 frames of random changes, sky reloads (good and broken) and sha
 ./target/debug/skytune soak --frames 1000 --size 96x54 --warm-up-frames 500 --max-rss-growth-percent 10 --report "$out/reliability.md" >/dev/null
 
 echo "smoke: skytune bench frame --quick (every sky against the fill-rate floor)"
-./target/debug/skytune bench frame --quick --out "$out/performance.md" | tail -1
+./target/debug/skytune bench frame --quick --out "$out/performance.md" > "$out/frame.txt"
+tail -1 "$out/frame.txt"
+grep -q '^fill_limit_ratio worst=[0-9.]* median=[0-9.]*$' "$out/frame.txt"
 
 echo "smoke: skytune bench (a few frames; the report goes to a temporary file)"
 ./target/debug/skytune bench --frames 3 --size 160x90 --out "$out/benchmarks.md" >/dev/null
