@@ -60,10 +60,38 @@ fn vs_main(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> Vert
     return out;
 }
 
-fn stage_uv(s: Stage, mesh_uv: vec2<f32>, dir_in: vec3<f32>) -> vec2<f32> {
+// Specialisation: a pipeline per material sets SPECIALISED and these from the object's stages
+// (src/render/sky_objects.rs), so the compiler drops the UV modes and samples a material does not
+// use; the generic pipeline keeps the defaults and reads everything from the uniform.
+override SPECIALISED: bool = false;
+override STAGE_COUNT: u32 = 4u;
+override UV_MODE_0: u32 = 0u;
+override UV_MODE_1: u32 = 0u;
+override UV_MODE_2: u32 = 0u;
+override UV_MODE_3: u32 = 0u;
+
+fn stage_count() -> u32 {
+    if SPECIALISED {
+        return STAGE_COUNT;
+    }
+    return draw.misc.x;
+}
+
+fn uv_mode(i: u32) -> u32 {
+    if SPECIALISED {
+        switch i {
+            case 0u: { return UV_MODE_0; }
+            case 1u: { return UV_MODE_1; }
+            case 2u: { return UV_MODE_2; }
+            default: { return UV_MODE_3; }
+        }
+    }
+    return draw.stages[i].cfg.y;
+}
+
+fn stage_uv(s: Stage, mode: u32, mesh_uv: vec2<f32>, dir_in: vec3<f32>) -> vec2<f32> {
     let dir = normalize(dir_in);
     var uv = mesh_uv;
-    let mode = s.cfg.y;
     if mode == UV_SUN {
         let sun = globals.towards_sun.xyz;
         var right = cross(sun, vec3<f32>(0.0, 1.0, 0.0));
@@ -102,16 +130,13 @@ fn add_term(sum: vec4<f32>, term_display: vec4<f32>, view: vec3<f32>, has_view: 
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
-    let uv0 = stage_uv(draw.stages[0], in.uv, in.world_dir);
-    let uv1 = stage_uv(draw.stages[1], in.uv, in.world_dir);
-    let uv2 = stage_uv(draw.stages[2], in.uv, in.world_dir);
-    let uv3 = stage_uv(draw.stages[3], in.uv, in.world_dir);
-    var samples = array<vec4<f32>, 4>(
-        textureSample(tex0, samp0, uv0),
-        textureSample(tex1, samp1, uv1),
-        textureSample(tex2, samp2, uv2),
-        textureSample(tex3, samp3, uv3),
-    );
+    // Stages past the material's count are neither placed nor sampled.
+    let count = stage_count();
+    var samples = array<vec4<f32>, 4>(vec4<f32>(1.0), vec4<f32>(1.0), vec4<f32>(1.0), vec4<f32>(1.0));
+    if count > 0u { samples[0] = textureSample(tex0, samp0, stage_uv(draw.stages[0], uv_mode(0u), in.uv, in.world_dir)); }
+    if count > 1u { samples[1] = textureSample(tex1, samp1, stage_uv(draw.stages[1], uv_mode(1u), in.uv, in.world_dir)); }
+    if count > 2u { samples[2] = textureSample(tex2, samp2, stage_uv(draw.stages[2], uv_mode(2u), in.uv, in.world_dir)); }
+    if count > 3u { samples[3] = textureSample(tex3, samp3, stage_uv(draw.stages[3], uv_mode(3u), in.uv, in.world_dir)); }
     // A physical model's radiance (already exposed, on the HDR target) in place of its stage; that
     // stage's colour then counts as white in its term.
     var view = vec3<f32>(1.0);
@@ -124,7 +149,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     var term = vec4<f32>(0.0);
     var has_term = false;
     var term_has_view = false;
-    for (var i = 0u; i < draw.misc.x; i = i + 1u) {
+    for (var i = 0u; i < count; i = i + 1u) {
         let s = draw.stages[i];
         var c = samples[i];
         if s.cfg.z < 4u { c = c * draw.constants[s.cfg.z]; }

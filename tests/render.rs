@@ -406,3 +406,22 @@ fn physical_models_draw_through_the_hdr_target_and_keep_nel_layers_as_authored()
     let (d, _) = common::diff(&aces, &neutral, 3);
     assert!(d.differing > 0.2, "the tone mapper changes the sky: {d:?}");
 }
+
+#[test]
+fn materials_draw_with_specialised_pipelines() {
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    for (hour, tier) in [(13.0, 4), (22.0, 4), (22.0, 2)] {
+        let input = FrameInput { tier: skytune::sky::Tier::new(tier).unwrap(), ..FrameInput::new(hour, 0.5) };
+        h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+    }
+    let pass = h.renderer.pass::<skytune::render::sky_objects::SkyObjectsPass>().unwrap();
+    let (ok, failed) = pass.variants_built();
+    assert!(ok >= 4 && failed == 0, "specialised pipelines: {ok} built, {failed} failed");
+    // A shader reload empties the cache; the next frame builds them again.
+    h.renderer.reload_shaders(&h.ctx).unwrap();
+    assert_eq!(h.renderer.pass::<skytune::render::sky_objects::SkyObjectsPass>().unwrap().variants_built(), (0, 0));
+    h.render(&sky, &FrameInput::new(13.0, 0.5), &camera(), &RenderOptions::default()).unwrap();
+    assert!(h.renderer.pass::<skytune::render::sky_objects::SkyObjectsPass>().unwrap().variants_built().0 > 0);
+}

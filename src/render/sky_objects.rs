@@ -110,11 +110,32 @@ impl DrawUniform {
     }
 }
 
-/// The sky objects pass: pipelines (one per blend mode, built once and rebuilt on shader edits)
-/// and the current sky's per-object resources.
+/// The generic pipelines (one per blend mode: every material, read from the uniform) and the
+/// shader module the specialised ones are built from.
+pub struct SkyObjectPipelines {
+    generic: [wgpu::RenderPipeline; 3],
+    module: wgpu::ShaderModule,
+}
+
+/// What a specialised pipeline is built for: stage count, UV mode per stage, blend, target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct VariantKey {
+    count: u32,
+    modes: [u32; 4],
+    blend: usize,
+    target: Target,
+}
+
+/// The sky objects pass: pipelines (one per blend mode, built once and rebuilt on shader edits,
+/// plus one per material signature, built on first use) and the current sky's per-object resources.
 pub struct SkyObjectsPass {
     bind_layout: wgpu::BindGroupLayout,
-    pipelines: Pipelines<[wgpu::RenderPipeline; 3]>,
+    pipeline_layout: wgpu::PipelineLayout,
+    display_format: wgpu::TextureFormat,
+    pipelines: Pipelines<SkyObjectPipelines>,
+    /// Specialised pipelines by material signature (`None`: building it failed; the generic one
+    /// draws). Emptied when the shaders change.
+    variants: HashMap<VariantKey, Option<wgpu::RenderPipeline>>,
     draws: Staged<Option<SkyObjectDraws>>,
     /// The shared sky-view map and its sampler, bound to every draw.
     sky_view: (wgpu::TextureView, wgpu::Sampler),
@@ -147,37 +168,93 @@ impl SkyObjectsPass {
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipelines = Pipelines::new_render(b, pipeline_layout, Self::build)?;
+        let pipelines = Pipelines::new_render(b, pipeline_layout.clone(), Self::build)?;
         let sky_view = (b.shared.sky_view_view.clone(), b.shared.sky_view_sampler.clone());
-        Ok(Self { bind_layout, pipelines, draws: Staged::new(None), sky_view, visible: Vec::new(), hidden: 0 })
+        Ok(Self {
+            bind_layout,
+            pipeline_layout,
+            display_format: b.color_format,
+            pipelines,
+            variants: HashMap::new(),
+            draws: Staged::new(None),
+            sky_view,
+            visible: Vec::new(),
+            hidden: 0,
+        })
     }
 
-    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 3]> {
-        let (device, format) = (b.device, b.color_format);
-        let module = shaders::module(device, b.library, "sky_objects")?;
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<SkyObjectPipelines> {
+        let module = shaders::module(b.device, b.library, "sky_objects")?;
         let names = ["SkyObjects::pipeline_opaque", "SkyObjects::pipeline_alpha", "SkyObjects::pipeline_additive"];
-        let build_one = |i: usize| {
-            shaders::validated(device, names[i], || {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(names[i]),
-                    layout: Some(layout),
-                    vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[Some(SkyVertex::LAYOUT)], compilation_options: Default::default() },
-                    primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                    depth_stencil: super::depth_state(false, wgpu::CompareFunction::Less),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some("fs_main"),
-                        targets: &[Some(wgpu::ColorTargetState { format, blend: BLENDS[i], write_mask: wgpu::ColorWrites::ALL })],
-                        compilation_options: Default::default(),
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-            })
-        };
-        Ok([build_one(0)?, build_one(1)?, build_one(2)?])
+        let one = |i: usize| create_pipeline(b.device, layout, &module, names[i], BLENDS[i], b.color_format, &[]);
+        Ok(SkyObjectPipelines { generic: [one(0)?, one(1)?, one(2)?], module })
     }
+
+    /// Specialised pipelines built so far: (succeeded, failed and drawn by the generic pipeline).
+    pub fn variants_built(&self) -> (usize, usize) {
+        let ok = self.variants.values().filter(|v| v.is_some()).count();
+        (ok, self.variants.len() - ok)
+    }
+
+    /// Builds the specialised pipelines this frame's visible versions need and do not have yet.
+    fn build_variants(&mut self, device: &wgpu::Device, target: Target) {
+        let Some(draws) = &self.draws.current else { return };
+        for (index, _, versions) in &self.visible {
+            for &v in versions {
+                let key = draws.objects[*index][v].variant(target);
+                if self.variants.contains_key(&key) {
+                    continue;
+                }
+                let modes = key.modes.map(f64::from);
+                let constants = [
+                    ("SPECIALISED", 1.0),
+                    ("STAGE_COUNT", f64::from(key.count)),
+                    ("UV_MODE_0", modes[0]),
+                    ("UV_MODE_1", modes[1]),
+                    ("UV_MODE_2", modes[2]),
+                    ("UV_MODE_3", modes[3]),
+                ];
+                let format = if target == Target::Hdr { super::HDR_FORMAT } else { self.display_format };
+                let label = format!("SkyObjects::pipeline {} stages {:?} blend {} {:?}", key.count, key.modes, key.blend, target);
+                let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, BLENDS[key.blend], format, &constants);
+                if let Err(e) = &built {
+                    log::error!("{label}: {e}; the generic pipeline draws this material");
+                }
+                self.variants.insert(key, built.ok());
+            }
+        }
+    }
+}
+
+/// One sky-object pipeline: `constants` specialise it (none: the generic pipeline).
+fn create_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    label: &str,
+    blend: Option<wgpu::BlendState>,
+    format: wgpu::TextureFormat,
+    constants: &[(&str, f64)],
+) -> RenderResult<wgpu::RenderPipeline> {
+    let options = wgpu::PipelineCompilationOptions { constants, zero_initialize_workgroup_memory: true };
+    shaders::validated(device, label, || {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            vertex: wgpu::VertexState { module, entry_point: Some("vs_main"), buffers: &[Some(SkyVertex::LAYOUT)], compilation_options: options.clone() },
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: super::depth_state(false, wgpu::CompareFunction::Less),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some("fs_main"),
+                targets: &[Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL })],
+                compilation_options: options,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    })
 }
 
 impl Pass for SkyObjectsPass {
@@ -195,6 +272,10 @@ impl Pass for SkyObjectsPass {
 
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipelines.commit(accept);
+        if accept {
+            // Rebuilt from the new module on their next use.
+            self.variants.clear();
+        }
     }
 
     fn stage_sky(&mut self, up: &mut SkyUpload<'_>) {
@@ -217,6 +298,7 @@ impl Pass for SkyObjectsPass {
                 Err(_) => self.hidden += 1,
             }
         }
+        self.build_variants(cx.device, cx.target);
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
@@ -227,7 +309,8 @@ impl Pass for SkyObjectsPass {
         let (Some(draws), Some((index, _, versions))) = (&self.draws.current, self.visible.get(key)) else { return 0 };
         for &v in versions {
             let d = &draws.objects[*index][v];
-            rpass.set_pipeline(&self.pipelines.for_target(target)[blend_index(d.blend)]);
+            let specialised = self.variants.get(&d.variant(target)).and_then(Option::as_ref);
+            rpass.set_pipeline(specialised.unwrap_or(&self.pipelines.for_target(target).generic[blend_index(d.blend)]));
             rpass.set_bind_group(1, &d.bind_group, &[]);
             rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
             rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
@@ -253,6 +336,13 @@ struct VersionDraw {
     blend: BlendMode,
     shape: Shape,
     base: DrawUniform,
+}
+
+impl VersionDraw {
+    /// The specialised pipeline this version draws with on `target`.
+    fn variant(&self, target: Target) -> VariantKey {
+        VariantKey { count: self.base.misc[0], modes: self.base.stages.map(|s| s.cfg[1]), blend: blend_index(self.blend), target }
+    }
 }
 
 /// Per-sky GPU resources: one [`VersionDraw`] per version of every object.
