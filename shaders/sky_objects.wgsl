@@ -9,7 +9,7 @@
 struct Stage {
     scale_offset: vec4<f32>, // uv scale (xy) and offset (zw), repeats
     params: vec4<f32>,       // sun: size_rad; quake: z_scale, z_offset, t_scale, time_scale
-    cfg: vec4<u32>,          // op (0 add, 1 modulate), uv mode, constant index (4 = none), enabled
+    cfg: vec4<u32>,          // op (0 add, 1 modulate), uv mode, constant index (4 = none), live (0: its term is black this frame, not sampled)
 };
 
 // Keep in sync with `DrawUniform` in src/render/sky_objects.rs.
@@ -133,10 +133,11 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     // Stages past the material's count are neither placed nor sampled.
     let count = stage_count();
     var samples = array<vec4<f32>, 4>(vec4<f32>(1.0), vec4<f32>(1.0), vec4<f32>(1.0), vec4<f32>(1.0));
-    if count > 0u { samples[0] = textureSample(tex0, samp0, stage_uv(draw.stages[0], uv_mode(0u), in.uv, in.world_dir)); }
-    if count > 1u { samples[1] = textureSample(tex1, samp1, stage_uv(draw.stages[1], uv_mode(1u), in.uv, in.world_dir)); }
-    if count > 2u { samples[2] = textureSample(tex2, samp2, stage_uv(draw.stages[2], uv_mode(2u), in.uv, in.world_dir)); }
-    if count > 3u { samples[3] = textureSample(tex3, samp3, stage_uv(draw.stages[3], uv_mode(3u), in.uv, in.world_dir)); }
+    // Nor are the stages of a term that is black this frame (its constant is): they read as 0.
+    if count > 0u { samples[0] = vec4<f32>(0.0); if draw.stages[0].cfg.w != 0u { samples[0] = textureSample(tex0, samp0, stage_uv(draw.stages[0], uv_mode(0u), in.uv, in.world_dir)); } }
+    if count > 1u { samples[1] = vec4<f32>(0.0); if draw.stages[1].cfg.w != 0u { samples[1] = textureSample(tex1, samp1, stage_uv(draw.stages[1], uv_mode(1u), in.uv, in.world_dir)); } }
+    if count > 2u { samples[2] = vec4<f32>(0.0); if draw.stages[2].cfg.w != 0u { samples[2] = textureSample(tex2, samp2, stage_uv(draw.stages[2], uv_mode(2u), in.uv, in.world_dir)); } }
+    if count > 3u { samples[3] = vec4<f32>(0.0); if draw.stages[3].cfg.w != 0u { samples[3] = textureSample(tex3, samp3, stage_uv(draw.stages[3], uv_mode(3u), in.uv, in.world_dir)); } }
     // A physical model's radiance (already exposed, on the HDR target) in place of its stage; that
     // stage's colour then counts as white in its term.
     var view = vec3<f32>(1.0);

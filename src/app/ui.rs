@@ -415,6 +415,7 @@ fn stats(ui: &mut egui::Ui, info: &UiInfo<'_>) {
     section(ui, "CPU time per frame section:", info.cpu_ms);
     let s = info.stats;
     ui.label(format!("draw calls {}, objects drawn {}, hidden {}, stars {}", s.draw_calls, s.objects_drawn, s.objects_hidden, s.stars));
+    ui.label(format!("texture stages skipped (black this frame): {}", s.stages_skipped));
     if let Some(g) = info.glare {
         ui.label(format!("sun visibility {:.3}, glare intensity {:.3}", g.ratio, g.intensity));
     }

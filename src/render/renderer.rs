@@ -48,6 +48,8 @@ pub struct FrameStats {
     pub objects_hidden: u32,
     /// Stars in the field after the magnitude cutoff.
     pub stars: u32,
+    /// Texture stages of sky objects not sampled because their term is black this frame.
+    pub stages_skipped: u32,
 }
 
 /// What the last sky upload did with the textures of the sky before it.

@@ -24,7 +24,8 @@ pub struct StageUniform {
     pub scale_offset: [f32; 4],
     /// Sun: size in radians; Quake: z_scale, z_offset, t_scale, time_scale.
     pub params: [f32; 4],
-    /// op (0 add, 1 modulate), uv mode, constant index (4 = none), enabled.
+    /// op (0 add, 1 modulate), uv mode, constant index (4 = none), live (0: its term is black
+    /// this frame and is not sampled).
     pub cfg: [u32; 4],
 }
 
@@ -82,6 +83,34 @@ impl From<&Version> for DrawUniform {
 }
 
 impl DrawUniform {
+    /// Marks the stages of terms that contribute nothing this frame (a factor's constant is black,
+    /// and transparent too when alpha weighs the colour) so the shader does not sample them;
+    /// returns how many. The sky-model stage is never skipped.
+    pub fn skip_dark_terms(&mut self, alpha_matters: bool) -> u32 {
+        let count = (self.misc[0] as usize).min(4);
+        let mut skipped = 0;
+        let mut start = 0;
+        while start < count {
+            let mut end = start + 1;
+            while end < count && self.stages[end].cfg[0] == 1 {
+                end += 1;
+            }
+            let dark = (start..end).any(|k| {
+                let c = self.stages[k].cfg[2] as usize;
+                c < 4 && self.constants[c][..3].iter().all(|v| *v <= 0.0) && (!alpha_matters || self.constants[c][3] <= 0.0)
+            });
+            let holds_view = (start..end).any(|k| k as u32 == self.misc[2]);
+            if dark && !holds_view {
+                for k in start..end {
+                    self.stages[k].cfg[3] = 0;
+                    skipped += 1;
+                }
+            }
+            start = end;
+        }
+        skipped
+    }
+
     /// Applies a frame's colours, UV offsets and placement; `sky_view_stage` is the gradient
     /// stage when a physical sky model colours it.
     pub fn with_frame(mut self, pass: &VersionFrame, shape: &Shape, placement: Option<(Vec3, f32)>, camera_up: Vec3, sky_view_stage: Option<usize>) -> Self {
@@ -142,6 +171,8 @@ pub struct SkyObjectsPass {
     /// This frame's visible objects: (object index, versions to draw), in draw order.
     visible: Vec<(usize, u8, Vec<usize>)>,
     hidden: u32,
+    /// Texture stages not sampled this frame (their term is black).
+    stages_skipped: u32,
 }
 
 fn blend_index(b: BlendMode) -> usize {
@@ -180,6 +211,7 @@ impl SkyObjectsPass {
             sky_view,
             visible: Vec::new(),
             hidden: 0,
+            stages_skipped: 0,
         })
     }
 
@@ -291,7 +323,7 @@ impl Pass for SkyObjectsPass {
         self.visible.clear();
         self.hidden = 0;
         let Some(draws) = &self.draws.current else { return };
-        draws.prepare(cx.queue, cx.frame, cx.camera);
+        self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera);
         for of in &cx.frame.objects {
             match &of.versions {
                 Ok(versions) => self.visible.push((of.index, of.priority, versions.iter().map(|v| v.version).collect())),
@@ -322,6 +354,7 @@ impl Pass for SkyObjectsPass {
     fn stats(&self, stats: &mut FrameStats) {
         stats.objects_drawn = self.visible.len() as u32;
         stats.objects_hidden = self.hidden;
+        stats.stages_skipped = self.stages_skipped;
     }
 }
 
@@ -424,14 +457,19 @@ impl SkyObjectDraws {
         Self { objects, meshes }
     }
 
-    /// Writes this frame's uniforms and gradients.
-    pub fn prepare(&self, queue: &wgpu::Queue, frame: &FrameSky, camera: &Camera) {
+    /// Writes this frame's uniforms and gradients; returns the texture stages skipped because
+    /// their term is black this frame.
+    pub fn prepare(&self, queue: &wgpu::Queue, frame: &FrameSky, camera: &Camera) -> u32 {
+        let mut skipped = 0;
         for of in &frame.objects {
             let Ok(versions) = &of.versions else { continue };
             for p in versions {
                 let d = &self.objects[of.index][p.version];
                 let sky_view_stage = d.gradient_stage.filter(|_| frame.sky_model.kind.is_physical());
-                let u = d.base.with_frame(p, &d.shape, of.placement, camera.screen_up(), sky_view_stage);
+                let mut u = d.base.with_frame(p, &d.shape, of.placement, camera.screen_up(), sky_view_stage);
+                // Alpha weighs the colour under alpha and additive blending: a term only counts as
+                // nothing there when it is transparent too.
+                skipped += u.skip_dark_terms(d.blend != BlendMode::Opaque);
                 queue.write_buffer(&d.uniform, 0, bytemuck::bytes_of(&u));
                 if let (Some((tex, h)), Some(g)) = (&d.gradient, &p.gradient) {
                     let bytes: Vec<u8> = g.iter().flat_map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)).collect();
@@ -439,5 +477,41 @@ impl SkyObjectDraws {
                 }
             }
         }
+        skipped
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn uniform(ops: &[(u32, u32)]) -> DrawUniform {
+        let mut u = DrawUniform::zeroed();
+        for (k, (op, constant)) in ops.iter().enumerate() {
+            u.stages[k].cfg = [*op, 0, *constant, 1];
+        }
+        u.misc = [ops.len() as u32, 0, NO_STAGE, 0];
+        u.constants = [[1.0; 4]; 4];
+        u
+    }
+
+    #[test]
+    fn black_terms_are_skipped_and_nothing_else() {
+        // Gradient; stars x mask with constant 0; halo with constant 1 (the default skydome).
+        let mut u = uniform(&[(0, 4), (0, 0), (1, 4), (0, 1)]);
+        u.constants[0] = [0.0, 0.0, 0.0, 1.0];
+        assert_eq!(u.skip_dark_terms(false), 2);
+        assert_eq!(u.stages.map(|s| s.cfg[3]), [1, 0, 0, 1]);
+        // Under alpha (or additive) blending an opaque black constant still weighs: kept.
+        let mut v = uniform(&[(0, 4), (0, 0), (1, 4), (0, 1)]);
+        v.constants[0] = [0.0, 0.0, 0.0, 1.0];
+        assert_eq!(v.skip_dark_terms(true), 0);
+        v.constants[0] = [0.0; 4];
+        assert_eq!(v.skip_dark_terms(true), 2);
+        // The stage a physical sky model feeds is never skipped.
+        let mut w = uniform(&[(0, 0)]);
+        w.constants[0] = [0.0; 4];
+        w.misc[2] = 0;
+        assert_eq!(w.skip_dark_terms(false), 0);
     }
 }
