@@ -148,6 +148,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     let (eval_us, objects) = evaluation_cost(if args.quick { 200 } else { 2000 })?;
     // Reload latency: a file written to the first frame that shows it.
     let latency = reload_latency(&mut hl, if args.quick { 2 } else { 7 })?;
+    let shader_ms = shader_latency(&ctx, (w, h), if args.quick { 1 } else { 5 })?;
 
     let mut md = String::new();
     let _ = writeln!(md, "# Performance\n\nWritten by `skytune bench frame` (`cargo run --release -- bench frame`); re-run it to refresh this file.\n");
@@ -187,10 +188,21 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     }
     let _ = writeln!(md, "\n## CPU: evaluating the sky\n\n`Sky::evaluate` for a sky of {objects} objects (the built-in sky plus billboards on its paths): median {eval_us:.1} us per frame (target: 50 us).\n");
     let _ = writeln!(md, "## Hot-reload latency\n\nFrom the end of a file write to the end of the first frame rendered with the change (file watcher with its debounce of {} ms, off-thread load, upload, one frame at {w}x{h}), medians of {} edits (target: 100 ms plus the debounce):\n", skytune::watch::DEBOUNCE.as_millis(), latency.0.len().min(latency.1.len()));
-    let _ = writeln!(md, "| edit | median ms |\n|---|---:|\n| sky file | {:.0} |\n| bitmap | {:.0} |", median(&latency.0), median(&latency.1));
+    let _ = writeln!(
+        md,
+        "| edit | median ms |\n|---|---:|\n| sky file | {:.0} |\n| bitmap | {:.0} |\n| shader (`sky_objects.wgsl`: every pipeline of the renderer rebuilt) | {:.0} |",
+        median(&latency.0),
+        median(&latency.1),
+        median(&shader_ms)
+    );
     skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
     println!("per object (built-in sky, dusk, horizon): {}", per_object.iter().map(|(n, ms)| format!("{n} {ms:.2} ms")).collect::<Vec<_>>().join(", "));
-    println!("evaluate: {eval_us:.1} us for {objects} objects; reload latency: sky file {:.0} ms, bitmap {:.0} ms", median(&latency.0), median(&latency.1));
+    println!(
+        "evaluate: {eval_us:.1} us for {objects} objects; reload latency: sky file {:.0} ms, bitmap {:.0} ms, shader {:.0} ms",
+        median(&latency.0),
+        median(&latency.1),
+        median(&shader_ms)
+    );
     println!("wrote {}", args.out.display());
     println!("fill_limit_ratio worst={worst:.2} median={med:.2}");
     Ok(())
@@ -264,4 +276,51 @@ fn reload_latency(hl: &mut Headless, edits: u32) -> anyhow::Result<(Vec<f64>, Ve
     }
     let _ = std::fs::remove_dir_all(&dir);
     Ok((sky_ms, bitmap_ms))
+}
+
+/// Latencies (ms) of shader edits: a file of a hot-reloaded shader folder written, to the first
+/// frame rendered with the rebuilt pipelines (watcher, debounce, every pipeline rebuilt).
+fn shader_latency(ctx: &GpuContext, (w, h): (u32, u32), edits: u32) -> anyhow::Result<Vec<f64>> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    let dir = std::env::temp_dir().join(format!("skytune-bench-shaders-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    ShaderLibrary::export_embedded(&dir).context("writing the shaders")?;
+    let mut hl = Headless::with_library(ctx.clone(), ShaderLibrary { dir: Some(dir.clone()) }, w, h)?;
+    let sky = default_sky();
+    hl.set_sky(&sky)?;
+    let changed = Arc::new(AtomicBool::new(false));
+    let flag = changed.clone();
+    let mut watcher = skytune::watch::FileWatcher::new(move |paths| {
+        if paths.iter().any(|p| p.extension().is_some_and(|x| x == "wgsl")) {
+            flag.store(true, Ordering::Release);
+        }
+    })?;
+    watcher.set_dirs([dir.clone()].into_iter().collect());
+    let file = dir.join("sky_objects.wgsl");
+    let original = std::fs::read_to_string(&file)?;
+    let camera = Camera::default();
+    let options = RenderOptions { glare: false, ..Default::default() };
+    let mut out = Vec::new();
+    for k in 0..edits {
+        std::thread::sleep(Duration::from_millis(400));
+        changed.store(false, Ordering::Release);
+        std::fs::write(&file, format!("{original}\n// edit {k}\n")).context("writing the shader")?;
+        let started = Instant::now();
+        loop {
+            anyhow::ensure!(started.elapsed() < Duration::from_secs(60), "no shader reload within 60 s");
+            if changed.swap(false, Ordering::AcqRel) {
+                hl.renderer.reload_shaders(&hl.ctx)?;
+                hl.frame(&sky, &FrameInput::new(12.0, 0.0), &camera, &options, 0.0);
+                hl.ctx.wait_idle()?;
+                out.push(started.elapsed().as_secs_f64() * 1000.0);
+                break;
+            }
+            hl.frame(&sky, &FrameInput::new(12.0, 0.0), &camera, &options, 0.0);
+            hl.ctx.wait_idle()?;
+        }
+    }
+    drop(watcher);
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(out)
 }

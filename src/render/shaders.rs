@@ -34,6 +34,19 @@ impl ShaderLibrary {
         EMBEDDED.iter().map(|(n, _)| *n).filter(|n| *n != GLOBALS)
     }
 
+    /// Writes the embedded sources as files under `dir` (the layout of `shaders/`), e.g. to
+    /// hot-reload and measure edits away from the checkout.
+    pub fn export_embedded(dir: &Path) -> std::io::Result<()> {
+        for (name, source) in EMBEDDED {
+            let path = dir.join(format!("{name}.wgsl"));
+            if let Some(parent) = path.parent() {
+                std::fs::create_dir_all(parent)?;
+            }
+            std::fs::write(path, source)?;
+        }
+        Ok(())
+    }
+
     fn raw(&self, name: &str) -> RenderResult<String> {
         match &self.dir {
             Some(dir) => {

@@ -48,6 +48,37 @@ pub fn upload(device: &wgpu::Device, queue: &wgpu::Queue, label: &str, width: u3
     texture
 }
 
+/// Creates a texture with its full mip chain from RGBA8 data (each level a box-filtered half of the
+/// one above, computed on the CPU at load): tiled and minified textures (the skydome's stars, ten
+/// times over the dome) neither shimmer nor thrash the rasteriser's texture cache.
+pub fn upload_mipmapped(device: &wgpu::Device, queue: &wgpu::Queue, label: &str, width: u32, height: u32, rgba8: &[u8]) -> wgpu::Texture {
+    let levels = 32 - width.max(height).max(1).leading_zeros();
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: levels,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: TEXTURE_FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let Some(mut level) = image::RgbaImage::from_raw(width, height, rgba8.to_vec()) else { return texture };
+    for mip in 0..levels {
+        let (w, h) = level.dimensions();
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo { texture: &texture, mip_level: mip, origin: wgpu::Origin3d::ZERO, aspect: wgpu::TextureAspect::All },
+            level.as_raw(),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(w * 4), rows_per_image: Some(h) },
+            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        );
+        if mip + 1 < levels {
+            level = image::imageops::resize(&level, (w / 2).max(1), (h / 2).max(1), image::imageops::FilterType::Triangle);
+        }
+    }
+    texture
+}
+
 /// Overwrites a whole texture with RGBA8 data.
 pub fn write(queue: &wgpu::Queue, texture: &wgpu::Texture, width: u32, height: u32, rgba8: &[u8]) {
     queue.write_texture(
@@ -66,6 +97,7 @@ fn sampler(device: &wgpu::Device, label: &str, mode: wgpu::AddressMode) -> wgpu:
         address_mode_w: mode,
         mag_filter: wgpu::FilterMode::Linear,
         min_filter: wgpu::FilterMode::Linear,
+        mipmap_filter: wgpu::MipmapFilterMode::Linear,
         ..Default::default()
     })
 }
@@ -114,7 +146,7 @@ impl TextureCache {
             }
             None => {
                 self.uploaded += 1;
-                let view = upload(device, queue, &format!("texture {}", image.key), image.width, image.height, &image.rgba8).create_view(&Default::default());
+                let view = upload_mipmapped(device, queue, &format!("texture {}", image.key), image.width, image.height, &image.rgba8).create_view(&Default::default());
                 Entry { content, view }
             }
         };
