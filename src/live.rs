@@ -60,6 +60,15 @@ impl SkySpec {
         }
     }
 
+    /// The sky file shown (for a continent, its season's), if any.
+    pub fn sky_file(&self) -> Option<PathBuf> {
+        match self {
+            SkySpec::Builtin => None,
+            SkySpec::File(p) => Some(p.clone()),
+            SkySpec::Continent { path, season } => load_continent(path).ok().map(|c| c.skies[*season].clone()),
+        }
+    }
+
     /// Short name for titles and screenshot file names.
     pub fn display(&self) -> String {
         match self {
@@ -198,11 +207,7 @@ impl LiveSky {
 
     /// The sky file shown (for a continent, its current season's), if any.
     pub fn sky_file(&self) -> Option<PathBuf> {
-        match self.spec() {
-            SkySpec::Builtin => None,
-            SkySpec::File(p) => Some(p),
-            SkySpec::Continent { path, season } => load_continent(&path).ok().map(|c| c.skies[season].clone()),
-        }
+        self.spec().sky_file()
     }
 
     /// What is being shown.

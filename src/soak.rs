@@ -128,15 +128,27 @@ fn growth(samples: &[Sample], value: impl Fn(&Sample) -> f64) -> f64 {
     (last - first) / first
 }
 
-/// Copies the files of `from` (not its sub-folders) into `to`.
-fn copy_folder(from: &Path, to: &Path) -> anyhow::Result<()> {
-    for entry in std::fs::read_dir(from).with_context(|| format!("reading {}", from.display()))? {
-        let path = entry?.path();
-        if path.is_file() {
-            std::fs::copy(&path, to.join(path.file_name().unwrap_or_default())).with_context(|| format!("copying {}", path.display()))?;
+/// A fresh temporary folder `skytune-NAME-PID` holding a copy of a sky to rewrite: the files of
+/// `sky_file`'s folder (not its sub-folders), or the built-in sky when `None`. Returns the folder
+/// and the copied sky file. The artist's files are only read.
+pub fn sky_copy(name: &str, sky_file: Option<&Path>) -> anyhow::Result<(PathBuf, PathBuf)> {
+    let dir = std::env::temp_dir().join(format!("skytune-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let copied = match sky_file {
+        Some(file) => {
+            let from = file.parent().unwrap_or(Path::new("."));
+            for entry in std::fs::read_dir(from).with_context(|| format!("reading {}", from.display()))? {
+                let path = entry?.path();
+                if path.is_file() {
+                    std::fs::copy(&path, dir.join(path.file_name().unwrap_or_default())).with_context(|| format!("copying {}", path.display()))?;
+                }
+            }
+            dir.join(file.file_name().unwrap_or_default())
         }
-    }
-    Ok(())
+        None => crate::sky::builtin::write_sky_folder(&dir, crate::sky::procedural::preset("default").ok_or_else(|| anyhow!("no default preset"))?, 7)?,
+    };
+    Ok((dir, copied))
 }
 
 /// The same random changes for a given seed: hour, weather, tier, view, model (shared by
@@ -169,15 +181,7 @@ impl Driver {
 /// Runs a soak; `progress` is called every [`SAMPLE_EVERY`] frames.
 pub fn run(ctx: GpuContext, settings: &SoakSettings, mut progress: impl FnMut(&Sample)) -> anyhow::Result<SoakReport> {
     let started = Instant::now();
-    let dir = tempfile_dir()?;
-    match &settings.sky_dir {
-        Some(d) => copy_folder(d, &dir)?,
-        None => {
-            let palette = crate::sky::procedural::preset("default").ok_or_else(|| anyhow!("no default preset"))?;
-            crate::sky::builtin::write_sky_folder(&dir, palette, 7)?;
-        }
-    }
-    let sky_file = dir.join("sky.toml");
+    let (dir, sky_file) = sky_copy("soak", settings.sky_dir.as_ref().map(|d| d.join("sky.toml")).as_deref())?;
     let good_text = std::fs::read_to_string(&sky_file).with_context(|| format!("reading {}", sky_file.display()))?;
     // Broken the same way for any sky: an object whose name is a number.
     let broken_text = broken_version(&good_text);
@@ -306,13 +310,6 @@ fn wait_until(live: &mut LiveSky, done: impl Fn(&LiveSky) -> bool) -> bool {
         }
     }
     false
-}
-
-fn tempfile_dir() -> anyhow::Result<PathBuf> {
-    let dir = std::env::temp_dir().join(format!("skytune-soak-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    Ok(dir)
 }
 
 impl SoakReport {

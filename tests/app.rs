@@ -89,18 +89,9 @@ fn window_compares_the_sky_with_a_snapshot_under_xvfb() {
         }
     }
     img.save(&gradient).unwrap();
-    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
-    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
-        .arg(&sky_file)
-        .args(["--cpu", "--frames", "8", "--compare", "snapshot=before"])
-        .env("DISPLAY", &display)
-        .env("SKYTUNE_CONFIG", dir.path().join("state.toml"))
-        .env("RUST_LOG", "info")
-        .output()
-        .expect("running skytune");
-    let _ = server.kill();
-    let _ = server.wait();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let (out, stderr) = in_window(&dir.path().join("state.toml"), |c| {
+        c.arg(&sky_file).args(["--cpu", "--frames", "8", "--compare", "snapshot=before"]);
+    });
     assert!(out.status.success(), "{stderr}");
     let line = stderr.lines().find(|l| l.contains("compare: B = snapshot before:")).unwrap_or_else(|| panic!("no comparison logged: {stderr}"));
     let mean: f64 = line.split("FLIP mean ").nth(1).and_then(|r| r.split_whitespace().next()).and_then(|v| v.parse().ok()).unwrap();
@@ -157,24 +148,30 @@ fn xvfb() -> Option<(std::process::Child, String)> {
     Some((child, format!(":{n}")))
 }
 
+/// Runs the window under its own Xvfb with `config` as its settings file and `RUST_LOG=info`;
+/// `customise` adds the arguments and environment. Returns the output and its stderr.
+fn in_window(config: &std::path::Path, customise: impl FnOnce(&mut Command)) -> (std::process::Output, String) {
+    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
+    let mut command = Command::new(env!("CARGO_BIN_EXE_skytune"));
+    command.env("DISPLAY", &display).env("SKYTUNE_CONFIG", config).env("RUST_LOG", "info");
+    customise(&mut command);
+    let out = command.output().expect("running skytune");
+    let _ = server.kill();
+    let _ = server.wait();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    (out, stderr)
+}
+
 #[test]
 fn window_starts_renders_screenshots_and_exits_under_xvfb() {
-    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
     let shots = tempfile::tempdir().unwrap();
     let config = shots.path().join("state.toml");
     let (_d, sky) = common::default_sky_folder();
-    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
-        .arg(&sky)
-        .args(["--cpu", "--screenshot-and-exit", "--shots"])
-        .arg(shots.path())
-        .env("DISPLAY", &display)
-        .env("SKYTUNE_CONFIG", &config)
-        .output()
-        .expect("running skytune");
-    let _ = server.kill();
-    let _ = server.wait();
+    let (out, stderr) = in_window(&config, |c| {
+        c.arg(&sky).args(["--cpu", "--screenshot-and-exit", "--shots"]).arg(shots.path());
+    });
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "exit {:?}\nstdout:\n{stdout}\nstderr:\n{}", out.status, String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "exit {:?}\nstdout:\n{stdout}\nstderr:\n{stderr}", out.status);
     let shot = std::fs::read_dir(shots.path()).unwrap().filter_map(|e| e.ok()).map(|e| e.path()).find(|p| p.extension().is_some_and(|x| x == "png")).expect("a screenshot");
     assert!(shot.file_name().unwrap().to_string_lossy().starts_with("default_17.50h_w0.10"), "{}", shot.display());
     let img = image::open(&shot).unwrap().to_rgba8();
@@ -190,18 +187,10 @@ fn window_starts_renders_screenshots_and_exits_under_xvfb() {
 
 #[test]
 fn window_runs_a_fixed_number_of_frames() {
-    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
-        .args(["--cpu", "--frames", "5"])
-        .env("DISPLAY", &display)
-        .env("SKYTUNE_CONFIG", dir.path().join("state.toml"))
-        .env("RUST_LOG", "info")
-        .output()
-        .expect("running skytune");
-    let _ = server.kill();
-    let _ = server.wait();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let (out, stderr) = in_window(&dir.path().join("state.toml"), |c| {
+        c.args(["--cpu", "--frames", "5"]);
+    });
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("rendered 5 frames, exiting"), "{stderr}");
     // Reading the shaders must not look like an edit of them (that would reload in a loop).
@@ -210,19 +199,10 @@ fn window_runs_a_fixed_number_of_frames() {
 
 #[test]
 fn a_lost_device_is_reported_and_recreated_in_the_window() {
-    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
-        .args(["--cpu", "--frames", "12"])
-        .env("DISPLAY", &display)
-        .env("SKYTUNE_CONFIG", dir.path().join("state.toml"))
-        .env("SKYTUNE_TEST_LOSE_DEVICE_AT", "4")
-        .env("RUST_LOG", "info")
-        .output()
-        .expect("running skytune");
-    let _ = server.kill();
-    let _ = server.wait();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let (out, stderr) = in_window(&dir.path().join("state.toml"), |c| {
+        c.args(["--cpu", "--frames", "12"]).env("SKYTUNE_TEST_LOSE_DEVICE_AT", "4");
+    });
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("the GPU device was lost"), "{stderr}");
     assert!(stderr.contains("GPU device recreated"), "{stderr}");
@@ -232,20 +212,12 @@ fn a_lost_device_is_reported_and_recreated_in_the_window() {
 
 #[test]
 fn window_soak_changes_everything_and_keeps_running() {
-    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
     let dir = tempfile::tempdir().unwrap();
     let state = dir.path().join("state.toml");
     std::fs::write(&state, "window_size = [320, 180]\n").unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
-        .args(["--cpu", "--soak", "--frames", "520"])
-        .env("DISPLAY", &display)
-        .env("SKYTUNE_CONFIG", &state)
-        .env("RUST_LOG", "info")
-        .output()
-        .expect("running skytune");
-    let _ = server.kill();
-    let _ = server.wait();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let (out, stderr) = in_window(&state, |c| {
+        c.args(["--cpu", "--soak", "--frames", "520"]);
+    });
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("soak: working on a copy"), "{stderr}");
     assert!(stderr.contains("reloaded sky \"soak 100"), "the good edit at frame 100 loaded: {stderr}");
@@ -257,20 +229,12 @@ fn window_soak_changes_everything_and_keeps_running() {
 
 #[test]
 fn a_corrupt_settings_file_is_reported_and_replaced() {
-    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
     let dir = tempfile::tempdir().unwrap();
     let state = dir.path().join("state.toml");
     std::fs::write(&state, b"window_size = [\xff\xfe not toml").unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_skytune"))
-        .args(["--cpu", "--frames", "3"])
-        .env("DISPLAY", &display)
-        .env("SKYTUNE_CONFIG", &state)
-        .env("RUST_LOG", "info")
-        .output()
-        .expect("running skytune");
-    let _ = server.kill();
-    let _ = server.wait();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let (out, stderr) = in_window(&state, |c| {
+        c.args(["--cpu", "--frames", "3"]);
+    });
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("was unusable") && stderr.contains("replaced by defaults"), "{stderr}");
     assert!(dir.path().join("state.toml.corrupt").is_file());

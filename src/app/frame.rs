@@ -34,26 +34,7 @@ pub struct WindowSoak {
 impl WindowSoak {
     /// Copies the sky of `spec` (its folder's files, or the built-in sky) to a temporary folder.
     pub fn new(spec: &SkySpec) -> anyhow::Result<Self> {
-        let dir = std::env::temp_dir().join(format!("skytune-window-soak-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-        let source = match spec {
-            SkySpec::File(p) => Some(p.clone()),
-            SkySpec::Continent { path, season } => crate::sky::load::load_continent(path).ok().map(|c| c.skies[*season].clone()),
-            SkySpec::Builtin => None,
-        };
-        let sky_file = match source {
-            Some(p) => {
-                for entry in std::fs::read_dir(p.parent().unwrap_or(Path::new("."))).with_context(|| format!("reading {}", p.display()))? {
-                    let f = entry?.path();
-                    if f.is_file() {
-                        std::fs::copy(&f, dir.join(f.file_name().unwrap_or_default()))?;
-                    }
-                }
-                dir.join(p.file_name().unwrap_or_default())
-            }
-            None => crate::sky::builtin::write_sky_folder(&dir, crate::sky::procedural::preset("default").ok_or_else(|| anyhow!("no default preset"))?, 7)?,
-        };
+        let (dir, sky_file) = crate::soak::sky_copy("window-soak", spec.sky_file().as_deref())?;
         let good = std::fs::read_to_string(&sky_file).with_context(|| format!("reading {}", sky_file.display()))?;
         log::info!("soak: working on a copy of the sky in {}", dir.display());
         Ok(Self { sky_file, good, driver: crate::soak::Driver::new(1), dir, samples: Vec::new() })

@@ -45,25 +45,7 @@ impl Baseline {
             bind_group_layouts: &[None, Some(&layout)],
             immediate_size: 0,
         });
-        let module = shaders::module(device, library, "baseline")?;
-        let pipeline = shaders::validated(device, "Baseline::pipeline", || {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("Baseline::pipeline"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
-                    compilation_options: Default::default(),
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        })?;
+        let pipeline = shaders::fullscreen_pipeline(device, library, "baseline", &pipeline_layout, "Baseline::pipeline", format)?;
         Ok(Self { pipeline, bind_group })
     }
 

@@ -115,6 +115,37 @@ pub fn module(device: &wgpu::Device, library: &ShaderLibrary, name: &str) -> Ren
     })
 }
 
+/// A pipeline that draws one full-screen triangle from `shaders/NAME.wgsl` (`vs_main` without
+/// vertex buffers, `fs_main`) into a `format` target, no depth, no blending.
+pub fn fullscreen_pipeline(
+    device: &wgpu::Device,
+    library: &ShaderLibrary,
+    name: &str,
+    layout: &wgpu::PipelineLayout,
+    label: &str,
+    format: wgpu::TextureFormat,
+) -> RenderResult<wgpu::RenderPipeline> {
+    let module = module(device, library, name)?;
+    validated(device, label, || {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
+                compilation_options: Default::default(),
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    })
+}
+
 /// Creates a compute pipeline from `module`'s `entry`, validated.
 pub fn compute_pipeline(device: &wgpu::Device, layout: &wgpu::PipelineLayout, module: &wgpu::ShaderModule, entry: &str, label: &str) -> RenderResult<wgpu::ComputePipeline> {
     validated(device, label, || {

@@ -63,26 +63,7 @@ impl ToneMapPass {
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
-        let (device, format) = (b.device, b.color_format);
-        let module = shaders::module(device, b.library, "tone_map")?;
-        shaders::validated(device, "ToneMap::pipeline", || {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("ToneMap::pipeline"),
-                layout: Some(layout),
-                vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
-                    compilation_options: Default::default(),
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        })
+        shaders::fullscreen_pipeline(b.device, b.library, "tone_map", layout, "ToneMap::pipeline", b.color_format)
     }
 }
 
