@@ -128,43 +128,58 @@ fn add_term(sum: vec4<f32>, term_display: vec4<f32>, view: vec3<f32>, has_view: 
     return vec4<f32>(sum.rgb + rgb, max(sum.a, t.a));
 }
 
+// The material's running sum: finished terms plus the open one.
+struct Terms {
+    sum: vec4<f32>,
+    term: vec4<f32>,
+    has_term: bool,
+    term_has_view: bool,
+};
+
+// Folds stage `i` (its sample `c`) into the sum. Called with constant indices: a loop over a
+// dynamically indexed array of samples spills to memory on SIMD rasterisers (lavapipe).
+fn fold_stage(acc_in: Terms, i: u32, c_in: vec4<f32>, view: vec3<f32>) -> Terms {
+    var acc = acc_in;
+    let s = draw.stages[i];
+    var c = c_in;
+    if s.cfg.z < 4u { c = c * draw.constants[s.cfg.z]; }
+    if s.cfg.x == 1u {
+        acc.term = acc.term * c;
+    } else {
+        if acc.has_term { acc.sum = add_term(acc.sum, acc.term, view, acc.term_has_view); }
+        acc.term = c;
+        acc.has_term = true;
+        acc.term_has_view = false;
+    }
+    acc.term_has_view = acc.term_has_view || i == draw.misc.z;
+    return acc;
+}
+
+// Stage `i`'s sample: not placed nor sampled when its term is black this frame (reads as 0), white
+// when the sky-view map stands in for it.
+fn stage_sample(i: u32, t: texture_2d<f32>, smp: sampler, in: VertexOut) -> vec4<f32> {
+    if draw.misc.z == i { return vec4<f32>(1.0); }
+    if draw.stages[i].cfg.w == 0u { return vec4<f32>(0.0); }
+    return textureSample(t, smp, stage_uv(draw.stages[i], uv_mode(i), in.uv, in.world_dir));
+}
+
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     // Stages past the material's count are neither placed nor sampled.
     let count = stage_count();
-    var samples = array<vec4<f32>, 4>(vec4<f32>(1.0), vec4<f32>(1.0), vec4<f32>(1.0), vec4<f32>(1.0));
-    // Nor are the stages of a term that is black this frame (its constant is): they read as 0.
-    if count > 0u { samples[0] = vec4<f32>(0.0); if draw.stages[0].cfg.w != 0u { samples[0] = textureSample(tex0, samp0, stage_uv(draw.stages[0], uv_mode(0u), in.uv, in.world_dir)); } }
-    if count > 1u { samples[1] = vec4<f32>(0.0); if draw.stages[1].cfg.w != 0u { samples[1] = textureSample(tex1, samp1, stage_uv(draw.stages[1], uv_mode(1u), in.uv, in.world_dir)); } }
-    if count > 2u { samples[2] = vec4<f32>(0.0); if draw.stages[2].cfg.w != 0u { samples[2] = textureSample(tex2, samp2, stage_uv(draw.stages[2], uv_mode(2u), in.uv, in.world_dir)); } }
-    if count > 3u { samples[3] = vec4<f32>(0.0); if draw.stages[3].cfg.w != 0u { samples[3] = textureSample(tex3, samp3, stage_uv(draw.stages[3], uv_mode(3u), in.uv, in.world_dir)); } }
     // A physical model's radiance (already exposed, on the HDR target) in place of its stage; that
     // stage's colour then counts as white in its term.
     var view = vec3<f32>(1.0);
     if draw.misc.z < 4u {
         view = textureSample(sky_view, sky_view_sampler, sky_view_uv(normalize(in.world_dir))).rgb;
-        samples[draw.misc.z] = vec4<f32>(1.0);
     }
-
-    var sum = vec4<f32>(0.0);
-    var term = vec4<f32>(0.0);
-    var has_term = false;
-    var term_has_view = false;
-    for (var i = 0u; i < count; i = i + 1u) {
-        let s = draw.stages[i];
-        var c = samples[i];
-        if s.cfg.z < 4u { c = c * draw.constants[s.cfg.z]; }
-        if s.cfg.x == 1u {
-            term = term * c;
-        } else {
-            if has_term { sum = add_term(sum, term, view, term_has_view); }
-            term = c;
-            has_term = true;
-            term_has_view = false;
-        }
-        term_has_view = term_has_view || i == draw.misc.z;
-    }
-    if has_term { sum = add_term(sum, term, view, term_has_view); }
+    var acc = Terms(vec4<f32>(0.0), vec4<f32>(0.0), false, false);
+    if count > 0u { acc = fold_stage(acc, 0u, stage_sample(0u, tex0, samp0, in), view); }
+    if count > 1u { acc = fold_stage(acc, 1u, stage_sample(1u, tex1, samp1, in), view); }
+    if count > 2u { acc = fold_stage(acc, 2u, stage_sample(2u, tex2, samp2, in), view); }
+    if count > 3u { acc = fold_stage(acc, 3u, stage_sample(3u, tex3, samp3, in), view); }
+    var sum = acc.sum;
+    if acc.has_term { sum = add_term(sum, acc.term, view, acc.term_has_view); }
     var color = sum;
 
     if draw.misc.y == 1u {
