@@ -1,4 +1,4 @@
-//! requires: sky_model/single, sky_model/lut_sampling
+//! requires: sky_model/single, sky_model/lut_sampling, sky_model/analytic
 // Evaluates a sky model for a list of radiance cases (`skytune radiance`, tests, benchmarks).
 // Keep in sync with src/render/radiance_probe.rs.
 @group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
@@ -10,6 +10,8 @@
 @group(1) @binding(4) var<storage, read> lut_params: LutParams;
 @group(1) @binding(5) var<storage, read> transmittance_lut: array<vec4<f32>>;
 @group(1) @binding(6) var<storage, read> multiscattering_lut: array<vec4<f32>>;
+// The analytic models' coefficients, 12 vectors per case (src/atmosphere/analytic.rs).
+@group(1) @binding(7) var<storage, read> analytic: array<vec4<f32>>;
 
 fn direction(elevation_deg: f32, azimuth_deg: f32) -> vec3<f32> {
     let e = radians(elevation_deg);
@@ -37,4 +39,17 @@ fn cs_lut(@builtin(global_invocation_id) id: vec3<u32>) {
     let sun = direction(c.y, 0.0);
     let view = direction(c.z, c.w);
     radiance[id.x] = vec4<f32>(lut_radiance(atmosphere, c.x, view, sun), 1.0);
+}
+
+@compute @workgroup_size(64)
+fn cs_analytic(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= arrayLength(&cases)) {
+        return;
+    }
+    let c = cases[id.x];
+    var coefficients: array<vec4<f32>, 12>;
+    for (var k = 0u; k < 12u; k++) {
+        coefficients[k] = analytic[12u * id.x + k];
+    }
+    radiance[id.x] = vec4<f32>(analytic_radiance(coefficients, direction(c.z, c.w)), 1.0);
 }

@@ -1,4 +1,4 @@
-//! requires: sky_model/single, sky_model/lut_sampling, sky_model/tone, sky_model/sky_view_map
+//! requires: sky_model/single, sky_model/lut_sampling, sky_model/tone, sky_model/sky_view_map, sky_model/analytic
 // Sky-view pass (compute phase): the current physical model rendered into the sky-view map as
 // exposed linear radiance, for the skydome's gradient stage to sample into the HDR target (the
 // display phase, tone_map.wgsl, tone-maps the frame).
@@ -6,7 +6,7 @@
 struct SkyViewParams {
     towards_sun: vec4<f32>, // xyz unit vector, w: camera altitude (km)
     exposure: vec4<f32>,    // x: radiance scale (2^EV), y: tone mapper as f32 (0 ACES, 1 neutral) for the scene's light, zw: map size (texels)
-    model: vec4<f32>,       // x: 0 single, 1 lut, 2 radiance computed on the CPU (cells, reference); y: 1 automatic exposure
+    model: vec4<f32>,       // x: 0 single, 1 lut, 2 radiance computed on the CPU (cells, reference), 3 analytic; y: 1 automatic exposure
 };
 
 @group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
@@ -29,10 +29,29 @@ struct SkyViewParams {
 // shades with display-referred colours; `to_target` takes them back to exposed radiance), laid out
 // as in `Globals` (sky_view.rs copies them there when the model drives the scene).
 @group(1) @binding(8) var<storage, read_write> sky_light: array<vec4<f32>, 4>;
+// The analytic models' coefficients for this sun (src/atmosphere/analytic.rs); [11].w the kind
+// (2: Braun-Cohen, whose colour is a display value).
+@group(1) @binding(9) var<storage, read> analytic_coefficients: array<vec4<f32>, 12>;
+
+// Braun and Cohen's colour as the exposed radiance the frame's tone mapper takes back to it
+// (its exposure scale is 1).
+fn display_referred_radiance(display: vec3<f32>) -> vec3<f32> {
+    let l = linear_from_display(display);
+    if (params.exposure.y > 0.5) {
+        return tone_map_neutral_inverse(l);
+    }
+    return tone_map_aces_inverse(l);
+}
 
 // Radiance of the frame's model along `dir` (texel `index` of the CPU map for `cells`).
 fn model_radiance(dir: vec3<f32>, index: u32) -> vec3<f32> {
-    if (params.model.x > 1.5) {
+    if (params.model.x > 2.5) {
+        let radiance = analytic_radiance(analytic_coefficients, dir);
+        if (analytic_coefficients[11].w > 1.5) {
+            return display_referred_radiance(radiance);
+        }
+        return radiance;
+    } else if (params.model.x > 1.5) {
         return cpu_radiance[index].xyz;
     } else if (params.model.x > 0.5) {
         return lut_radiance(atmosphere, params.towards_sun.w, dir, params.towards_sun.xyz);
@@ -97,6 +116,13 @@ fn cs_exposure(@builtin(local_invocation_index) i: u32) {
         sky_light[1] = vec4<f32>(display_from_exposed(horizon * scale, tone), 1.0);
         sky_light[2] = vec4<f32>(display_from_exposed(mean * scale, tone), 1.0);
         sky_light[3] = vec4<f32>(display_from_exposed(t_sun / PI * scale, tone), 1.0);
+        if (params.model.x > 2.5 && analytic_coefficients[11].w > 1.5) {
+            // Braun and Cohen: one colour for sky, fog and ambient light; no directional light.
+            let c = analytic_coefficients[0].rgb;
+            sky_light[1] = vec4<f32>(c, 1.0);
+            sky_light[2] = vec4<f32>(c, 1.0);
+            sky_light[3] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        }
     }
 }
 

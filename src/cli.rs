@@ -150,6 +150,13 @@ pub enum RadianceModel {
     Lut,
     /// The cell model of the procedural-sky text (CPU, solved per ground albedo).
     Cells,
+    /// Preetham, Shirley and Smits 1999 (GPU; `--on-cpu` for the CPU evaluation).
+    Preetham,
+    /// Hosek and Wilkie 2012, RGB (GPU; `--on-cpu` for the `hw-skymodel` crate's evaluation).
+    Hosek,
+    /// Braun and Cohen's simple model: display values, the time of day from the sun's elevation
+    /// on an equinox morning (6:00 on the horizon, 15 degrees an hour).
+    Linear,
 }
 
 /// Optical depth towards the sun of the `single` model.
@@ -206,6 +213,15 @@ pub struct RadianceArgs {
     /// Force the software adapter (lavapipe) for GPU models.
     #[arg(long)]
     pub cpu: bool,
+    /// `preetham`, `hosek`: atmospheric turbidity (clamped into each model's domain).
+    #[arg(long, default_value_t = 2.5)]
+    pub turbidity: f64,
+    /// `linear`: parameter table of the paper (snow, desert, forest).
+    #[arg(long, default_value = "snow")]
+    pub preset: String,
+    /// `preetham`, `hosek`, `linear`: evaluate on the CPU (double precision; the crate's for hosek).
+    #[arg(long)]
+    pub on_cpu: bool,
 }
 
 /// Which frame to render.
@@ -241,7 +257,7 @@ pub struct FrameArgs {
     /// Render what the environment map sees (objects with visible_in_env_map).
     #[arg(long)]
     pub env_map: bool,
-    /// Colour source of the skydome instead of the sky file's: bitmap, single.
+    /// Colour source of the skydome instead of the sky file's: bitmap, linear, preetham, hosek, single, lut, cells, reference.
     #[arg(long)]
     pub sky_model: Option<String>,
     /// Exposure of physical sky models, stops (default: the sky file's).
@@ -272,6 +288,33 @@ pub struct RenderArgs {
     /// Output PNG.
     #[arg(long, short, default_value = "shot.png")]
     pub out: PathBuf,
+    /// File format: png (display values), exr or hdr (linear light); default from --out's extension.
+    #[arg(long, value_enum)]
+    pub format: Option<ExportFormat>,
+    /// With --env-map: write an environment map instead of a view (equirect: one 2:1 image of
+    /// --size; cube: six faces OUT_px .. OUT_nz, each as tall as --size).
+    #[arg(long, value_enum)]
+    pub projection: Option<Projection>,
+}
+
+/// File format of `render`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExportFormat {
+    /// 8-bit sRGB display values.
+    Png,
+    /// OpenEXR, 32-bit float linear light.
+    Exr,
+    /// Radiance RGBE, linear light.
+    Hdr,
+}
+
+/// Environment-map projection of `render --env-map`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Projection {
+    /// Equirectangular (latitude-longitude), north in the middle, east to its right.
+    Equirect,
+    /// Six cube faces.
+    Cube,
 }
 
 /// Window options.

@@ -14,6 +14,7 @@
 pub mod app;
 pub mod atmosphere;
 pub mod compare;
+pub mod export;
 pub mod fsx;
 pub mod live;
 pub mod render;

@@ -136,14 +136,43 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             }
             (out, format!("model cells: {settings:?}"))
         }
+        cli::RadianceModel::Preetham | cli::RadianceModel::Hosek | cli::RadianceModel::Linear => {
+            use skytune::atmosphere::analytic::{self, AnalyticModel, LinearParams};
+            anyhow::ensure!(args.turbidity.is_finite(), "--turbidity: expected a finite number, found {}", args.turbidity);
+            let model = match args.model {
+                cli::RadianceModel::Preetham => AnalyticModel::Preetham { turbidity: args.turbidity },
+                cli::RadianceModel::Hosek => AnalyticModel::Hosek { turbidity: args.turbidity, albedo: 0.0 },
+                _ => AnalyticModel::Linear(LinearParams::preset(&args.preset).ok_or_else(|| {
+                    anyhow!("--preset: unknown table \"{}\"; expected one of {}", args.preset, analytic::LINEAR_PRESETS.map(|p| p.0).join(", "))
+                })?),
+            };
+            let albedo_note = if matches!(model, AnalyticModel::Hosek { .. }) { " (the albedo column is used)" } else { "" };
+            let per_case = |c: &skytune::atmosphere::reference::Case| match model {
+                AnalyticModel::Hosek { turbidity, .. } => AnalyticModel::Hosek { turbidity, albedo: c.albedo },
+                m => m,
+            };
+            let out: Vec<[f64; 3]> = if args.on_cpu {
+                list.iter().map(|c| per_case(c).radiance(analytic::direction(c.view_elev_deg.to_radians(), c.rel_azimuth_deg.to_radians()), analytic::direction(c.sun_elev_deg.to_radians(), 0.0), analytic::equinox_morning_hour(c.sun_elev_deg))).collect()
+            } else {
+                let ctx = GpuContext::headless(adapter(args.cpu))?;
+                let probe = skytune::render::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
+                probe.analytic(&ctx, &list, per_case)?.into_iter().map(|c| c.map(f64::from)).collect()
+            };
+            let place = if args.on_cpu { "CPU".to_string() } else { "GPU".to_string() };
+            (out, format!("units: {}\nmodel {} on the {place}: turbidity {}{albedo_note}", model.units(), model.name(), args.turbidity))
+        }
     };
     let name = match args.model {
         cli::RadianceModel::Reference => "reference",
         cli::RadianceModel::Single => "single",
         cli::RadianceModel::Lut => "lut",
         cli::RadianceModel::Cells => "cells",
+        cli::RadianceModel::Preetham => "preetham",
+        cli::RadianceModel::Hosek => "hosek",
+        cli::RadianceModel::Linear => "linear",
     };
-    cases::write_radiance(&args.out, &format!("skytune radiance --model {name}: {units}\n{comment}"), &list, &out)?;
+    let header = if comment.starts_with("units: ") { format!("skytune radiance --model {name}\n{comment}") } else { format!("skytune radiance --model {name}: {units}\n{comment}") };
+    cases::write_radiance(&args.out, &header, &list, &out)?;
     println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());
     Ok(())
 }
@@ -225,18 +254,41 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
             log::info!("hidden: {} ({why})", sky.objects[o.index].name);
         }
     }
-    let image = headless.render(sky, &input, &camera, &options)?;
-    skytune::fsx::save_png(&image, &args.out)?;
-    println!(
-        "wrote {} ({}x{}, sky \"{}\", hour {}, weather {}, tier {})",
-        args.out.display(),
-        image.width(),
-        image.height(),
-        sky.name,
-        input.hour,
-        input.weather,
-        input.tier.stages()
-    );
+    use skytune::export::{self, Format};
+    let ext = args.out.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let format = match (args.format, ext.as_deref()) {
+        (Some(cli::ExportFormat::Png), _) | (None, Some("png")) | (None, None) => Format::Png,
+        (Some(cli::ExportFormat::Exr), _) | (None, Some("exr")) => Format::Exr,
+        (Some(cli::ExportFormat::Hdr), _) | (None, Some("hdr")) => Format::Hdr,
+        (None, Some(other)) => bail!("--out: unknown image extension \".{other}\"; use .png, .exr or .hdr, or give --format"),
+    };
+    let about = format!("sky \"{}\", hour {}, weather {}, tier {}", sky.name, input.hour, input.weather, input.tier.stages());
+    if let Some(projection) = args.projection {
+        anyhow::ensure!(args.frame.env_map, "--projection: only with --env-map (an environment map shows the objects marked visible_in_env_map)");
+        let (w, h) = cli::parse_size(&args.size)?;
+        match projection {
+            cli::Projection::Cube => {
+                let faces = export::cube_faces(headless, sky, &input, &options, h, format.linear())?;
+                for ((suffix, _, _), face) in export::CUBE_FACES.iter().zip(&faces) {
+                    let path = export::face_path(&args.out, suffix, format);
+                    export::save(face, format, &path)?;
+                    println!("wrote {} ({h}x{h} cube face, {about})", path.display());
+                }
+            }
+            cli::Projection::Equirect => {
+                // Faces a little sharper than the map's texels at the equator.
+                let face = (w / 4).clamp(16, 2048);
+                let faces = export::cube_faces(headless, sky, &input, &options, face, format.linear())?;
+                let map = export::equirect_from_cube(&faces, w, h);
+                export::save(&map, format, &args.out)?;
+                println!("wrote {} ({w}x{h} equirectangular, {about})", args.out.display());
+            }
+        }
+        return Ok(());
+    }
+    let image = if format.linear() { export::render_linear(headless, sky, &input, &camera, &options)? } else { export::display_to_float(&headless.render(sky, &input, &camera, &options)?, false) };
+    export::save(&image, format, &args.out)?;
+    println!("wrote {} ({}x{}, {about})", args.out.display(), image.width(), image.height());
     Ok(())
 }
 

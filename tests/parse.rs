@@ -164,6 +164,14 @@ fn starfield_respects_magnitude_cutoff() {
 }
 
 #[test]
+fn unknown_star_source_and_layer_are_located() {
+    let (e, line, file) = broken("[stars]\ncount = 6000", "[stars]\nsource = \"hipparcos\"\ncount = 6000");
+    assert_error(&e, &file, line + 1, "stars.source", "unknown variant `hipparcos`, expected `procedural` or `catalogue`");
+    let (e, line, file) = broken("name = \"galaxy\"", "name = \"galaxy\"\nlayer = \"dusk\"");
+    assert_error(&e, &file, line + 1, "object[1].layer", "unknown variant `dusk`, expected `day` or `night`");
+}
+
+#[test]
 fn bitmap_mode_without_bitmap_points_at_the_owner() {
     let (e, line, file) = broken("diffuse = { mode = \"bitmap\", bitmap = \"clouds_storm.png\" }", "diffuse = { mode = \"bitmap\" }");
     assert_error(&e, &file, line, "object[8].standard.diffuse", "needs a `bitmap`");
@@ -201,7 +209,13 @@ fn bad_sky_model_and_atmosphere_values_are_located() {
     for (extra, needle, field, message) in [
         ("[sky_model]\nkind = \"single\"\nview_steps = 0\n", "view_steps = 0", "sky_model.view_steps", "expected a sample count in 1..=1024, found 0"),
         ("[sky_model]\nview_steps = 1000000\n", "view_steps = 1000000", "sky_model.view_steps", "found 1000000"),
-        ("[sky_model]\nkind = \"hosek\"\n", "kind = \"hosek\"", "sky_model.kind", "unknown variant"),
+        ("[sky_model]\nkind = \"hosek-wilkie\"\n", "kind = \"hosek-wilkie\"", "sky_model.kind", "unknown variant"),
+        ("[sky_model]\nkind = \"preetham\"\nturbidity = 0.5\n", "turbidity = 0.5", "sky_model.turbidity", "expected a turbidity in [1, 10], found 0.5"),
+        ("[sky_model]\nkind = \"hosek\"\nturbidity = nan\n", "turbidity = nan", "sky_model.turbidity", "expected a turbidity in [1, 10]"),
+        ("[sky_model]\nkind = \"linear\"\n[sky_model.linear]\npreset = \"tundra\"\n", "preset = \"tundra\"", "sky_model.linear.preset", "unknown preset \"tundra\"; expected one of snow, desert, forest"),
+        ("[sky_model]\nkind = \"linear\"\n[sky_model.linear]\nmax = [200, 300, 200]\n", "max = [200, 300, 200]", "sky_model.linear.max[1]", "expected a light factor in [0, 255], found 300"),
+        ("[sky_model]\nkind = \"linear\"\n[sky_model.linear]\nmin = [100, 100, 100]\nmax = [90, 200, 200]\n", "min = [100, 100, 100]", "sky_model.linear.min", "expected min <= max per channel"),
+        ("[sky_model]\nkind = \"linear\"\n[sky_model.linear]\nsunrise_hour = 5\nsunset_hour = 7\nramp_hours = 4\n", "ramp_hours = 4", "sky_model.linear.ramp_hours", "ramps of 4 h overlap"),
         ("[atmosphere]\nrayleigh_scale_height_km = nan\n", "rayleigh_scale_height_km = nan", "atmosphere.rayleigh_scale_height_km", "expected a finite number > 0"),
         ("[atmosphere]\nmie_scattering_per_km = -1\n", "mie_scattering_per_km = -1", "atmosphere.mie_scattering_per_km", "expected a finite number >= 0"),
         ("[atmosphere]\ntop_radius_km = 6000\n", "top_radius_km = 6000", "atmosphere.top_radius_km", "expected more than ground_radius_km"),

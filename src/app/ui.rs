@@ -429,6 +429,9 @@ fn model_label(kind: SkyModelKind) -> &'static str {
         SkyModelKind::Lut => "LUT multiple scattering",
         SkyModelKind::Cells => "cells (CPU, background)",
         SkyModelKind::Reference => "reference (CPU still, background)",
+        SkyModelKind::Preetham => "Preetham 1999 (analytic)",
+        SkyModelKind::Hosek => "Hosek-Wilkie 2012 (analytic)",
+        SkyModelKind::Linear => "Braun-Cohen linear (one colour)",
     }
 }
 
@@ -441,7 +444,9 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
             ui.selectable_value(&mut model.kind, kind, model_label(kind));
         }
     });
-    if model.kind.is_physical() {
+    if model.kind == SkyModelKind::Linear {
+        linear_controls(ui, &mut model.linear);
+    } else if model.kind.is_physical() {
         ui.checkbox(&mut model.auto_exposure, "automatic exposure (EV below compensates)");
         ui.checkbox(&mut model.drive_scene, "light the scene from the model (fog, ambient, sun)");
         ui.add(egui::Slider::new(&mut model.exposure_ev, -4.0..=12.0).text("exposure (EV)"));
@@ -458,7 +463,14 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
                 ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Numerical, "numerical");
             });
         }
-        if model.kind == SkyModelKind::Reference {
+        if matches!(model.kind, SkyModelKind::Preetham | SkyModelKind::Hosek) {
+            ui.add(egui::Slider::new(&mut model.turbidity, 1.0..=10.0).text("turbidity"));
+            if model.kind == SkyModelKind::Hosek {
+                ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
+            } else if (model.turbidity as f64) < crate::atmosphere::analytic::PREETHAM_MIN_TURBIDITY {
+                ui.label(format!("below {} Preetham's fit goes negative: clamped", crate::atmosphere::analytic::PREETHAM_MIN_TURBIDITY));
+            }
+        } else if model.kind == SkyModelKind::Reference {
             ui.add(egui::Slider::new(&mut model.reference_paths, 1..=1024).text("paths per direction"));
             ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
         } else if model.kind == SkyModelKind::Cells {
@@ -481,6 +493,37 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
     if c.sky_model.is_some() && ui.small_button("use the sky file's model").clicked() {
         c.sky_model = None;
     }
+}
+
+/// Braun and Cohen's parameters: the paper's presets, light factors and ramps.
+fn linear_controls(ui: &mut egui::Ui, p: &mut crate::atmosphere::analytic::LinearParams) {
+    use crate::atmosphere::analytic::{LinearParams, Ramp, LINEAR_PRESETS};
+    ui.horizontal(|ui| {
+        ui.label("preset:");
+        for (name, _, _) in LINEAR_PRESETS {
+            if ui.small_button(name).clicked() {
+                if let Some(preset) = LinearParams::preset(name) {
+                    *p = LinearParams { hours_per_day: p.hours_per_day, sunrise_hour: p.sunrise_hour, sunset_hour: p.sunset_hour, ramp_hours: p.ramp_hours, ramp: p.ramp, ..preset };
+                }
+            }
+        }
+    });
+    for (label, values) in [("min", &mut p.min), ("max", &mut p.max)] {
+        ui.horizontal(|ui| {
+            ui.label(label);
+            for v in values.iter_mut() {
+                ui.add(egui::DragValue::new(v).range(0.0..=255.0));
+            }
+        });
+    }
+    let day = p.hours_per_day;
+    ui.add(egui::Slider::new(&mut p.sunrise_hour, 0.0..=day).text("sunrise starts (h)"));
+    ui.add(egui::Slider::new(&mut p.sunset_hour, 0.0..=day).text("sunset starts (h)"));
+    ui.add(egui::Slider::new(&mut p.ramp_hours, 0.1..=day / 4.0).text("ramp (h)"));
+    ui.horizontal(|ui| {
+        ui.radio_value(&mut p.ramp, Ramp::Linear, "linear ramp");
+        ui.radio_value(&mut p.ramp, Ramp::Exponential, "exponential ramp");
+    });
 }
 
 fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {

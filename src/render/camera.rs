@@ -15,12 +15,15 @@ pub struct Camera {
     pub fov_y_deg: f32,
     /// Eye height above the ground at the origin, m.
     pub eye_height_m: f32,
+    /// An explicit view (unit forward, unit up) instead of yaw and pitch: environment-map faces
+    /// look straight up and down, which yaw and pitch (clamped short of the poles) cannot.
+    pub look: Option<(Vec3, Vec3)>,
 }
 
 impl Default for Camera {
     fn default() -> Self {
         // Facing south, slightly up: the noon sun and the horizon are both in view.
-        Self { yaw_deg: 180.0, pitch_deg: 12.0, fov_y_deg: 70.0, eye_height_m: 1.8 }
+        Self { yaw_deg: 180.0, pitch_deg: 12.0, fov_y_deg: 70.0, eye_height_m: 1.8, look: None }
     }
 }
 
@@ -35,6 +38,9 @@ impl Camera {
 
     /// Unit view direction.
     pub fn forward(&self) -> Vec3 {
+        if let Some((forward, _)) = self.look {
+            return forward;
+        }
         direction(self.yaw_deg, self.pitch_deg.clamp(-89.0, 89.0))
     }
 
@@ -46,6 +52,9 @@ impl Camera {
     /// Unit "up" of the screen, in world space.
     pub fn screen_up(&self) -> Vec3 {
         let f = self.forward();
+        if let Some((_, up)) = self.look {
+            return up;
+        }
         let right = f.cross(Vec3::Y).try_normalize().unwrap_or(Vec3::X);
         right.cross(f)
     }
@@ -54,8 +63,9 @@ impl Camera {
     pub fn matrices(&self, aspect: f32) -> (Mat4, Mat4) {
         let proj = Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, 0.05, 5000.0);
         let f = self.forward();
-        let view = Mat4::look_to_rh(self.position(), f, Vec3::Y);
-        let view_rot = Mat4::look_to_rh(Vec3::ZERO, f, Vec3::Y);
+        let up = self.look.map_or(Vec3::Y, |(_, up)| up);
+        let view = Mat4::look_to_rh(self.position(), f, up);
+        let view_rot = Mat4::look_to_rh(Vec3::ZERO, f, up);
         (proj * view, proj * view_rot)
     }
 }

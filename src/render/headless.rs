@@ -55,35 +55,7 @@ impl Offscreen {
 
     /// Copies the colour target back to the CPU (blocks until the GPU is done).
     pub fn read(&self, ctx: &GpuContext) -> RenderResult<image::RgbaImage> {
-        let row = (self.width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("Offscreen::readback"),
-            size: (row * self.height) as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("Offscreen::readback_encoder") });
-        encoder.copy_texture_to_buffer(
-            self.color.as_image_copy(),
-            wgpu::TexelCopyBufferInfo { buffer: &buffer, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(row), rows_per_image: Some(self.height) } },
-            wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
-        );
-        ctx.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        buffer.map_async(wgpu::MapMode::Read, .., move |r| {
-            let _ = tx.send(r);
-        });
-        ctx.wait_idle()?;
-        rx.recv().map_err(|_| RenderError::Readback("the readback callback never ran".into()))?.map_err(|e| RenderError::Readback(e.to_string()))?;
-        let mut pixels = Vec::with_capacity((self.width * self.height * 4) as usize);
-        {
-            let view = buffer.get_mapped_range(..).map_err(|e| RenderError::Readback(e.to_string()))?;
-            for y in 0..self.height as usize {
-                let start = y * row as usize;
-                pixels.extend_from_slice(&view[start..start + self.width as usize * 4]);
-            }
-        }
-        buffer.unmap();
+        let pixels = read_texture(ctx, &self.color, self.width, self.height, 4)?;
         image::RgbaImage::from_raw(self.width, self.height, pixels).ok_or_else(|| RenderError::Readback("size mismatch".into()))
     }
 
@@ -97,6 +69,47 @@ impl Offscreen {
 const STILL_SETTLE_FRAMES: usize = 6;
 /// Longest a still waits for a pass's background work (the `cells` model's solve).
 const STILL_BUSY_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(300);
+
+/// Copies a `width` x `height` texture of `texel_bytes` per texel back to the CPU, rows packed
+/// (blocks until the GPU is done).
+pub fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture, width: u32, height: u32, texel_bytes: u32) -> RenderResult<Vec<u8>> {
+    let row = (width * texel_bytes).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = readback_buffer(ctx, "Offscreen::readback", (row * height) as u64);
+    let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("Offscreen::readback_encoder") });
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo { buffer: &buffer, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(row), rows_per_image: Some(height) } },
+        wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+    );
+    let bytes = finish_readback(ctx, encoder, &buffer)?;
+    let line = (width * texel_bytes) as usize;
+    Ok((0..height as usize).flat_map(|y| bytes[y * row as usize..y * row as usize + line].iter().copied()).collect())
+}
+
+/// Copies the first `size` bytes of a buffer (with COPY_SRC usage) back to the CPU.
+pub fn read_buffer(ctx: &GpuContext, source: &wgpu::Buffer, size: u64) -> RenderResult<Vec<u8>> {
+    let buffer = readback_buffer(ctx, "Headless::buffer_readback", size);
+    let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("Headless::buffer_readback_encoder") });
+    encoder.copy_buffer_to_buffer(source, 0, &buffer, 0, size);
+    finish_readback(ctx, encoder, &buffer)
+}
+
+fn readback_buffer(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false })
+}
+
+fn finish_readback(ctx: &GpuContext, encoder: wgpu::CommandEncoder, buffer: &wgpu::Buffer) -> RenderResult<Vec<u8>> {
+    ctx.queue.submit([encoder.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.wait_idle()?;
+    rx.recv().map_err(|_| RenderError::Readback("the readback callback never ran".into()))?.map_err(|e| RenderError::Readback(e.to_string()))?;
+    let bytes = buffer.get_mapped_range(..).map_err(|e| RenderError::Readback(e.to_string()))?.to_vec();
+    buffer.unmap();
+    Ok(bytes)
+}
 
 /// A renderer with its own offscreen target: renders frames of a sky to images. The context may
 /// be shared with a window (it is a set of shared handles).

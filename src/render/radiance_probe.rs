@@ -7,6 +7,7 @@ use wgpu::util::DeviceExt;
 use super::error::{RenderError, RenderResult};
 use super::sky_model::{storage_entry, AtmosphereUniform, LutBuilder, LutTables, LutUniform, SingleUniform};
 use super::{shaders, GpuContext, ShaderLibrary};
+use crate::atmosphere::analytic::{self, AnalyticModel};
 use crate::atmosphere::reference::Case;
 use crate::atmosphere::{Atmosphere, LutSettings, SingleSettings};
 
@@ -16,6 +17,7 @@ pub struct RadianceProbe {
     empty_layout: wgpu::BindGroupLayout,
     single: wgpu::ComputePipeline,
     lut: wgpu::ComputePipeline,
+    analytic: wgpu::ComputePipeline,
     tables: LutTables,
     builder: LutBuilder,
 }
@@ -25,6 +27,7 @@ pub struct RadianceProbe {
 enum Model {
     Single,
     Lut,
+    Analytic,
 }
 
 fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
@@ -50,6 +53,7 @@ impl RadianceProbe {
                 storage_entry(4, true),
                 storage_entry(5, true),
                 storage_entry(6, true),
+                storage_entry(7, true),
             ],
         });
         // Group 0 (the frame's globals) is declared by every module but unused here.
@@ -62,8 +66,9 @@ impl RadianceProbe {
         let module = shaders::module(device, library, "radiance_probe")?;
         let single = shaders::compute_pipeline(device, &pipeline_layout, &module, "cs_single", "RadianceProbe::single")?;
         let lut = shaders::compute_pipeline(device, &pipeline_layout, &module, "cs_lut", "RadianceProbe::lut")?;
+        let analytic = shaders::compute_pipeline(device, &pipeline_layout, &module, "cs_analytic", "RadianceProbe::analytic")?;
         let builder = LutBuilder::new(device, library, &empty)?;
-        Ok(Self { layout, empty_layout: empty, single, lut, tables: LutTables::new(device), builder })
+        Ok(Self { layout, empty_layout: empty, single, lut, analytic, tables: LutTables::new(device), builder })
     }
 
     /// Radiance of the `lut` model for every case (tables built per distinct ground albedo).
@@ -77,7 +82,7 @@ impl RadianceProbe {
             let subset: Vec<Case> = index.iter().map(|i| cases[*i]).collect();
             let params = LutUniform::new(settings, albedo as f32);
             ctx.queue.write_buffer(&self.tables.params, 0, bytemuck::bytes_of(&params));
-            let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Lut, Some(settings))?;
+            let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Lut, Some(settings), &[])?;
             for (i, r) in index.into_iter().zip(result) {
                 out[i] = r;
             }
@@ -88,11 +93,37 @@ impl RadianceProbe {
     /// Radiance of the `single` model for every case, sr^-1 per unit of solar irradiance
     /// (blocks until the GPU is done).
     pub fn single(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &SingleSettings, cases: &[Case]) -> RenderResult<Vec<[f32; 3]>> {
-        self.run(ctx, atmosphere, settings, cases, Model::Single, None)
+        self.run(ctx, atmosphere, settings, cases, Model::Single, None, &[])
     }
 
-    /// Evaluates `model` for `cases`; with `luts`, builds the tables first.
-    fn run(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &SingleSettings, cases: &[Case], model: Model, luts: Option<&LutSettings>) -> RenderResult<Vec<[f32; 3]>> {
+    /// Radiance of an analytic model for every case (the model's units, [`AnalyticModel::units`]):
+    /// the sun at the case's elevation, azimuth 0; `linear` at [`equinox_morning_hour`].
+    /// `model_for` gives each case's model (Hosek's albedo comes from the case).
+    pub fn analytic(&self, ctx: &GpuContext, cases: &[Case], model_for: impl Fn(&Case) -> AnalyticModel) -> RenderResult<Vec<[f32; 3]>> {
+        let coefficients: Vec<[f32; 4]> = cases
+            .iter()
+            .flat_map(|c| {
+                let model = model_for(c);
+                let sun = analytic::direction(c.sun_elev_deg.to_radians(), 0.0);
+                model.coefficients(sun, analytic::equinox_morning_hour(c.sun_elev_deg)).vectors
+            })
+            .collect();
+        self.run(ctx, &Atmosphere::default(), &SingleSettings::default(), cases, Model::Analytic, None, &coefficients)
+    }
+
+    /// Evaluates `model` for `cases`; with `luts`, builds the tables first; `analytic`: the analytic
+    /// models' coefficients (12 per case, or none).
+    #[allow(clippy::too_many_arguments)]
+    fn run(
+        &self,
+        ctx: &GpuContext,
+        atmosphere: &Atmosphere,
+        settings: &SingleSettings,
+        cases: &[Case],
+        model: Model,
+        luts: Option<&LutSettings>,
+        analytic: &[[f32; 4]],
+    ) -> RenderResult<Vec<[f32; 3]>> {
         if cases.is_empty() {
             return Ok(Vec::new());
         }
@@ -102,6 +133,8 @@ impl RadianceProbe {
         let set = init("RadianceProbe::settings", bytemuck::bytes_of(&SingleUniform::from(settings)), wgpu::BufferUsages::UNIFORM);
         let data: Vec<[f32; 4]> = cases.iter().map(|c| [c.camera_km as f32, c.sun_elev_deg as f32, c.view_elev_deg as f32, c.rel_azimuth_deg as f32]).collect();
         let input = init("RadianceProbe::cases", bytemuck::cast_slice(&data), wgpu::BufferUsages::STORAGE);
+        // A binding may not be empty: one zero vector stands in when no model reads it.
+        let coefficients = init("RadianceProbe::analytic", if analytic.is_empty() { &[0u8; 16] } else { bytemuck::cast_slice(analytic) }, wgpu::BufferUsages::STORAGE);
         let size = (cases.len() * 16) as u64;
         let output = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("RadianceProbe::radiance"),
@@ -126,6 +159,7 @@ impl RadianceProbe {
                 self.tables.entries(4)[0].clone(),
                 self.tables.entries(4)[1].clone(),
                 self.tables.entries(4)[2].clone(),
+                wgpu::BindGroupEntry { binding: 7, resource: coefficients.as_entire_binding() },
             ],
         });
         let empty = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("RadianceProbe::empty"), layout: &self.empty_layout, entries: &[] });
@@ -140,6 +174,7 @@ impl RadianceProbe {
             pass.set_pipeline(match model {
                 Model::Single => &self.single,
                 Model::Lut => &self.lut,
+                Model::Analytic => &self.analytic,
             });
             pass.set_bind_group(1, &bind_group, &[]);
             pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);

@@ -73,7 +73,7 @@ pub struct RenderTarget<'a> {
 
 /// The HDR colour target of physical-model frames, sized like the display target.
 struct HdrTarget {
-    _texture: wgpu::Texture,
+    texture: wgpu::Texture,
     view: wgpu::TextureView,
     size: (u32, u32),
     /// Changes whenever the target is recreated (passes that bind it rebuild their bind groups).
@@ -360,12 +360,18 @@ impl SkyRenderer {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: super::HDR_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            // COPY_SRC: linear exports (`render --format exr`) read it back.
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
         let view = texture.create_view(&Default::default());
         let generation = self.hdr.as_ref().map_or(0, |t| t.generation + 1);
-        self.hdr = Some(HdrTarget { _texture: texture, view, size: (width, height), generation });
+        self.hdr = Some(HdrTarget { texture, view, size: (width, height), generation });
+    }
+
+    /// The HDR target (exposed linear radiance, rgba16float) of the last frame that used one.
+    pub fn hdr_texture(&self) -> Option<&wgpu::Texture> {
+        self.hdr.as_ref().map(|t| &t.texture)
     }
 
     /// GPU time of each phase of a recent frame, ms (empty without timestamp queries).

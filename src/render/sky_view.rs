@@ -45,12 +45,17 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
         let kind = match model.kind {
             SkyModelKind::Lut => 1.0,
             SkyModelKind::Cells | SkyModelKind::Reference => 2.0,
+            k if k.is_analytic() => 3.0,
             _ => 0.0,
         };
+        // Braun and Cohen's colours are display values: no exposure, the tone mapper's inverse.
+        let display_referred = model.kind == SkyModelKind::Linear;
+        let exposure = if display_referred { 1.0 } else { model.exposure_ev.exp2() };
+        let auto = model.auto_exposure && !display_referred;
         Self {
             towards_sun: towards_sun.extend(model.camera_km).to_array(),
-            exposure: [model.exposure_ev.exp2(), super::tone_map::ToneMapUniform::from(model.tone_mapper).settings[0] as f32, w as f32, h as f32],
-            model: [kind, if model.auto_exposure { 1.0 } else { 0.0 }, 0.0, 0.0],
+            exposure: [exposure, super::tone_map::ToneMapUniform::from(model.tone_mapper).settings[0] as f32, w as f32, h as f32],
+            model: [kind, if auto { 1.0 } else { 0.0 }, 0.0, 0.0],
         }
     }
 }
@@ -64,6 +69,8 @@ struct Key {
     params: SkyViewParams,
     /// `cells` iterations, or `reference` paths and grid.
     cpu: [u32; 3],
+    /// The analytic models' coefficients for this sun (and hour).
+    analytic: [[f32; 4]; 12],
 }
 
 /// A model computed on the CPU worker.
@@ -228,6 +235,8 @@ pub struct SkyViewPass {
     /// seen recently (a compare view toggling, a scrubbed slider) costs no recomputation.
     cpu_cache: Vec<(Key, Arc<Vec<[f32; 4]>>)>,
     next_job: u64,
+    /// The analytic models' coefficients (`AnalyticCoefficients::vectors`).
+    analytic: wgpu::Buffer,
     /// Exposure (16 bytes), then the scene's fog, ambient and diffuse in the layout of `Globals`.
     sky_light: wgpu::Buffer,
     globals: wgpu::Buffer,
@@ -267,7 +276,14 @@ impl SkyViewPass {
             super::sky_model::storage_entry(6, true),
             super::sky_model::storage_entry(7, true),
             super::sky_model::storage_entry(8, false),
+            super::sky_model::storage_entry(9, true),
         ]);
+        let analytic = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("SkyView::analytic"),
+            size: 12 * 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let sky_light = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::sky_light"),
             size: 64,
@@ -314,6 +330,7 @@ impl SkyViewPass {
                 b.shared.luts.entries(4)[2].clone(),
                 wgpu::BindGroupEntry { binding: 7, resource: cpu_radiance.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 8, resource: sky_light.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 9, resource: analytic.as_entire_binding() },
             ],
         });
         let map = b.shared.sky_view.clone();
@@ -334,6 +351,7 @@ impl SkyViewPass {
             cpu_cache: Vec::new(),
             next_job: 0,
             sky_light,
+            analytic,
             globals: b.globals_buffer.clone(),
             drive_scene: false,
         })
@@ -350,6 +368,11 @@ impl SkyViewPass {
 }
 
 impl SkyViewPass {
+    /// The map's light: [0].x the exposure scale of the last map (2^EV, or the automatic one).
+    pub fn sky_light_buffer(&self) -> &wgpu::Buffer {
+        &self.sky_light
+    }
+
     /// Progress (0..1) of a CPU model's map being computed, if one is.
     pub fn progress(&self) -> Option<f32> {
         let worker = self.cells.as_ref().filter(|_| self.cells_pending.is_some())?;
@@ -481,6 +504,7 @@ impl SkyViewPass {
                 SkyModelKind::Reference => [model.reference_paths, model.reference_grid[0], model.reference_grid[1]],
                 _ => [model.cell_iterations, 0, 0],
             },
+            analytic: model.analytic().map_or([[0.0; 4]; 12], |m| m.coefficients(cx.frame.towards_sun.as_dvec3().to_array(), cx.frame.hour as f64).vectors),
         };
         if self.computed == Some(key) {
             self.cells_pending = None;
@@ -492,6 +516,7 @@ impl SkyViewPass {
         cx.queue.write_buffer(&self.atmosphere, 0, bytemuck::bytes_of(&key.atmosphere));
         cx.queue.write_buffer(&self.single, 0, bytemuck::bytes_of(&key.single));
         cx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&key.params));
+        cx.queue.write_buffer(&self.analytic, 0, bytemuck::cast_slice(&key.analytic));
         self.computed = Some(key);
         self.dirty = true;
         self.maps_computed += 1;

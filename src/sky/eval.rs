@@ -317,11 +317,20 @@ impl Sky {
             VersionFrame { version, diffuse: color(&v.diffuse), constants, uv_offsets, gradient }
         };
 
+        let sky_model = input.sky_model.unwrap_or(self.model);
+        // Braun and Cohen's layers: alpha from the light factor (equations 3 and 4).
+        let layer_alpha = |layer: Option<super::model::LayerKind>| -> f32 {
+            match (sky_model.kind, layer) {
+                (super::model::SkyModelKind::Linear, Some(kind)) => sky_model.linear.layer_alpha(hour as f64, kind == super::model::LayerKind::Night) as f32,
+                _ => 1.0,
+            }
+        };
         let objects = self
             .objects
             .iter()
             .enumerate()
             .map(|(index, o)| {
+                let alpha = layer_alpha(o.layer);
                 let placement = o.path.map(|p| self.path_at(p, hour));
                 let in_view = if input.env_map { o.visible_in_env_map } else { o.visible_in_main_scene };
                 let (versions, fallback): (Vec<(usize, &Version)>, bool) = if o.standard.stages.len() <= input.tier.stages() {
@@ -340,7 +349,10 @@ impl Sky {
                     let needs = versions.iter().map(|(_, v)| v.stages.len()).min().unwrap_or(o.standard.stages.len());
                     Err(Hidden::Tier { needs, has: tier })
                 } else {
-                    let frames: Vec<VersionFrame> = fitting.iter().map(|&(i, v)| version_frame(i, v)).collect();
+                    let mut frames: Vec<VersionFrame> = fitting.iter().map(|&(i, v)| version_frame(i, v)).collect();
+                    for f in &mut frames {
+                        f.diffuse[3] *= alpha;
+                    }
                     let first = &frames[0];
                     let ref_alpha = match fitting[0].1.ref_color {
                         RefColor::None => 1.0,
@@ -364,8 +376,10 @@ impl Sky {
         let stars = self.stars.as_ref().map(|s| StarsFrame { color: color(&s.color), priority: s.priority });
         let pole = self.stars.as_ref().map_or(45.0, |s| s.pole_elevation_deg);
         let axis = direction(0.0, pole);
-        // One turn of the celestial sphere per day, around the pole, westward as seen from the ground.
-        let celestial_from_world = Quat::from_axis_angle(axis, -std::f32::consts::TAU * hour / hpd);
+        // One turn of the celestial sphere per day, around the pole, westward as seen from the
+        // ground: world = celestial_from_world^-1 * celestial turns by -angle about the pole
+        // (clockwise seen from above it), so stars rise in the east (tests/catalogue.rs).
+        let celestial_from_world = Quat::from_axis_angle(axis, std::f32::consts::TAU * hour / hpd);
         FrameSky {
             hour,
             hours_per_day: hpd,
@@ -375,7 +389,7 @@ impl Sky {
             frame: input.frame,
             tier: input.tier,
             env_map: input.env_map,
-            sky_model: input.sky_model.unwrap_or(self.model),
+            sky_model,
             atmosphere: crate::atmosphere::Atmosphere::at_weather(&self.atmosphere_by_weather, weather as f64).unwrap_or(self.atmosphere),
             fog_color: fog,
             sun_ambient: self.sun_ambient.sample(hour, hpd, weather),

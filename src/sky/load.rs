@@ -199,6 +199,44 @@ impl Validator<'_> {
         self.err_at(offset..offset, field, message);
     }
 
+    /// Braun and Cohen's parameters: a preset of the paper, then the file's overrides.
+    fn linear(&mut self, l: &model::LinearDef) -> crate::atmosphere::analytic::LinearParams {
+        use crate::atmosphere::analytic::{LinearParams, LINEAR_PRESETS};
+        let mut p = LinearParams::default();
+        if let Some(name) = &l.preset {
+            match LinearParams::preset(name.get_ref()) {
+                Some(preset) => p = preset,
+                None => self.err_at(
+                    name.span(),
+                    "sky_model.linear.preset",
+                    format!("unknown preset \"{}\"; expected one of {}", name.get_ref(), LINEAR_PRESETS.map(|p| p.0).join(", ")),
+                ),
+            }
+        }
+        if let Some(min) = l.min {
+            p.min = min.map(|v| v.get() as f64);
+        }
+        if let Some(max) = l.max {
+            p.max = max.map(|v| v.get() as f64);
+        }
+        p.sunrise_hour = l.sunrise_hour.map_or(p.sunrise_hour, |h| h.get() as f64);
+        p.sunset_hour = l.sunset_hour.map_or(p.sunset_hour, |h| h.get() as f64);
+        p.ramp_hours = l.ramp_hours.map_or(p.ramp_hours, |h| h.get() as f64);
+        p.ramp = l.ramp;
+        if (0..3).any(|c| p.min[c] > p.max[c]) {
+            self.err_in("[sky_model.linear]", "min", "sky_model.linear.min", format!("expected min <= max per channel, found min {:?} and max {:?}", p.min, p.max));
+        }
+        if p.ramp_hours * 2.0 > 24.0 || (p.sunset_hour - p.sunrise_hour).abs() < p.ramp_hours {
+            self.err_in(
+                "[sky_model.linear]",
+                "ramp_hours",
+                "sky_model.linear.ramp_hours",
+                format!("the sunrise ({} h) and sunset ({} h) ramps of {} h overlap", p.sunrise_hour, p.sunset_hour, p.ramp_hours),
+            );
+        }
+        p
+    }
+
     fn err_near(&mut self, needle: &str, field: &str, message: impl Into<String>) {
         self.err_in(needle, needle, field, message);
     }
@@ -289,6 +327,8 @@ impl Validator<'_> {
             }
             let color = self.color(&s.color, "stars.color", "[stars]")?;
             Some(Stars {
+                source: s.source,
+                sidereal_hours_at_midnight: s.sidereal_hours_at_midnight.get(),
                 count: s.count.min(MAX_STARS),
                 magnitude_cutoff: s.magnitude_cutoff.get(),
                 seed: s.seed,
@@ -322,6 +362,8 @@ impl Validator<'_> {
                 reference_paths: m.reference_paths.map_or(256, |s| s.0),
                 reference_grid: m.reference_grid.map_or([48, 27], |[a, b]| [a.0.max(2), b.0.max(2)]),
                 drive_scene: m.drive_scene,
+                turbidity: m.turbidity.map_or(2.5, |t| t.get()),
+                linear: crate::atmosphere::analytic::LinearParams { hours_per_day: hours as f64, ..m.linear.as_ref().map_or_else(Default::default, |l| self.linear(l)) },
             }
         });
         if model.cell_iterations > 32 {
@@ -487,6 +529,7 @@ impl Validator<'_> {
             priority: o.priority.0,
             visible_in_main_scene: o.visible_in_main_scene,
             visible_in_env_map: o.visible_in_env_map,
+            layer: o.layer,
             path,
             standard: standard?,
             fallback: fallback?,

@@ -65,11 +65,27 @@ pub enum SkyModelKind {
     Cells,
     /// The double-precision reference, computed on the CPU in the background (a still).
     Reference,
+    /// Preetham, Shirley and Smits 1999: the Perez distribution at a turbidity.
+    Preetham,
+    /// Hosek and Wilkie 2012, RGB: coefficients from the `hw-skymodel` crate.
+    Hosek,
+    /// Braun and Cohen's simple model: one colour from per-channel light factors that ramp at
+    /// sunrise and sunset (`[sky_model.linear]`).
+    Linear,
 }
 
 impl SkyModelKind {
     /// Every model, in the order the app lists them.
-    pub const ALL: [SkyModelKind; 5] = [SkyModelKind::Bitmap, SkyModelKind::Single, SkyModelKind::Lut, SkyModelKind::Cells, SkyModelKind::Reference];
+    pub const ALL: [SkyModelKind; 8] = [
+        SkyModelKind::Bitmap,
+        SkyModelKind::Linear,
+        SkyModelKind::Preetham,
+        SkyModelKind::Hosek,
+        SkyModelKind::Single,
+        SkyModelKind::Lut,
+        SkyModelKind::Cells,
+        SkyModelKind::Reference,
+    ];
 
     /// Name in the sky file and the CLI.
     pub fn name(self) -> &'static str {
@@ -79,7 +95,15 @@ impl SkyModelKind {
             SkyModelKind::Lut => "lut",
             SkyModelKind::Cells => "cells",
             SkyModelKind::Reference => "reference",
+            SkyModelKind::Preetham => "preetham",
+            SkyModelKind::Hosek => "hosek",
+            SkyModelKind::Linear => "linear",
         }
+    }
+
+    /// Whether the model is evaluated from a few coefficients per sun (`shaders/sky_model/analytic.wgsl`).
+    pub fn is_analytic(self) -> bool {
+        matches!(self, SkyModelKind::Preetham | SkyModelKind::Hosek | SkyModelKind::Linear)
     }
 
     /// Whether the model produces radiance (and so needs exposure and a tone mapper).
@@ -177,6 +201,51 @@ pub struct SkyModelDef {
     /// it instead of the bitmaps.
     #[serde(default)]
     pub drive_scene: bool,
+    /// `preetham`, `hosek`: atmospheric turbidity, 1..=10 (default 2.5; Preetham clamps below 1.7).
+    #[serde(default)]
+    pub turbidity: Option<Turbidity>,
+    /// `linear`: Braun and Cohen's parameters.
+    #[serde(default)]
+    pub linear: Option<LinearDef>,
+}
+
+/// `[sky_model.linear]`: Braun and Cohen's light parameters. `preset` starts from one of the
+/// paper's tables (snow, desert, forest); `min` and `max` override it.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearDef {
+    /// `snow`, `desert` or `forest` (the paper's tables 1 to 3); default snow.
+    #[serde(default)]
+    pub preset: Option<Spanned<String>>,
+    /// Light factor at night per channel, 0..=255 (`l_min`).
+    #[serde(default)]
+    pub min: Option<[LightFactor; 3]>,
+    /// Light factor by day per channel, 0..=255 (`l_max`).
+    #[serde(default)]
+    pub max: Option<[LightFactor; 3]>,
+    /// Hour the sunrise ramp starts (default 5).
+    #[serde(default)]
+    pub sunrise_hour: Option<NonNegative>,
+    /// Hour the sunset ramp starts (default 17).
+    #[serde(default)]
+    pub sunset_hour: Option<NonNegative>,
+    /// Length of each ramp, hours (default 4).
+    #[serde(default)]
+    pub ramp_hours: Option<Positive>,
+    /// `linear` (the paper's equations) or `exponential` (its recommendation).
+    #[serde(default)]
+    pub ramp: crate::atmosphere::analytic::Ramp,
+}
+
+/// Which of Braun and Cohen's layer kinds an object is: its alpha follows the light factor
+/// (equation 3 by day, equation 4 by night) when the sky model is `linear`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LayerKind {
+    /// Clouds, the sun: alpha = l - l_min.
+    Day,
+    /// Stars, the moon: alpha = 255 - (l + l_min).
+    Night,
 }
 
 fn default_albedo() -> Unit {
@@ -322,6 +391,9 @@ pub struct ObjectDef {
     /// Drawn when rendering the environment map.
     #[serde(default = "yes")]
     pub visible_in_env_map: bool,
+    /// With the `linear` sky model: a daytime or night-time layer whose alpha follows the light.
+    #[serde(default)]
+    pub layer: Option<LayerKind>,
     /// Name of the path that places this object (billboards and quads); domes ignore it.
     #[serde(default)]
     pub path: Option<Spanned<String>>,
@@ -585,7 +657,15 @@ pub struct WeatherGradients {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StarsDef {
-    /// Stars generated before the cutoff.
+    /// `procedural` (invented stars, for invented skies) or `catalogue` (the Bright Star
+    /// Catalogue's 9,096 stars at their real positions and magnitudes).
+    #[serde(default)]
+    pub source: StarSource,
+    /// `catalogue`: local sidereal time at hour 0, hours: the right ascension on the meridian at
+    /// midnight (0 near the September equinox, 12 near the March one).
+    #[serde(default)]
+    pub sidereal_hours_at_midnight: Finite,
+    /// `procedural`: stars generated before the cutoff.
     #[serde(default = "default_star_count")]
     pub count: u32,
     /// Stars fainter than this visual magnitude are dropped.
@@ -606,6 +686,17 @@ pub struct StarsDef {
     /// Drawn after the objects of this priority or lower, before the others.
     #[serde(default = "default_star_priority")]
     pub priority: Priority,
+}
+
+/// Where the point stars come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StarSource {
+    /// Uniform random directions, magnitudes following the observed star counts.
+    #[default]
+    Procedural,
+    /// The Yale Bright Star Catalogue (5th revised edition), embedded (assets/bsc5.bin).
+    Catalogue,
 }
 
 fn default_star_priority() -> Priority {
@@ -748,6 +839,12 @@ checked_f32!(
 checked_f32!(
     /// A phase-function asymmetry, strictly between -1 and 1.
     Asymmetry, |v| v > -1.0 && v < 1.0, "a number strictly between -1 and 1");
+checked_f32!(
+    /// Atmospheric turbidity, [1, 10].
+    Turbidity, |v| (1.0..=10.0).contains(&v), "a turbidity in [1, 10]");
+checked_f32!(
+    /// A light factor of Braun and Cohen's model, [0, 255].
+    LightFactor, |v| (0.0..=255.0).contains(&v), "a light factor in [0, 255]");
 checked_f32!(
     /// An elevation in degrees, [-90, 90].
     Elevation, |v| (-90.0..=90.0).contains(&v), "an elevation in degrees within [-90, 90]");

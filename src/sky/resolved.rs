@@ -88,6 +88,23 @@ pub struct SkyModel {
     pub reference_grid: [u32; 2],
     /// The model also lights the main scene (fog colour, sun ambient and diffuse).
     pub drive_scene: bool,
+    /// `preetham`, `hosek`: turbidity.
+    pub turbidity: f32,
+    /// `linear`: Braun and Cohen's parameters.
+    pub linear: crate::atmosphere::analytic::LinearParams,
+}
+
+impl SkyModel {
+    /// The analytic model this is, if it is one.
+    pub fn analytic(&self) -> Option<crate::atmosphere::analytic::AnalyticModel> {
+        use crate::atmosphere::analytic::AnalyticModel;
+        match self.kind {
+            SkyModelKind::Preetham => Some(AnalyticModel::Preetham { turbidity: self.turbidity as f64 }),
+            SkyModelKind::Hosek => Some(AnalyticModel::Hosek { turbidity: self.turbidity as f64, albedo: self.ground_albedo as f64 }),
+            SkyModelKind::Linear => Some(AnalyticModel::Linear(self.linear)),
+            _ => None,
+        }
+    }
 }
 
 impl Default for SkyModel {
@@ -105,6 +122,8 @@ impl Default for SkyModel {
             reference_paths: 256,
             reference_grid: [48, 27],
             drive_scene: false,
+            turbidity: 2.5,
+            linear: Default::default(),
         }
     }
 }
@@ -160,6 +179,8 @@ pub struct SkyObject {
     pub visible_in_main_scene: bool,
     /// Drawn into environment maps.
     pub visible_in_env_map: bool,
+    /// Braun and Cohen's layer kind (alpha from the light factor with the `linear` model).
+    pub layer: Option<super::model::LayerKind>,
     /// Index of the placing path.
     pub path: Option<usize>,
     /// Full-quality version.
@@ -233,6 +254,10 @@ pub struct Gradients {
 /// Point-star field settings.
 #[derive(Debug, Clone)]
 pub struct Stars {
+    /// Procedural or catalogue stars.
+    pub source: super::model::StarSource,
+    /// `catalogue`: local sidereal time at hour 0, hours.
+    pub sidereal_hours_at_midnight: f32,
     /// Stars generated before the cutoff.
     pub count: u32,
     /// Faintest visual magnitude kept.

@@ -1,5 +1,7 @@
-//! Procedural star catalogue: uniform directions, magnitudes following the observed growth of
-//! star counts (about x3.2 per magnitude), cut at the sky's magnitude limit.
+//! The point stars: a procedural field (uniform directions, magnitudes following the observed
+//! growth of star counts, about x3.2 per magnitude) or the Bright Star Catalogue (real positions
+//! and magnitudes, embedded from assets/bsc5.bin, converted by scripts/convert_bsc.py), cut at the
+//! sky's magnitude limit.
 
 use glam::Vec3;
 
@@ -29,8 +31,63 @@ impl Star {
     }
 }
 
-/// Generates `count` stars over [BRIGHTEST, FAINTEST] and keeps those at or below the cutoff.
+/// The embedded Bright Star Catalogue (format: scripts/convert_bsc.py).
+const BSC: &[u8] = include_bytes!("../../assets/bsc5.bin");
+
+/// One catalogue entry: declination and right ascension (degrees), visual magnitude.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CatalogueStar {
+    /// Declination, degrees.
+    pub declination_deg: f32,
+    /// Right ascension, degrees (15 per hour).
+    pub right_ascension_deg: f32,
+    /// Visual magnitude.
+    pub magnitude: f32,
+}
+
+/// Every star of the embedded catalogue, brightest first.
+pub fn catalogue() -> Vec<CatalogueStar> {
+    let count = BSC.get(8..12).map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize);
+    BSC.get(12..)
+        .unwrap_or_default()
+        .chunks_exact(6)
+        .take(count)
+        .map(|c| CatalogueStar {
+            declination_deg: i16::from_le_bytes([c[0], c[1]]) as f32 / 100.0,
+            right_ascension_deg: u16::from_le_bytes([c[2], c[3]]) as f32 / 65536.0 * 360.0,
+            magnitude: i16::from_le_bytes([c[4], c[5]]) as f32 / 100.0,
+        })
+        .collect()
+}
+
+/// The world direction at hour 0 of a star (the celestial frame: the renderer turns it about the
+/// pole as the day goes), for a pole at `pole_elevation_deg` above the northern horizon and
+/// `sidereal_deg` of right ascension on the meridian.
+pub fn celestial_direction(star: &CatalogueStar, pole_elevation_deg: f32, sidereal_deg: f32) -> Vec3 {
+    let lat = pole_elevation_deg.to_radians();
+    let pole = Vec3::new(0.0, lat.sin(), -lat.cos());
+    // Where the celestial equator crosses the meridian (due south), and the west point.
+    let equator_south = Vec3::new(0.0, lat.cos(), lat.sin());
+    let west = Vec3::NEG_X;
+    let dec = star.declination_deg.to_radians();
+    let hour_angle = (sidereal_deg - star.right_ascension_deg).to_radians();
+    (dec.sin() * pole + dec.cos() * (hour_angle.cos() * equator_south + hour_angle.sin() * west)).normalize()
+}
+
+/// The sky's stars: generated or from the catalogue, at or below its magnitude cutoff.
 pub fn generate(s: &Stars) -> Vec<Star> {
+    match s.source {
+        super::model::StarSource::Procedural => procedural(s),
+        super::model::StarSource::Catalogue => catalogue()
+            .into_iter()
+            .filter(|c| c.magnitude <= s.magnitude_cutoff)
+            .map(|c| Star { direction: celestial_direction(&c, s.pole_elevation_deg, s.sidereal_hours_at_midnight * 15.0), magnitude: c.magnitude })
+            .collect(),
+    }
+}
+
+/// Generates `count` stars over [BRIGHTEST, FAINTEST] and keeps those at or below the cutoff.
+fn procedural(s: &Stars) -> Vec<Star> {
     let mut rng = SplitMix::new(s.seed);
     let span = FAINTEST - BRIGHTEST;
     // Inverse CDF of N(<m) ~ 10^(slope m): m = faintest + log10(u') / slope, u' in [10^(-slope span), 1].
