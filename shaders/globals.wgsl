@@ -12,6 +12,8 @@ struct Globals {
     viewport: vec4<f32>,               // width, height, 1/width, 1/height (pixels)
     camera_position: vec4<f32>,        // world position of the main-scene camera, m
     output: vec4<f32>,                 // x: 1 when drawing exposed linear radiance into the HDR target (0: display values), y: tone mapper
+    cloud_sun: vec4<f32>,              // sun light on lit clouds, display values (the sky model's, else sun_diffuse)
+    cloud_ambient: vec4<f32>,          // ambient light on lit clouds, display values (the sky model's, else sun_ambient)
 };
 @group(0) @binding(0) var<uniform> globals: Globals;
 const PI: f32 = 3.14159265358979;

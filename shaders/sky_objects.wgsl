@@ -19,7 +19,7 @@ struct Draw {
     diffuse: vec4<f32>,
     constants: array<vec4<f32>, 4>,
     stages: array<Stage, 4>,
-    misc: vec4<u32>,         // stage count, lighting (0 flat, 1 moon), stage fed by the sky-view map (4 = none)
+    misc: vec4<u32>,         // stage count, lighting (0 flat, 1 moon, 2 cloud), stage fed by the sky-view map (4 = none), cloud density (f32 bits)
 };
 
 @group(1) @binding(0) var<uniform> draw: Draw;
@@ -163,6 +163,26 @@ fn stage_sample(i: u32, t: texture_2d<f32>, smp: sampler, in: VertexOut) -> vec4
     return textureSample(t, smp, stage_uv(draw.stages[i], uv_mode(i), in.uv, in.world_dir));
 }
 
+// The procedural-sky text's 2D cloud: along the view ray a constant scattering strength rho over
+// a fake depth D, an isotropic phase function, so L = (E_sun / (4 pi) + L_ambient) (1 - exp(-rho D)).
+// `depth` is rho D (the material's alpha times the density); the sun term is modulated by a
+// normal faked from the depth's screen-space slope (thicker towards the middle of a cloud, so its
+// edges face outwards). The light is the sky model's (globals.cloud_sun = E T / pi as a display
+// value, so E T / (4 pi) is a quarter of it), in the target's space.
+fn lit_cloud(dir: vec3<f32>, depth: f32, d_depth: vec2<f32>, d_dir_x: vec3<f32>, d_dir_y: vec3<f32>) -> vec4<f32> {
+    let gx = d_dir_x / max(dot(d_dir_x, d_dir_x), 1e-12);
+    let gy = d_dir_y / max(dot(d_dir_y, d_dir_y), 1e-12);
+    // Depth slope per radian of view direction, scaled to a bump of a few degrees.
+    let slope = (d_depth.x * gx + d_depth.y * gy) * 0.03;
+    let n = normalize(-dir - slope);
+    let sun_dir = globals.towards_sun.xyz;
+    let sun_facing = clamp(1.0 + 2.0 * dot(n, sun_dir), 0.0, 3.0);
+    let sun = to_target(globals.cloud_sun.rgb) * 0.25 * sun_facing;
+    let ambient = to_target(globals.cloud_ambient.rgb);
+    let coverage = 1.0 - exp(-max(depth, 0.0));
+    return vec4<f32>(sun + ambient, coverage);
+}
+
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     // Stages past the material's count are neither placed nor sampled.
@@ -181,6 +201,15 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     var sum = acc.sum;
     if acc.has_term { sum = add_term(sum, acc.term, view, acc.term_has_view); }
     var color = sum;
+
+    // Lit clouds: derivatives only in uniform control flow (the lighting is per draw).
+    let depth = sum.a * bitcast<f32>(draw.misc.w);
+    let d_depth = vec2<f32>(dpdx(depth), dpdy(depth));
+    let d_dir_x = dpdx(in.world_dir);
+    let d_dir_y = dpdy(in.world_dir);
+    if draw.misc.y == 2u {
+        color = lit_cloud(normalize(in.world_dir), depth, d_depth, d_dir_x, d_dir_y);
+    }
 
     if draw.misc.y == 1u {
         // Moon: a lit sphere seen from the dome centre; the sun side is bright, so phases show.

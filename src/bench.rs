@@ -91,6 +91,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         with_model(mk("sky fills the screen, single model, sun moving (map every frame)", up, true, 4), SkyModelKind::Single, true),
         with_model(mk("sky fills the screen, lut model, sun still (map reused)", up, true, 4), SkyModelKind::Lut, false),
         with_model(mk("sky fills the screen, lut model, sun moving (map every frame)", up, true, 4), SkyModelKind::Lut, true),
+        with_model(mk("sky fills the screen, preetham model, sun moving (map every frame)", up, true, 4), SkyModelKind::Preetham, true),
+        with_model(mk("sky fills the screen, hosek model, sun moving (map every frame)", up, true, 4), SkyModelKind::Hosek, true),
+        with_model(mk("sky fills the screen, linear model, sun moving (map every frame)", up, true, 4), SkyModelKind::Linear, true),
     ];
     let per_round = args.frames.div_ceil(ROUNDS).max(1);
     for round in 0..ROUNDS {
@@ -174,6 +177,20 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         ratio(7, 2),
         ratio(8, 2),
         ratio(9, 2)
+    );
+    let compute = |i: usize| optional(&configs[i].compute_ms);
+    let _ = writeln!(
+        md,
+        "- The sky-view map of each model with the sun moving (compute phase, GPU ms, same run): `single` {}, `lut` {}, `preetham` {}, `hosek` {}, `linear` {}; \
+         frame time relative to the bitmap sky: `preetham` {:.2}x, `hosek` {:.2}x, `linear` {:.2}x.",
+        compute(7),
+        compute(9),
+        compute(10),
+        compute(11),
+        compute(12),
+        ratio(10, 2),
+        ratio(11, 2),
+        ratio(12, 2)
     );
     skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
     print!("{md}");

@@ -24,14 +24,8 @@ use crate::sky::{FrameInput, Sky};
 pub type LinearImage = image::Rgba32FImage;
 
 /// The six cube faces: file suffix, forward, up.
-pub const CUBE_FACES: [(&str, Vec3, Vec3); 6] = [
-    ("px", Vec3::X, Vec3::Y),
-    ("nx", Vec3::NEG_X, Vec3::Y),
-    ("py", Vec3::Y, Vec3::NEG_Z),
-    ("ny", Vec3::NEG_Y, Vec3::Z),
-    ("pz", Vec3::Z, Vec3::Y),
-    ("nz", Vec3::NEG_Z, Vec3::Y),
-];
+pub const CUBE_FACES: [(&str, Vec3, Vec3); 6] =
+    [("px", Vec3::X, Vec3::Y), ("nx", Vec3::NEG_X, Vec3::Y), ("py", Vec3::Y, Vec3::NEG_Z), ("ny", Vec3::NEG_Y, Vec3::Z), ("pz", Vec3::Z, Vec3::Y), ("nz", Vec3::NEG_Z, Vec3::Y)];
 
 /// sRGB-encoded to linear.
 fn srgb_decode(c: f32) -> f32 {
@@ -70,6 +64,7 @@ pub fn render_linear(hl: &mut Headless, sky: &Sky, input: &FrameInput, camera: &
     let light = headless::read_buffer(&hl.ctx, sky_view.sky_light_buffer(), 16)?;
     let scale = f32::from_le_bytes([light[0], light[1], light[2], light[3]]);
     let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
+    log::debug!("render_linear: exposure scale {scale}");
     Ok(LinearImage::from_fn(w, h, |x, y| {
         let i = ((y * w + x) * 8) as usize;
         let v = |c: usize| half::f16::from_bits(u16::from_le_bytes([texels[i + 2 * c], texels[i + 2 * c + 1]])).to_f32() / scale;

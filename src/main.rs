@@ -142,9 +142,10 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             let model = match args.model {
                 cli::RadianceModel::Preetham => AnalyticModel::Preetham { turbidity: args.turbidity },
                 cli::RadianceModel::Hosek => AnalyticModel::Hosek { turbidity: args.turbidity, albedo: 0.0 },
-                _ => AnalyticModel::Linear(LinearParams::preset(&args.preset).ok_or_else(|| {
-                    anyhow!("--preset: unknown table \"{}\"; expected one of {}", args.preset, analytic::LINEAR_PRESETS.map(|p| p.0).join(", "))
-                })?),
+                _ => AnalyticModel::Linear(
+                    LinearParams::preset(&args.preset)
+                        .ok_or_else(|| anyhow!("--preset: unknown table \"{}\"; expected one of {}", args.preset, analytic::LINEAR_PRESETS.map(|p| p.0).join(", ")))?,
+                ),
             };
             let albedo_note = if matches!(model, AnalyticModel::Hosek { .. }) { " (the albedo column is used)" } else { "" };
             let per_case = |c: &skytune::atmosphere::reference::Case| match model {
@@ -152,7 +153,15 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
                 m => m,
             };
             let out: Vec<[f64; 3]> = if args.on_cpu {
-                list.iter().map(|c| per_case(c).radiance(analytic::direction(c.view_elev_deg.to_radians(), c.rel_azimuth_deg.to_radians()), analytic::direction(c.sun_elev_deg.to_radians(), 0.0), analytic::equinox_morning_hour(c.sun_elev_deg))).collect()
+                list.iter()
+                    .map(|c| {
+                        per_case(c).radiance(
+                            analytic::direction(c.view_elev_deg.to_radians(), c.rel_azimuth_deg.to_radians()),
+                            analytic::direction(c.sun_elev_deg.to_radians(), 0.0),
+                            analytic::equinox_morning_hour(c.sun_elev_deg),
+                        )
+                    })
+                    .collect()
             } else {
                 let ctx = GpuContext::headless(adapter(args.cpu))?;
                 let probe = skytune::render::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
@@ -171,7 +180,8 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
         cli::RadianceModel::Hosek => "hosek",
         cli::RadianceModel::Linear => "linear",
     };
-    let header = if comment.starts_with("units: ") { format!("skytune radiance --model {name}\n{comment}") } else { format!("skytune radiance --model {name}: {units}\n{comment}") };
+    let header =
+        if comment.starts_with("units: ") { format!("skytune radiance --model {name}\n{comment}") } else { format!("skytune radiance --model {name}: {units}\n{comment}") };
     cases::write_radiance(&args.out, &header, &list, &out)?;
     println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());
     Ok(())
@@ -286,7 +296,11 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
         }
         return Ok(());
     }
-    let image = if format.linear() { export::render_linear(headless, sky, &input, &camera, &options)? } else { export::display_to_float(&headless.render(sky, &input, &camera, &options)?, false) };
+    let image = if format.linear() {
+        export::render_linear(headless, sky, &input, &camera, &options)?
+    } else {
+        export::display_to_float(&headless.render(sky, &input, &camera, &options)?, false)
+    };
     export::save(&image, format, &args.out)?;
     println!("wrote {} ({}x{}, {about})", args.out.display(), image.width(), image.height());
     Ok(())

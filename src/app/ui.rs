@@ -503,7 +503,8 @@ fn linear_controls(ui: &mut egui::Ui, p: &mut crate::atmosphere::analytic::Linea
         for (name, _, _) in LINEAR_PRESETS {
             if ui.small_button(name).clicked() {
                 if let Some(preset) = LinearParams::preset(name) {
-                    *p = LinearParams { hours_per_day: p.hours_per_day, sunrise_hour: p.sunrise_hour, sunset_hour: p.sunset_hour, ramp_hours: p.ramp_hours, ramp: p.ramp, ..preset };
+                    *p =
+                        LinearParams { hours_per_day: p.hours_per_day, sunrise_hour: p.sunrise_hour, sunset_hour: p.sunset_hour, ramp_hours: p.ramp_hours, ramp: p.ramp, ..preset };
                 }
             }
         }

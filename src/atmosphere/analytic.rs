@@ -199,8 +199,10 @@ impl Preetham {
         let chi = (4.0 / 9.0 - t / 120.0) * (PI - 2.0 * ts);
         let yz_kcd = (4.0453 * t - 4.9710) * chi.tan() - 0.2155 * t + 2.4192;
         let (t2, s, s2, s3) = (t * t, ts, ts * ts, ts * ts * ts);
-        let xz = t2 * (0.00166 * s3 - 0.00375 * s2 + 0.00209 * s) + t * (-0.02903 * s3 + 0.06377 * s2 - 0.03202 * s + 0.00394) + (0.11693 * s3 - 0.21196 * s2 + 0.06052 * s + 0.25886);
-        let yz = t2 * (0.00275 * s3 - 0.00610 * s2 + 0.00317 * s) + t * (-0.04214 * s3 + 0.08970 * s2 - 0.04153 * s + 0.00516) + (0.15346 * s3 - 0.26756 * s2 + 0.06670 * s + 0.26688);
+        let xz =
+            t2 * (0.00166 * s3 - 0.00375 * s2 + 0.00209 * s) + t * (-0.02903 * s3 + 0.06377 * s2 - 0.03202 * s + 0.00394) + (0.11693 * s3 - 0.21196 * s2 + 0.06052 * s + 0.25886);
+        let yz =
+            t2 * (0.00275 * s3 - 0.00610 * s2 + 0.00317 * s) + t * (-0.04214 * s3 + 0.08970 * s2 - 0.04153 * s + 0.00516) + (0.15346 * s3 - 0.26756 * s2 + 0.06670 * s + 0.26688);
         Self { perez, zenith: [yz_kcd.max(0.0) / SOLAR_ILLUMINANCE_KLX, xz, yz], sun_zenith: ts, towards_sun: sun, fade: twilight_fade(elevation) }
     }
 
@@ -222,7 +224,8 @@ impl Preetham {
 pub fn xyy_to_rec709(x: f64, y: f64, lum: f64) -> Rgb {
     let y = y.max(1e-6);
     let (cx, cy, cz) = (x / y * lum, lum, (1.0 - x - y) / y * lum);
-    [3.2406 * cx - 1.5372 * cy - 0.4986 * cz, -0.9689 * cx + 1.8758 * cy + 0.0415 * cz, 0.0557 * cx - 0.2040 * cy + 1.0570 * cz].map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 })
+    [3.2406 * cx - 1.5372 * cy - 0.4986 * cz, -0.9689 * cx + 1.8758 * cy + 0.0415 * cz, 0.0557 * cx - 0.2040 * cy + 1.0570 * cz]
+        .map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 })
 }
 
 /// Hosek and Wilkie's RGB model at one turbidity, albedo and sun.
@@ -242,7 +245,8 @@ impl Hosek {
         let (sun, elevation) = clamped_sun(towards_sun);
         let t = if turbidity.is_finite() { turbidity.clamp(1.0, 10.0) } else { 2.5 };
         let a = if albedo.is_finite() { albedo.clamp(0.0, 1.0) } else { 0.3 };
-        let params = hw_skymodel::rgb::SkyParams { elevation: (elevation.clamp(0.0, FRAC_PI_2) as f32).min(std::f32::consts::FRAC_PI_2), turbidity: t as f32, albedo: [a as f32; 3] };
+        let params =
+            hw_skymodel::rgb::SkyParams { elevation: (elevation.clamp(0.0, FRAC_PI_2) as f32).min(std::f32::consts::FRAC_PI_2), turbidity: t as f32, albedo: [a as f32; 3] };
         // Every parameter is clamped into the crate's ranges above, so this cannot fail.
         let state = hw_skymodel::rgb::SkyState::new(&params).unwrap_or_else(|e| unreachable!("clamped Hosek parameters rejected: {e}"));
         Self { state, towards_sun: sun, fade: twilight_fade(elevation) }

@@ -34,8 +34,18 @@ pub struct Globals {
     /// they write display values (see [`super::pass::Target`]); y: the tone mapper
     /// ([`super::tone_map::ToneMapUniform`]), which display-referred colours are inverted through.
     pub output: [f32; 4],
+    /// Sun light on lit clouds (display values): the sky model's transmitted sun (E T / pi, as
+    /// `sun_diffuse`) when a physical or analytic model shows, else the sky's `sun_diffuse`.
+    pub cloud_sun: [f32; 4],
+    /// Ambient light on lit clouds (display values): the model's mean sky radiance, else `sun_ambient`.
+    pub cloud_ambient: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<Globals>() == 3 * 64 + 8 * 16);
+const _: () = assert!(std::mem::size_of::<Globals>() == 3 * 64 + 10 * 16);
+
+/// Byte offset of `cloud_sun` in [`Globals`], followed by `cloud_ambient` (a physical or analytic
+/// sky model overwrites both on the GPU: see `sky_view.rs`).
+pub const CLOUD_LIGHT_OFFSET: u64 = std::mem::offset_of!(Globals, cloud_sun) as u64;
+const _: () = assert!(std::mem::offset_of!(Globals, cloud_ambient) - std::mem::offset_of!(Globals, cloud_sun) == 16);
 
 /// Byte offset of `fog_color` in [`Globals`], followed by `sun_ambient` and `sun_diffuse` (a
 /// physical sky model overwrites the three on the GPU: see `sky_view.rs`).
@@ -61,6 +71,8 @@ impl Globals {
             time: [frame.hour, frame.hours_per_day, frame.weather, frame.game_hours as f32],
             viewport: [width as f32, height as f32, 1.0 / width.max(1) as f32, 1.0 / height.max(1) as f32],
             camera_position: camera.position().extend(1.0).to_array(),
+            cloud_sun: v(frame.sun_diffuse),
+            cloud_ambient: v(frame.sun_ambient),
             output: [if target == super::pass::Target::Hdr { 1.0 } else { 0.0 }, super::tone_map::ToneMapUniform::from(frame.sky_model.tone_mapper).settings[0] as f32, 0.0, 0.0],
         }
     }

@@ -41,7 +41,8 @@ pub struct DrawUniform {
     pub constants: [[f32; 4]; 4],
     /// Stages.
     pub stages: [StageUniform; 4],
-    /// Stage count, lighting (0 flat, 1 moon), stage fed by the sky-view map (4 = none).
+    /// Stage count, lighting (0 flat, 1 moon, 2 cloud), stage fed by the sky-view map (4 = none),
+    /// lit clouds' density (f32 bits).
     pub misc: [u32; 4],
 }
 const _: () = assert!(std::mem::size_of::<StageUniform>() == 48);
@@ -77,7 +78,16 @@ impl From<&Version> for DrawUniform {
             diffuse: [1.0; 4],
             constants: [[1.0; 4]; 4],
             stages,
-            misc: [v.stages.len() as u32, matches!(v.lighting, Lighting::Moon) as u32, NO_STAGE, 0],
+            misc: [
+                v.stages.len() as u32,
+                match v.lighting {
+                    Lighting::Flat => 0,
+                    Lighting::Moon => 1,
+                    Lighting::Cloud => 2,
+                },
+                NO_STAGE,
+                v.cloud_density.to_bits(),
+            ],
         }
     }
 }

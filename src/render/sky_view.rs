@@ -242,6 +242,8 @@ pub struct SkyViewPass {
     globals: wgpu::Buffer,
     /// Whether this frame's model lights the main scene (copied into the globals every frame).
     drive_scene: bool,
+    /// Whether this frame's model has a map, and so the light of lit clouds.
+    model_light: bool,
 }
 
 fn uniform(device: &wgpu::Device, label: &str, size: usize) -> wgpu::Buffer {
@@ -354,6 +356,7 @@ impl SkyViewPass {
             analytic,
             globals: b.globals_buffer.clone(),
             drive_scene: false,
+            model_light: false,
         })
     }
 
@@ -453,7 +456,8 @@ impl Pass for SkyViewPass {
         let model = &cx.frame.sky_model;
         // Only once a map, and so its light, exists for the model in use.
         let kind = SkyViewParams::from((model, cx.frame.towards_sun)).model;
-        self.drive_scene = model.kind.is_physical() && model.drive_scene && self.computed.is_some_and(|k| k.params.model == kind);
+        self.model_light = model.kind.is_physical() && self.computed.is_some_and(|k| k.params.model == kind);
+        self.drive_scene = self.model_light && model.drive_scene;
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
@@ -471,6 +475,11 @@ impl Pass for SkyViewPass {
         // Every frame: the renderer rewrites the globals each frame.
         if self.drive_scene {
             encoder.copy_buffer_to_buffer(&self.sky_light, 16, &self.globals, super::globals::SCENE_LIGHT_OFFSET, 48);
+        }
+        if self.model_light {
+            // Lit clouds: the model's sun (sky_light[3]) and ambient (sky_light[2]) light.
+            encoder.copy_buffer_to_buffer(&self.sky_light, 48, &self.globals, super::globals::CLOUD_LIGHT_OFFSET, 16);
+            encoder.copy_buffer_to_buffer(&self.sky_light, 32, &self.globals, super::globals::CLOUD_LIGHT_OFFSET + 16, 16);
         }
     }
 

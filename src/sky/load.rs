@@ -668,7 +668,17 @@ impl Validator<'_> {
         if !ok {
             return None;
         }
-        Some(Version { shape: v.shape, blend: v.blend, stages, diffuse, constants: constants?, ref_color: v.ref_color, gradients, lighting: v.lighting })
+        Some(Version {
+            shape: v.shape,
+            blend: v.blend,
+            stages,
+            diffuse,
+            constants: constants?,
+            ref_color: v.ref_color,
+            gradients,
+            lighting: v.lighting,
+            cloud_density: v.cloud_density.map_or(3.0, |d| d.get()),
+        })
     }
 
     /// `anchor` locates the owner in the text (an object's quoted name, `[stars]`, `[glare]`).

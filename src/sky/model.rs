@@ -432,9 +432,13 @@ pub struct VersionDef {
     /// Per-weather gradient bitmaps feeding one stage with a 1xH texture each frame.
     #[serde(default)]
     pub weather_gradients: Option<WeatherGradients>,
-    /// Shading of billboards: `flat`, or `moon` (a lit sphere showing its phase).
+    /// Shading: `flat`, `moon` (billboards: a lit sphere showing its phase) or `cloud` (a layer
+    /// lit by the sky model's sun and ambient light).
     #[serde(default)]
     pub lighting: Lighting,
+    /// `lighting = "cloud"`: optical depth of a texel of alpha 1 (default 3).
+    #[serde(default)]
+    pub cloud_density: Option<Positive>,
 }
 
 /// Procedural sky geometry. Directions: x east, y up, -z north.
@@ -492,6 +496,11 @@ pub enum Lighting {
     Flat,
     /// Lit sphere: the disc is shaded by the sun direction, so it shows phases.
     Moon,
+    /// Lit cloud layer (the procedural-sky text's 2D clouds): the material's alpha is the cloud's
+    /// optical depth (times `cloud_density`); it scatters the sky model's sun (isotropically,
+    /// modulated by a normal faked from the texture's slope) and ambient light, and hides what is
+    /// behind by exp(-depth). The material's colour is ignored.
+    Cloud,
 }
 
 /// One texture stage of a material. Stages combine as a sum of terms: `add` starts a new term

@@ -206,8 +206,10 @@ pub struct Version {
     pub ref_color: RefColor,
     /// Weather gradients feeding one stage.
     pub gradients: Option<Gradients>,
-    /// Billboard shading.
+    /// Shading.
     pub lighting: Lighting,
+    /// Lit clouds: optical depth of a texel of alpha 1.
+    pub cloud_density: f32,
 }
 
 /// A texture stage.
