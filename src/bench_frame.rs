@@ -149,6 +149,8 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     // Reload latency: a file written to the first frame that shows it.
     let latency = reload_latency(&mut hl, if args.quick { 2 } else { 7 })?;
     let shader_ms = shader_latency(&ctx, (w, h), if args.quick { 1 } else { 5 })?;
+    // Particles: the CPU's closed-form evaluation plus its upload against the same as a compute pass.
+    let particles = particle_costs(&ctx, if args.quick { 3 } else { 15 }, if args.quick { &[1_000, 10_000][..] } else { &[1_000, 3_000, 10_000, 100_000][..] })?;
 
     let mut md = String::new();
     let _ = writeln!(md, "# Performance\n\nWritten by `skytune bench frame` (`cargo run --release -- bench frame`); re-run it to refresh this file.\n");
@@ -187,6 +189,16 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
         let _ = writeln!(md, "| {name} | {ms:.2} | {:.0}% |", 100.0 * ms / all);
     }
     let _ = writeln!(md, "\n## CPU: evaluating the sky\n\n`Sky::evaluate` for a sky of {objects} objects (the built-in sky plus billboards on its paths): median {eval_us:.1} us per frame (target: 50 us).\n");
+    let _ = writeln!(
+        md,
+        "## Particles: CPU or GPU simulation\n\nOne camera emitter (the built-in rain, always on, rate = cap / lifetime so the cap fills) at N particles, medians of {} frames at different times, side by side in one run. CPU: `sky::particles::simulate` (the closed-form evaluation of every birth slot of the last lifetime) plus the upload of its instances; GPU: the same evaluation as a compute pass (`shaders/particle_sim.wgsl`, one invocation per slot, appending live particles), submitted and waited for. The renderer uses the faster at the default counts (hundreds to a few thousand particles).\n",
+        particles.first().map_or(0, |p| p.runs)
+    );
+    let _ = writeln!(md, "| particles | alive (CPU) | alive (GPU) | CPU + upload ms | GPU ms | GPU / CPU |\n|---:|---:|---:|---:|---:|---:|");
+    for p in &particles {
+        let _ = writeln!(md, "| {} | {} | {} | {:.3} | {:.3} | {:.2} |", p.cap, p.cpu_alive, p.gpu_alive, p.cpu_ms, p.gpu_ms, p.gpu_ms / p.cpu_ms);
+    }
+    let _ = writeln!(md);
     let _ = writeln!(md, "## Hot-reload latency\n\nFrom the end of a file write to the end of the first frame rendered with the change (file watcher with its debounce of {} ms, off-thread load, upload, one frame at {w}x{h}), medians of {} edits (target: 100 ms plus the debounce):\n", skytune::watch::DEBOUNCE.as_millis(), latency.0.len().min(latency.1.len()));
     let _ = writeln!(
         md,
@@ -196,6 +208,9 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
         median(&shader_ms)
     );
     skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
+    for p in &particles {
+        println!("particles {}: CPU + upload {:.3} ms ({} alive), GPU {:.3} ms ({} alive)", p.cap, p.cpu_ms, p.cpu_alive, p.gpu_ms, p.gpu_alive);
+    }
     println!("per object (built-in sky, dusk, horizon): {}", per_object.iter().map(|(n, ms)| format!("{n} {ms:.2} ms")).collect::<Vec<_>>().join(", "));
     println!(
         "evaluate: {eval_us:.1} us for {objects} objects; reload latency: sky file {:.0} ms, bitmap {:.0} ms, shader {:.0} ms",
@@ -223,8 +238,10 @@ fn evaluation_cost(runs: u32) -> anyhow::Result<(f64, usize)> {
         );
     }
     std::fs::write(&file, text)?;
-    let sky = skytune::sky::load_sky_file(&file).map_err(|e| anyhow!("{e}"))?;
+    let mut sky = skytune::sky::load_sky_file(&file).map_err(|e| anyhow!("{e}"))?;
     let _ = std::fs::remove_dir_all(&dir);
+    // The objects' evaluation; the particles are measured on their own (`particle_costs`).
+    sky.emitters.clear();
     let mut times = Vec::new();
     for i in 0..runs {
         let input = FrameInput::new((i as f32 * 0.37) % 24.0, (i as f32 * 0.13) % 1.0);
@@ -234,6 +251,64 @@ fn evaluation_cost(runs: u32) -> anyhow::Result<(f64, usize)> {
         std::hint::black_box(frame);
     }
     Ok((median(&times), sky.objects.len()))
+}
+
+/// One row of the particle comparison.
+struct ParticleCost {
+    cap: u32,
+    runs: u32,
+    cpu_alive: usize,
+    gpu_alive: u32,
+    cpu_ms: f64,
+    gpu_ms: f64,
+}
+
+/// The built-in rain emitter at each cap, simulated on the CPU (plus upload) and on the GPU.
+fn particle_costs(ctx: &GpuContext, runs: u32, caps: &[u32]) -> anyhow::Result<Vec<ParticleCost>> {
+    use skytune::sky::particles::{simulate, ParticleClock};
+    let mut out = Vec::new();
+    for &cap in caps {
+        let mut sky = default_sky();
+        let mut e = sky.emitters.iter().find(|e| e.name == "rain").cloned().ok_or_else(|| anyhow!("the built-in sky has no rain emitter"))?;
+        e.kind = skytune::sky::model::EmitterKind::Particles;
+        e.emission = skytune::sky::resolved::Color { mode: skytune::sky::resolved::ColorMode::Unused, bitmap: None, value: [1.0; 4] };
+        e.max_particles = cap;
+        e.lifetime_spread = 0.0;
+        e.rate = cap as f32 / e.lifetime_s;
+        sky.emitters = vec![e.clone()];
+        let mut gpu = skytune::render::particle_sim::GpuParticleSim::new(ctx, &ShaderLibrary::embedded(), cap)?;
+        let upload = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("BenchFrame::particle_upload"),
+            size: cap as u64 * 64,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let (mut cpu_ms, mut gpu_ms, mut cpu_alive, mut gpu_alive) = (Vec::new(), Vec::new(), 0, 0);
+        for i in 0..runs + 1 {
+            let time_s = 100.0 + i as f64 * 0.37;
+            let input = FrameInput { particle_clock: Some(ParticleClock { time_s, hours_per_s: 0.0 }), ..FrameInput::new(12.0, 0.0) };
+            let mut frame = sky.evaluate(&FrameInput { particle_clock: Some(ParticleClock { time_s: -1e6, hours_per_s: 0.0 }), ..input.clone() });
+            let t = Instant::now();
+            frame.particles = simulate(&sky, &input, &frame);
+            let instances = frame.particles.emitters.first().map_or(&[][..], |f| &f.instances[..]);
+            ctx.queue.write_buffer(&upload, 0, bytemuck::cast_slice(instances));
+            ctx.queue.submit([]);
+            ctx.wait_idle()?;
+            let cpu = t.elapsed().as_secs_f64() * 1000.0;
+            let g = timed(ctx, |enc| {
+                gpu.prepare(&ctx.queue, &e, time_s);
+                gpu.record(enc);
+            })?;
+            if i > 0 {
+                cpu_ms.push(cpu);
+                gpu_ms.push(g);
+                cpu_alive = instances.len();
+                gpu_alive = gpu.alive(ctx)?;
+            }
+        }
+        out.push(ParticleCost { cap, runs, cpu_alive, gpu_alive, cpu_ms: median(&cpu_ms), gpu_ms: median(&gpu_ms) });
+    }
+    Ok(out)
 }
 
 /// Latencies (ms) of sky-file edits and bitmap edits: write, then poll and render a frame per

@@ -164,6 +164,33 @@ fn starfield_respects_magnitude_cutoff() {
 }
 
 #[test]
+fn bad_emitters_are_located() {
+    let base = "[[emitter]]\nname = \"sparks\"\nattach = \"sun\"\nrate = 5\nlifetime_s = 1\nmax_particles = 10\n";
+    for (from, to, field, message) in [
+        ("rate = 5", "rate = -5", "emitter[3].rate", "expected a finite number >= 0, found -5"),
+        ("max_particles = 10", "max_particles = 0", "emitter[3].max_particles", "expected a particle cap in 1..=100000"),
+        ("max_particles = 10", "max_particles = 1000000", "emitter[3].max_particles", "found 1000000"),
+        ("lifetime_s = 1", "lifetime_s = nan", "emitter[3].lifetime_s", "expected a finite number > 0, found NaN"),
+        ("attach = \"sun\"", "attach = \"sunn\"", "emitter[3].attach", "no object \"sunn\" to attach to; expected \"camera\" or one of"),
+        ("rate = 5", "rate = 5\nspread_deg = 270", "emitter[3].spread_deg", "expected 0..=180 degrees, found 270"),
+        ("rate = 5", "rate = 5\nblend = \"opaque\"", "emitter[3].blend", "particles blend as \"alpha\" or \"additive\""),
+        ("rate = 5", "rate = 5\nshape = \"square\"", "emitter[3].shape", "unknown variant `square`"),
+    ] {
+        let section = base.replacen(from, to, 1);
+        let (result, file, text) = with_sections(&section);
+        let errors = result.expect_err(&section);
+        let needle = to.lines().last().unwrap();
+        let line = text.rfind(needle).map(|at| text[..at].matches('\n').count() + 1).unwrap();
+        assert_error(&errors, &file, line, field, message);
+    }
+    // A good emitter loads, attached to its object.
+    let (result, _, _) = with_sections(base);
+    let sky = result.unwrap();
+    let e = sky.emitters.iter().find(|e| e.name == "sparks").unwrap();
+    assert_eq!(e.attach, skytune::sky::resolved::EmitterAttach::Object(sky.object_index("sun").unwrap()));
+}
+
+#[test]
 fn unknown_star_source_and_layer_are_located() {
     let (e, line, file) = broken("[stars]\ncount = 6000", "[stars]\nsource = \"hipparcos\"\ncount = 6000");
     assert_error(&e, &file, line + 1, "stars.source", "unknown variant `hipparcos`, expected `procedural` or `catalogue`");

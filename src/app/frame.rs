@@ -169,7 +169,10 @@ impl App {
             c.hour = (c.hour + input.dt_s * c.speed).rem_euclid(sky.hours_per_day);
             c.game_hours += (input.dt_s * c.speed) as f64;
         }
+        c.particle_time_s += input.dt_s as f64;
         (input.hour, input.game_hours) = (c.hour, c.game_hours);
+        input.particle_clock = Some(c.particle_clock(sky));
+        input.bursts = c.bursts.clone();
         input
     }
 

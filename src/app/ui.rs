@@ -54,6 +54,24 @@ pub struct Controls {
     pub sky_model: Option<SkyModel>,
     /// The compare view.
     pub compare: super::compare::CompareControls,
+    /// Particles run in real time (else their time follows the time slider, deterministically).
+    pub particles_real_time: bool,
+    /// Real seconds of particle time so far (real-time mode).
+    pub particle_time_s: f64,
+    /// Bursts asked for with the burst buttons, recent ones.
+    pub bursts: Vec<crate::sky::particles::Burst>,
+}
+
+impl Controls {
+    /// The particles' clock for this frame: real seconds, or the slider's game hours.
+    pub fn particle_clock(&self, sky: &crate::sky::Sky) -> crate::sky::particles::ParticleClock {
+        use crate::sky::particles::ParticleClock;
+        if self.particles_real_time {
+            ParticleClock { time_s: self.particle_time_s, hours_per_s: if self.playing { self.speed as f64 } else { 0.0 } }
+        } else {
+            ParticleClock { time_s: self.game_hours * sky.particle_seconds_per_hour as f64, hours_per_s: 1.0 / sky.particle_seconds_per_hour as f64 }
+        }
+    }
 }
 
 impl Default for Controls {
@@ -76,6 +94,9 @@ impl Default for Controls {
             freeze_glare: false,
             sky_model: None,
             compare: Default::default(),
+            particles_real_time: true,
+            particle_time_s: 0.0,
+            bursts: Vec::new(),
         }
     }
 }
@@ -527,6 +548,41 @@ fn linear_controls(ui: &mut egui::Ui, p: &mut crate::atmosphere::analytic::Linea
     });
 }
 
+/// Emitters: toggles, particles alive against their caps, births now, a burst button; the clock.
+fn particles(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
+    let sky = info.sky;
+    if sky.emitters.is_empty() {
+        return;
+    }
+    ui.heading("Particles");
+    ui.checkbox(&mut c.particles_real_time, "real time (else the time slider drives them, deterministically)");
+    let now = c.particle_clock(sky).time_s;
+    for (index, e) in sky.emitters.iter().enumerate() {
+        let f = info.frame.particles.emitters.iter().find(|f| f.emitter == index);
+        let mut on = !c.disabled.contains(&e.name);
+        ui.horizontal(|ui| {
+            if ui.checkbox(&mut on, "").changed() {
+                if on {
+                    c.disabled.retain(|n| n != &e.name);
+                } else {
+                    c.disabled.push(e.name.clone());
+                }
+            }
+            let alive = f.map_or(0, |f| f.instances.len());
+            let births = if f.is_some_and(|f| f.emitting) { "emitting" } else { "off" };
+            ui.label(RichText::new(&e.name).strong());
+            ui.label(RichText::new(format!("{alive} / {} alive, {births}", e.max_particles)).small());
+            if ui.small_button("burst").on_hover_text("births a quarter of the cap now, whatever the emission bitmap says").clicked() {
+                c.bursts.push(crate::sky::particles::Burst { emitter: e.name.clone(), time_s: now, count: (e.max_particles / 4).clamp(1, 500) });
+            }
+        });
+    }
+    // Bursts older than any particle's life are done.
+    let oldest = sky.emitters.iter().map(|e| e.lifetime_s * (1.0 + e.lifetime_spread)).fold(0.0, f32::max) as f64;
+    c.bursts.retain(|b| (now - b.time_s) <= oldest && b.time_s <= now);
+    ui.separator();
+}
+
 fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     ui.heading("Objects");
     let sky = info.sky;
@@ -538,6 +594,16 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
             Ok(_) => "standard".to_string(),
             Err(why) => format!("hidden: {why}"),
         };
+        // NeL: an object hidden by its ref colour keeps drawing the particles it already emitted.
+        let living: usize = info
+            .frame
+            .particles
+            .emitters
+            .iter()
+            .filter(|f| sky.emitters.get(f.emitter).is_some_and(|e| e.attach == crate::sky::resolved::EmitterAttach::Object(of.index)))
+            .map(|f| f.instances.len())
+            .sum();
+        let status = if of.versions.is_err() && living > 0 { format!("{status}; its {living} particles live on until they die") } else { status };
         let color = if of.versions.is_ok() { Color32::LIGHT_GREEN } else { Color32::from_rgb(230, 170, 90) };
         ui.horizontal(|ui| {
             if ui.checkbox(&mut on, "").changed() {
@@ -568,6 +634,7 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         }
         ui.separator();
     }
+    particles(ui, c, info);
     ui.label("Sky bitmaps:");
     ui.horizontal_wrapped(|ui| {
         for (name, b) in [("fog_color", &sky.fog_color), ("sun_ambient", &sky.sun_ambient), ("sun_diffuse", &sky.sun_diffuse)] {

@@ -271,6 +271,8 @@ pub const PASSES: &[(&str, PassConstructor)] = &[
     ("scene", |b| boxed(super::scene::ScenePass::new, b)),
     ("sky_objects", |b| boxed(super::sky_objects::SkyObjectsPass::new, b)),
     ("stars", |b| boxed(super::stars::StarsPass::new, b)),
+    ("particles", |b| boxed(super::particles::ParticlesPass::new, b)),
+    ("precipitation", |b| boxed(super::precipitation::PrecipitationPass::new, b)),
     ("glare", |b| boxed(super::glare::GlarePass::new, b)),
     ("tone_map", |b| boxed(super::tone_map::ToneMapPass::new, b)),
 ];

@@ -50,6 +50,8 @@ pub struct FrameStats {
     pub stars: u32,
     /// Texture stages of sky objects not sampled because their term is black this frame.
     pub stages_skipped: u32,
+    /// Particles alive (every emitter).
+    pub particles: u32,
 }
 
 /// What the last sky upload did with the textures of the sky before it.

@@ -54,12 +54,29 @@ pub struct FrameInput {
     pub frame: u64,
     /// Colour source of the skydome instead of the sky file's (the app's selector).
     pub sky_model: Option<SkyModel>,
+    /// Particle time (default: the game hours times the sky's `particle_seconds_per_hour`, so
+    /// the time slider drives the particles deterministically).
+    pub particle_clock: Option<super::particles::ParticleClock>,
+    /// Bursts of particles asked for (the app's burst button), recent ones.
+    pub bursts: Vec<super::particles::Burst>,
 }
 
 impl FrameInput {
     /// A frame at (hour, weather) with the best tier, the first frame, no time elapsed.
     pub fn new(hour: f32, weather: f32) -> Self {
-        Self { hour, game_hours: hour as f64, weather, tier: Tier::FOUR, env_map: false, disabled: Vec::new(), dt_s: 0.0, frame: 0, sky_model: None }
+        Self {
+            hour,
+            game_hours: hour as f64,
+            weather,
+            tier: Tier::FOUR,
+            env_map: false,
+            disabled: Vec::new(),
+            dt_s: 0.0,
+            frame: 0,
+            sky_model: None,
+            particle_clock: None,
+            bursts: Vec::new(),
+        }
     }
 }
 
@@ -239,6 +256,8 @@ pub struct FrameSky {
     pub stars: Option<StarsFrame>,
     /// Glare colour, if the sky has glare.
     pub glare: Option<Rgba>,
+    /// Particles alive this frame, per emitter.
+    pub particles: super::particles::ParticleFrame,
 }
 
 /// Converts compass azimuth and elevation (degrees) to a unit direction.
@@ -380,7 +399,7 @@ impl Sky {
         // ground: world = celestial_from_world^-1 * celestial turns by -angle about the pole
         // (clockwise seen from above it), so stars rise in the east (tests/catalogue.rs).
         let celestial_from_world = Quat::from_axis_angle(axis, std::f32::consts::TAU * hour / hpd);
-        FrameSky {
+        let mut frame = FrameSky {
             hour,
             hours_per_day: hpd,
             game_hours: input.game_hours,
@@ -399,6 +418,47 @@ impl Sky {
             objects,
             stars,
             glare: self.glare.as_ref().map(|g| color(&g.color)),
+            particles: Default::default(),
+        };
+        if !self.emitters.is_empty() {
+            frame.particles = super::particles::simulate(self, input, &frame);
+            // Lightning lifts the scene's light towards a cold white for the flash's duration.
+            let f = frame.particles.flash.min(1.0);
+            if f > 0.0 {
+                let lift = |c: Rgba| -> Rgba { [0, 1, 2, 3].map(|i| if i == 3 { c[3] } else { (c[i] + f * 0.8 * [0.85, 0.9, 1.0][i]).min(1.0) }) };
+                frame.fog_color = lift(frame.fog_color);
+                frame.sun_ambient = lift(frame.sun_ambient);
+                frame.sun_diffuse = lift(frame.sun_diffuse);
+            }
+        }
+        frame
+    }
+
+    /// The alpha of an object's ref colour at this input's hour and weather, for its version at
+    /// the best tier (what decides whether it is hidden by its ref colour, and whether its
+    /// emitters give birth).
+    pub fn object_ref_alpha(&self, index: usize, input: &FrameInput) -> f32 {
+        let Some(o) = self.objects.get(index) else { return 0.0 };
+        let (hour, hpd) = (input.hour.rem_euclid(self.hours_per_day), self.hours_per_day);
+        let weather = input.weather.clamp(0.0, 1.0);
+        let fog = self.fog_color.sample(hour, hpd, weather);
+        let color = |c: &Color| -> Rgba {
+            match c.mode {
+                ColorMode::Unused => c.value,
+                ColorMode::Fog => fog,
+                ColorMode::Bitmap => c.bitmap.as_ref().map_or(c.value, |b| b.sample(hour, hpd, weather)),
+                ColorMode::BitmapTimesFog => c.bitmap.as_ref().map_or(fog, |b| bitmap::mul(b.sample(hour, hpd, weather), fog)),
+            }
+        };
+        let v = if o.standard.stages.len() <= input.tier.stages() { &o.standard } else { o.fallback.first().unwrap_or(&o.standard) };
+        let constant = |k: usize| v.constants.get(k).map_or(1.0, |c| color(c)[3]);
+        match v.ref_color {
+            RefColor::None => 1.0,
+            RefColor::Diffuse => color(&v.diffuse)[3],
+            RefColor::Constant0 => constant(0),
+            RefColor::Constant1 => constant(1),
+            RefColor::Constant2 => constant(2),
+            RefColor::Constant3 => constant(3),
         }
     }
 

@@ -117,6 +117,8 @@ pub const MAX_FALLBACKS: usize = 2;
 pub const MAX_PATHS: usize = 64;
 /// Most keys of one path.
 pub const MAX_PATH_KEYS: usize = 1024;
+/// Most emitters in a sky (each may hold `model::MAX_PARTICLES_PER_EMITTER` particles).
+pub const MAX_EMITTERS: usize = 32;
 /// Most memory the distinct images of a sky may take once decoded (RGBA8), bytes: 512 MiB, eight
 /// textures of 4096 x 4096.
 pub const MAX_TEXTURE_BYTES: u64 = 512 << 20;
@@ -320,6 +322,7 @@ impl Validator<'_> {
         }
         // Stable: equal priorities keep file order, as NeL's sorted insertion did.
         objects.sort_by_key(|o: &SkyObject| o.priority);
+        let emitters = self.emitters(&f.emitters, &objects);
 
         let stars = f.stars.as_ref().and_then(|s| {
             if s.count > MAX_STARS {
@@ -413,6 +416,8 @@ impl Validator<'_> {
             sun_path: sun_path?,
             paths,
             objects,
+            emitters,
+            particle_seconds_per_hour: f.particle_seconds_per_hour.map_or(180.0, |s| s.get()),
             stars,
             glare,
             watched_files: watched,
@@ -420,6 +425,85 @@ impl Validator<'_> {
             atmosphere,
             atmosphere_by_weather,
         })
+    }
+
+    /// Checks the emitters: unique names, an attachment that exists, at most 4 parameters and
+    /// `MAX_EMITTERS` emitters, a cone of at most 180 degrees, an alpha or additive blend.
+    fn emitters(&mut self, defs: &[model::EmitterDef], objects: &[SkyObject]) -> Vec<Emitter> {
+        if defs.len() > MAX_EMITTERS {
+            let at = nth_offset(self.text, "[[emitter]]", MAX_EMITTERS);
+            self.err_at(at..at, &format!("emitter[{MAX_EMITTERS}]"), format!("a sky has at most {MAX_EMITTERS} emitters; this one has {}", defs.len()));
+            return Vec::new();
+        }
+        let mut names = HashSet::new();
+        let mut out = Vec::new();
+        for (i, e) in defs.iter().enumerate() {
+            let field = format!("emitter[{i}]");
+            let anchor = format!("\"{}\"", e.name);
+            if !names.insert(e.name.as_str()) {
+                self.err_near(&anchor, &format!("{field}.name"), format!("duplicate emitter name \"{}\"", e.name));
+            }
+            let attach = if e.attach.get_ref() == "camera" {
+                Some(EmitterAttach::Camera)
+            } else if let Some(index) = objects.iter().position(|o| &o.name == e.attach.get_ref()) {
+                Some(EmitterAttach::Object(index))
+            } else {
+                let known: Vec<&str> = objects.iter().map(|o| o.name.as_str()).collect();
+                self.err_at(
+                    e.attach.span(),
+                    &format!("{field}.attach"),
+                    format!("no object \"{}\" to attach to; expected \"camera\" or one of {}", e.attach.get_ref(), known.join(", ")),
+                );
+                None
+            };
+            if e.params.len() > 4 {
+                self.err_in(&anchor, "params", &format!("{field}.params"), format!("an emitter has at most 4 parameters; this one has {}", e.params.len()));
+            }
+            if e.spread_deg.get() > 180.0 {
+                self.err_in(&anchor, "spread_deg", &format!("{field}.spread_deg"), format!("expected 0..=180 degrees, found {}", e.spread_deg.get()));
+            }
+            if e.blend == BlendMode::Opaque {
+                self.err_in(&anchor, "blend", &format!("{field}.blend"), "particles blend as \"alpha\" or \"additive\"");
+            }
+            let emission = self.color(&e.emission, &format!("{field}.emission"), &anchor);
+            let texture = match &e.texture {
+                Some(t) => self.image(t, &format!("{field}.texture")).map(Some),
+                None => Some(None),
+            };
+            let params: Option<Vec<_>> =
+                e.params.iter().enumerate().take(4).map(|(k, p)| self.bitmap(&p.bitmap, &format!("{field}.params[{k}].bitmap")).map(|b| (b, p.scales))).collect();
+            let (Some(attach), Some(emission), Some(texture), Some(params)) = (attach, emission, texture, params) else { continue };
+            let v = |c: [model::Unit; 4]| c.map(|x| x.get());
+            out.push(Emitter {
+                name: e.name.clone(),
+                attach,
+                kind: e.kind,
+                shape: e.shape,
+                texture,
+                blend: e.blend,
+                rate: e.rate.get(),
+                lifetime_s: e.lifetime_s.get(),
+                lifetime_spread: e.lifetime_spread.get(),
+                speed: e.speed.get(),
+                speed_spread: e.speed_spread.get(),
+                direction: glam::Vec3::from_array(e.direction.map(|d| d.get())),
+                spread_deg: e.spread_deg.get(),
+                gravity: e.gravity.get(),
+                size: e.size.map(|s| s.get()),
+                color: e.color.map(v),
+                max_particles: e.max_particles.0,
+                emission,
+                params,
+                region_deg: e.region_deg.map_or(5.0, |r| r.get()),
+                min_elevation_deg: e.min_elevation_deg.map_or(15.0, |r| r.get()),
+                box_m: e.box_m.map_or(24.0, |b| b.get()),
+                streak_s: e.streak_s.map_or(0.04, |s| s.get()),
+                flash: e.flash.get(),
+                rain_to_snow: e.rain_to_snow.get(),
+                seed: e.seed,
+            });
+        }
+        out
     }
 
     fn path_ref(&mut self, index: &HashMap<&str, usize>, name: &Spanned<String>, field: &str) -> Option<usize> {

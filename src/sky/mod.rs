@@ -6,6 +6,7 @@ pub mod builtin;
 pub mod eval;
 pub mod load;
 pub mod model;
+pub mod particles;
 pub mod procedural;
 pub mod resolved;
 pub mod starfield;

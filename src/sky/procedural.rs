@@ -261,6 +261,38 @@ impl Palette {
                     rgba(clouds_rgb(h, w).map(|c| c * 0.7), if a < 0.01 { 0.0 } else { a })
                 }),
             ),
+            // Particle emitters: on (not black) when they should give birth.
+            (
+                "shooting_stars.png",
+                self.weather_bitmap(|h, w| {
+                    let a = (1.0 - smoothstep(-14.0, -4.0, self.sun_elevation(h))) * (1.0 - smoothstep(0.2, 0.5, w));
+                    let a = if a < 0.05 { 0.0 } else { a };
+                    rgba([a, a, a], 1.0)
+                }),
+            ),
+            (
+                "rain.png",
+                self.weather_bitmap(|h, w| {
+                    let a = smoothstep(0.6, 0.8, w);
+                    let light = 0.35 + 0.65 * self.daylight(h);
+                    rgba([0.75 * a * light, 0.8 * a * light, 0.9 * a * light], 1.0)
+                }),
+            ),
+            (
+                "lightning.png",
+                self.weather_bitmap(|_, w| {
+                    let a = smoothstep(0.85, 0.95, w);
+                    rgba([a, a, a], 1.0)
+                }),
+            ),
+            (
+                "eruptions.png",
+                self.weather_bitmap(|h, w| {
+                    let a = smoothstep(-2.0, 4.0, self.sun_elevation(h)) * (1.0 - w);
+                    let a = if a < 0.05 { 0.0 } else { a };
+                    rgba([a, 0.75 * a, 0.45 * a], 1.0)
+                }),
+            ),
             // Red/green 0.5 = no offset; lower green lifts the fog band (denser haze in bad weather).
             (
                 "fog_height.png",

@@ -47,6 +47,10 @@ pub struct Sky {
     pub paths: Vec<SkyPath>,
     /// Objects sorted by ascending priority (file order among equals).
     pub objects: Vec<SkyObject>,
+    /// Particle emitters, in file order.
+    pub emitters: Vec<Emitter>,
+    /// Seconds of particle simulation per game hour while the time slider drives it.
+    pub particle_seconds_per_hour: f32,
     /// Point-star field.
     pub stars: Option<Stars>,
     /// Sun glare.
@@ -231,6 +235,72 @@ pub struct Stage {
     pub uv_offset: Option<(Arc<ColorBitmap>, f32)>,
     /// Clamp instead of repeat.
     pub clamp: bool,
+}
+
+/// Where an emitter's particles live.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EmitterAttach {
+    /// Around the viewer, in metres, drawn in the main scene's depth range.
+    Camera,
+    /// On the dome with an object (index into `Sky::objects`), in directions.
+    Object(usize),
+}
+
+/// A particle emitter, checked (docs/sky-format.md, "Particles").
+#[derive(Debug, Clone)]
+pub struct Emitter {
+    /// Unique name.
+    pub name: String,
+    /// What it is attached to.
+    pub attach: EmitterAttach,
+    /// Plain, precipitation or lightning.
+    pub kind: super::model::EmitterKind,
+    /// Procedural shape (unless `texture`).
+    pub shape: super::model::ParticleShape,
+    /// Sprite texture.
+    pub texture: Option<Arc<TextureImage>>,
+    /// Alpha or additive.
+    pub blend: BlendMode,
+    /// Particles per second at full emission.
+    pub rate: f32,
+    /// Life, s.
+    pub lifetime_s: f32,
+    /// Lifetime variation, fraction.
+    pub lifetime_spread: f32,
+    /// Speed at birth: m/s (camera) or degrees/s (dome).
+    pub speed: f32,
+    /// Speed variation, fraction.
+    pub speed_spread: f32,
+    /// Direction of motion (zero: away from the emitter's centre).
+    pub direction: glam::Vec3,
+    /// Cone around the direction, degrees.
+    pub spread_deg: f32,
+    /// Acceleration down: m/s^2 or degrees/s^2.
+    pub gravity: f32,
+    /// Size at birth and death: m or degrees.
+    pub size: [f32; 2],
+    /// RGBA at birth and death.
+    pub color: [Rgba; 2],
+    /// Most particles alive.
+    pub max_particles: u32,
+    /// Emission switch and tint.
+    pub emission: Color,
+    /// User parameters: bitmap (value = red) and what it scales.
+    pub params: Vec<(Arc<ColorBitmap>, super::model::ParamTarget)>,
+    /// Birth region around a placed object's centre, degrees.
+    pub region_deg: f32,
+    /// Lowest birth elevation on a dome object, degrees.
+    pub min_elevation_deg: f32,
+    /// Side of the birth box around the viewer, m.
+    pub box_m: f32,
+    /// Streak length as seconds of motion.
+    pub streak_s: f32,
+    /// Lightning light lift.
+    pub flash: f32,
+    /// Precipitation: 0 rain .. 1 snow.
+    pub rain_to_snow: f32,
+    /// Random seed.
+    pub seed: u64,
 }
 
 /// A colour slot.
