@@ -489,8 +489,19 @@ pub fn summary(sky: &Sky) -> String {
             if fb.is_empty() { String::new() } else { format!(", fallback passes with {} stage(s)", fb.join(" + ")) }
         );
     }
+    for e in &sky.emitters {
+        let on = match e.attach {
+            skytune::sky::resolved::EmitterAttach::Camera => "the camera".to_string(),
+            skytune::sky::resolved::EmitterAttach::Object(i) => format!("\"{}\"", sky.objects[i].name),
+        };
+        let _ = writeln!(s, "  emitter {}: on {on}, {:?}, {} per s for {} s, at most {} particles", e.name, e.kind, e.rate, e.lifetime_s, e.max_particles);
+    }
     if let Some(st) = &sky.stars {
-        let _ = writeln!(s, "  stars: {} generated, magnitude cutoff {}", st.count, st.magnitude_cutoff);
+        let source = match st.source {
+            skytune::sky::model::StarSource::Catalogue => "the Bright Star Catalogue".to_string(),
+            skytune::sky::model::StarSource::Procedural => format!("{} generated", st.count),
+        };
+        let _ = writeln!(s, "  stars: {source}, magnitude cutoff {}", st.magnitude_cutoff);
     }
     if let Some(g) = &sky.glare {
         let _ = writeln!(s, "  glare: halo {} deg, {} flare sprites, persistence {} s", g.halo_size_deg, g.flares.len(), g.persistence_s);

@@ -11,8 +11,9 @@ use skytune::sky::particles::{Burst, ParticleClock};
 use skytune::sky::resolved::{Color, ColorMode, EmitterAttach};
 use skytune::sky::{FrameInput, Sky};
 
+/// A frame with every particle on the CPU (the reference the GPU path is held to below).
 fn at(sky: &Sky, hour: f32, weather: f32, time_s: f64) -> skytune::sky::FrameSky {
-    sky.evaluate(&FrameInput { particle_clock: Some(ParticleClock { time_s, hours_per_s: 0.0 }), ..FrameInput::new(hour, weather) })
+    sky.evaluate(&FrameInput { particle_clock: Some(ParticleClock { time_s, hours_per_s: 0.0 }), gpu_particles: false, ..FrameInput::new(hour, weather) })
 }
 
 fn count(frame: &skytune::sky::FrameSky, sky: &Sky, name: &str) -> usize {
@@ -67,10 +68,18 @@ fn the_count_never_exceeds_the_cap() {
             }
             for _ in 0..5 {
                 let time_s = rng.f64() * 1e5;
-                let bursts = sky.emitters.iter().map(|e| Burst { emitter: e.name.clone(), time_s: time_s - 0.01, count: 100_000 }).collect();
-                let frame = sky.evaluate(&FrameInput { particle_clock: Some(ParticleClock { time_s, hours_per_s: 0.0 }), bursts, ..FrameInput::new(23.0, 1.0) });
-                for f in &frame.particles.emitters {
-                    assert!(f.instances.len() <= cap as usize, "rate {rate}, cap {cap}: {} alive", f.instances.len());
+                let bursts: Vec<Burst> = sky.emitters.iter().map(|e| Burst { emitter: e.name.clone(), time_s: time_s - 0.01, count: 100_000 }).collect();
+                for gpu_particles in [false, true] {
+                    let frame = sky.evaluate(&FrameInput {
+                        particle_clock: Some(ParticleClock { time_s, hours_per_s: 0.0 }),
+                        bursts: bursts.clone(),
+                        gpu_particles,
+                        ..FrameInput::new(23.0, 1.0)
+                    });
+                    for f in &frame.particles.emitters {
+                        let drawn = f.instances.len() + f.gpu.as_ref().map_or(0, |g| g.slots as usize);
+                        assert!(drawn <= cap as usize, "rate {rate}, cap {cap}: {drawn} drawn");
+                    }
                 }
             }
         }
@@ -152,38 +161,62 @@ fn extreme_rates_and_steps_stay_finite_and_bounded() {
             for p in &f.instances {
                 assert!(p.position.iter().chain(&p.velocity).chain(&p.color).all(|v| v.is_finite()), "step {step}: {p:?}");
             }
+            if let Some(g) = &f.gpu {
+                assert!(
+                    g.slots <= 2000 && g.conditions.len() <= 3 * (skytune::sky::particles::MAX_GPU_BUCKETS + 1),
+                    "step {step}: {} slots, {} conditions",
+                    g.slots,
+                    g.conditions.len()
+                );
+                assert!(
+                    [g.first_age_s, g.slot_interval_s, g.acceptance, g.bucket_offset_s, g.bucket_s].iter().chain(g.conditions.iter().flatten()).all(|v| v.is_finite()),
+                    "step {step}: {g:?}"
+                );
+            }
         }
     }
     assert!(most > 0);
 }
 
 #[test]
-fn the_gpu_evaluation_finds_the_same_number_of_particles() {
+fn the_gpu_evaluation_matches_the_cpu_in_number_and_kind() {
     let ctx = skytune::render::GpuContext::headless(skytune::render::AdapterChoice::Cpu).unwrap();
     let mut sky = default_sky();
-    let mut e = sky.emitters.iter().find(|e| e.name == "rain").cloned().unwrap();
-    e.kind = skytune::sky::model::EmitterKind::Particles;
-    e.emission = Color { mode: ColorMode::Unused, bitmap: None, value: [1.0; 4] };
-    e.lifetime_spread = 0.0;
-    e.rate = 1500.0;
-    e.max_particles = 4000;
-    sky.emitters = vec![e.clone()];
-    let mut gpu = skytune::render::particle_sim::GpuParticleSim::new(&ctx, &skytune::render::ShaderLibrary::embedded(), e.max_particles).unwrap();
-    for time_s in [3.0, 17.25, 1000.125] {
-        let frame = at(&sky, 12.0, 0.0, time_s);
-        gpu.prepare(&ctx.queue, &e, time_s);
+    let index = sky.emitters.iter().position(|e| e.name == "rain").unwrap();
+    {
+        let e = &mut sky.emitters[index];
+        e.lifetime_spread = 0.0;
+        e.max_particles = 4000;
+    }
+    let e = sky.emitters[index].clone();
+    let mut gpu = skytune::render::particle_sim::StandaloneSim::new(&ctx, &skytune::render::ShaderLibrary::embedded(), e.max_particles).unwrap();
+    // Full storm (every slot born), light rain (thinned by the weather), and fair weather (none).
+    for (weather, time_s) in [(1.0f32, 3.0), (1.0, 1000.125), (0.7, 17.25), (0.3, 40.0)] {
+        let cpu = at(&sky, 12.0, weather, time_s);
+        let cpu = &cpu.particles.emitters.iter().find(|f| f.emitter == index).unwrap().instances;
+        let frame = sky.evaluate(&FrameInput { particle_clock: Some(ParticleClock { time_s, hours_per_s: 0.0 }), ..FrameInput::new(12.0, weather) });
+        let births = frame.particles.emitters.iter().find(|f| f.emitter == index).unwrap().gpu.clone().unwrap_or_default();
+        gpu.sim.prepare(&ctx.queue, &e, &births);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         gpu.record(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
-        let alive = gpu.alive(&ctx).unwrap() as usize;
-        let cpu = frame.particles.alive();
-        assert!(cpu.abs_diff(alive) <= 1, "t {time_s}: CPU {cpu}, GPU {alive}");
+        let live: Vec<_> = gpu.read(&ctx).unwrap().into_iter().filter(|p| p.position[3] > 0.0).collect();
+        // Same count within the random thinning's noise (3 sigma), the same box and speeds.
+        let (n, m) = (cpu.len() as f64, live.len() as f64);
+        assert!((n - m).abs() <= 3.0 * n.sqrt().max(1.0) + 1.0, "weather {weather}, t {time_s}: CPU {n}, GPU {m}");
+        let half = e.box_m * 0.5 + e.speed * 1.2 * e.lifetime_s + 1.0;
+        for p in &live {
+            assert!(p.position[..3].iter().all(|v| v.abs() <= half), "{p:?}");
+            let speed = (p.velocity[0].powi(2) + p.velocity[1].powi(2) + p.velocity[2].powi(2)).sqrt();
+            assert!(speed <= e.speed * (1.0 + e.speed_spread) * 1.001, "{p:?}");
+        }
     }
 }
 
 fn render(sky: &Sky, hour: f32, weather: f32, time_s: f64, camera: Camera) -> image::RgbaImage {
     let mut h = common::headless(160, 90);
     h.set_sky(sky).unwrap();
+    // Camera emitters on the GPU, as the renderer does by default.
     let input = FrameInput { particle_clock: Some(ParticleClock { time_s, hours_per_s: 0.0 }), ..FrameInput::new(hour, weather) };
     h.render(sky, &input, &camera, &RenderOptions { glare: false, ..Default::default() }).unwrap()
 }

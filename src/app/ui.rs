@@ -571,7 +571,11 @@ fn particles(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
             let alive = f.map_or(0, |f| f.instances.len());
             let births = if f.is_some_and(|f| f.emitting) { "emitting" } else { "off" };
             ui.label(RichText::new(&e.name).strong());
-            ui.label(RichText::new(format!("{alive} / {} alive, {births}", e.max_particles)).small());
+            match f.and_then(|f| f.gpu.as_ref()) {
+                // Evaluated on the GPU: the CPU knows the slots of the last lifetime, not which live.
+                Some(g) => ui.label(RichText::new(format!("at most {} / {} alive (GPU), {births}", g.slots as usize + alive, e.max_particles)).small()),
+                None => ui.label(RichText::new(format!("{alive} / {} alive, {births}", e.max_particles)).small()),
+            };
             if ui.small_button("burst").on_hover_text("births a quarter of the cap now, whatever the emission bitmap says").clicked() {
                 c.bursts.push(crate::sky::particles::Burst { emitter: e.name.clone(), time_s: now, count: (e.max_particles / 4).clamp(1, 500) });
             }

@@ -220,6 +220,10 @@ pub trait Pass: Any {
     /// Records one item into the compute phase.
     fn dispatch(&self, _cpass: &mut wgpu::ComputePass<'_>, _key: usize) {}
 
+    /// Compute work this frame of a pass that draws in another phase (recorded with
+    /// [`Pass::dispatch`] in the compute phase, before any drawing).
+    fn compute_items(&self, _cx: &FrameContext<'_>, _out: &mut Vec<DrawItem>) {}
+
     /// An occlusion query set the phase's render pass must carry (at most one pass per phase).
     fn occlusion_query_set(&self) -> Option<&wgpu::QuerySet> {
         None

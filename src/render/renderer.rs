@@ -258,6 +258,9 @@ impl SkyRenderer {
             scratch.clear();
             pass.items(&cx, &mut scratch);
             items[pass.phase().index()].extend(scratch.iter().map(|it| (i, *it)));
+            scratch.clear();
+            pass.compute_items(&cx, &mut scratch);
+            items[Phase::Compute.index()].extend(scratch.iter().map(|it| (i, *it)));
         }
         // Sky objects and stars interleave by priority; list order among equals.
         items[Phase::Sky.index()].sort_by_key(|(_, it)| it.priority);

@@ -59,6 +59,9 @@ pub struct FrameInput {
     pub particle_clock: Option<super::particles::ParticleClock>,
     /// Bursts of particles asked for (the app's burst button), recent ones.
     pub bursts: Vec<super::particles::Burst>,
+    /// Camera emitters' births are evaluated by the renderer on the GPU (measured faster from a
+    /// few thousand particles: docs/performance.md); false keeps every particle on the CPU.
+    pub gpu_particles: bool,
 }
 
 impl FrameInput {
@@ -76,6 +79,7 @@ impl FrameInput {
             sky_model: None,
             particle_clock: None,
             bursts: Vec::new(),
+            gpu_particles: true,
         }
     }
 }

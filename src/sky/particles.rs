@@ -58,6 +58,32 @@ pub struct Burst {
     pub count: u32,
 }
 
+/// Most buckets of birth conditions handed to the GPU (longer lives get longer buckets).
+pub const MAX_GPU_BUCKETS: usize = 1024;
+
+/// A camera emitter's births for the GPU to evaluate (`shaders/particle_sim.wgsl`): the same
+/// closed form, one invocation per slot, written in slot order (dead slots as empty sprites), so
+/// the picture is as deterministic as the CPU's.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GpuBirths {
+    /// Slots evaluated (and instances drawn), at most the cap.
+    pub slots: u32,
+    /// Age of the first (oldest) slot, s.
+    pub first_age_s: f32,
+    /// Seconds between slots.
+    pub slot_interval_s: f32,
+    /// The emitter's rate over the slot rate (before the conditions' scale).
+    pub acceptance: f32,
+    /// The first slot's number (random seeds), low 32 bits.
+    pub first_slot: u32,
+    /// Seconds from the start of the first bucket to the first slot's birth.
+    pub bucket_offset_s: f32,
+    /// Length of a bucket, s.
+    pub bucket_s: f32,
+    /// Per bucket: [on, rate, speed, size], tint RGBA, [rain_to_snow, 0, 0, 0].
+    pub conditions: Vec<[f32; 4]>,
+}
+
 /// One emitter's particles this frame.
 #[derive(Debug, Clone, Default)]
 pub struct EmitterFrame {
@@ -69,6 +95,8 @@ pub struct EmitterFrame {
     pub emitting: bool,
     /// Light lift of its lightning bolts now.
     pub flash: f32,
+    /// Camera emitters evaluated on the GPU: their births (`instances` then holds only bursts).
+    pub gpu: Option<GpuBirths>,
 }
 
 /// Every emitter's particles this frame.
@@ -81,9 +109,9 @@ pub struct ParticleFrame {
 }
 
 impl ParticleFrame {
-    /// Particles alive in all.
+    /// Particles alive in all on the CPU, plus the slots the GPU evaluates (an upper bound of its).
     pub fn alive(&self) -> usize {
-        self.emitters.iter().map(|e| e.instances.len()).sum()
+        self.emitters.iter().map(|e| e.instances.len() + e.gpu.as_ref().map_or(0, |g| g.slots as usize)).sum()
     }
 }
 
@@ -243,7 +271,11 @@ fn simulate_emitter(sky: &Sky, index: usize, e: &Emitter, input: &super::FrameIn
     let cone = Cone::new(e.direction.try_normalize().unwrap_or(Vec3::NEG_Y), e.spread_deg.to_radians());
     let env = Births { sky, index, e, frame, clock, object_live, placement, slot_rate, cone };
     let (mut instances, mut flash) = (Vec::new(), 0.0f32);
-    if slot_rate > 0.0 && object_live {
+    let on_gpu = input.gpu_particles && e.attach == EmitterAttach::Camera && e.kind != EmitterKind::Lightning;
+    let mut gpu = None;
+    if on_gpu && slot_rate > 0.0 {
+        gpu = Some(env.gpu_births(max_life));
+    } else if slot_rate > 0.0 && object_live {
         let first = ((t - max_life) * slot_rate).ceil() as i64;
         let last = (t * slot_rate).floor() as i64;
         let slots = (last - first + 1).max(0);
@@ -273,7 +305,8 @@ fn simulate_emitter(sky: &Sky, index: usize, e: &Emitter, input: &super::FrameIn
     }
     let mut bucket: Option<(i64, Conditions)> = None;
     let mut cond_at = |birth: f64| env.conditions_cached(&mut bucket, birth);
-    // Bursts: born at once, whatever the switch says.
+    // Bursts: born at once, whatever the switch says (within what the GPU's slots leave of the cap).
+    let cap = cap.saturating_sub(gpu.as_ref().map_or(0, |g: &GpuBirths| g.slots as usize));
     for (n, burst) in input.bursts.iter().filter(|b| b.emitter == e.name).enumerate() {
         let age = (t - burst.time_s) as f32;
         if !(0.0..max_life as f32).contains(&age) {
@@ -295,7 +328,7 @@ fn simulate_emitter(sky: &Sky, index: usize, e: &Emitter, input: &super::FrameIn
         let c = cond_at(t);
         c.on && c.rate > 0.0
     };
-    EmitterFrame { emitter: index, instances, emitting, flash }
+    EmitterFrame { emitter: index, instances, emitting, flash, gpu }
 }
 
 /// What the births of one emitter depend on this frame.
@@ -324,6 +357,38 @@ impl Births<'_> {
                 *bucket = Some((b, c));
                 c
             }
+        }
+    }
+
+    /// The slots of the last lifetime and their birth conditions, for the GPU.
+    fn gpu_births(&self, max_life: f64) -> GpuBirths {
+        let t = self.clock.time_s;
+        let first = ((t - max_life) * self.slot_rate).ceil() as i64;
+        let last = (t * self.slot_rate).floor() as i64;
+        let slots = ((last - first + 1).max(0) as u64).min(self.e.max_particles as u64) as u32;
+        let first_birth = first as f64 / self.slot_rate;
+        let span = slots as f64 / self.slot_rate;
+        let bucket_s = BUCKET_S.max(span / MAX_GPU_BUCKETS as f64);
+        let first_bucket = (first_birth / bucket_s).floor();
+        let buckets = (((first_birth + span) / bucket_s).floor() - first_bucket + 1.0).clamp(1.0, MAX_GPU_BUCKETS as f64 + 1.0) as usize;
+        let mut table = Vec::with_capacity(buckets * 3);
+        for b in 0..buckets {
+            let start = (first_bucket + b as f64) * bucket_s;
+            let hour = self.frame.hour as f64 - (t - start) * self.clock.hours_per_s;
+            let c = conditions(self.sky, self.e, self.frame, hour as f32, self.frame.weather, self.object_live);
+            table.push([if c.on { 1.0 } else { 0.0 }, c.rate, c.speed, c.size]);
+            table.push(c.tint);
+            table.push([c.rain_to_snow, 0.0, 0.0, 0.0]);
+        }
+        GpuBirths {
+            slots,
+            first_age_s: (t - first_birth) as f32,
+            slot_interval_s: (1.0 / self.slot_rate) as f32,
+            acceptance: (self.e.rate as f64 / self.slot_rate).min(1.0) as f32,
+            first_slot: first as u32,
+            bucket_offset_s: (first_birth - first_bucket * bucket_s) as f32,
+            bucket_s: bucket_s as f32,
+            conditions: table,
         }
     }
 
