@@ -1,5 +1,10 @@
+//! requires: sky_model/tone
 // Particle sprites shared by particles.wgsl (on the dome) and precipitation.wgsl (around the
-// viewer). Keep `Particle` in sync with `ParticleInstance` in src/sky/particles.rs.
+// viewer): instance layout, sprite geometry, shapes, and the fragment stage of both (each file
+// adds its vertex stage). Keep `Particle` in sync with `ParticleInstance` in src/sky/particles.rs.
+
+@group(1) @binding(0) var sprite: texture_2d<f32>;
+@group(1) @binding(1) var sprite_sampler: sampler;
 struct Particle {
     @location(0) position: vec4<f32>, // dome: unit direction; camera: m from the eye. w: half size
     @location(1) velocity: vec4<f32>, // per second; w: streak length, s of motion
@@ -53,4 +58,34 @@ fn sprite_coverage(local: vec2<f32>, shape: u32, bits: u32) -> f32 {
         return (exp(-60.0 * d * d) + 0.3 * exp(-6.0 * d * d)) * (1.0 - local.x * local.x);
     }
     return exp(-4.0 * r2) * step(r2, 1.0);
+}
+
+// Additive blending, premultiplied (to_target is not linear): see stars.wgsl. Shape 5 (the
+// lightning flash over the sky) covers everything.
+@fragment
+fn fs_main(in: ParticleOut) -> @location(0) vec4<f32> {
+    if (in.misc.x == 4u) {
+        let t = textureSample(sprite, sprite_sampler, in.local * 0.5 + vec2<f32>(0.5));
+        return vec4<f32>(to_target(in.color.rgb * t.rgb * in.color.a * t.a), 1.0);
+    }
+    var coverage = 1.0;
+    if (in.misc.x != 5u) {
+        coverage = sprite_coverage(in.local, in.misc.x, in.misc.y);
+    }
+    return vec4<f32>(to_target(in.color.rgb * in.color.a * coverage), 1.0);
+}
+
+// Alpha blending.
+@fragment
+fn fs_alpha(in: ParticleOut) -> @location(0) vec4<f32> {
+    var coverage = 1.0;
+    var rgb = in.color.rgb;
+    if (in.misc.x == 4u) {
+        let t = textureSample(sprite, sprite_sampler, in.local * 0.5 + vec2<f32>(0.5));
+        rgb = rgb * t.rgb;
+        coverage = t.a;
+    } else {
+        coverage = sprite_coverage(in.local, in.misc.x, in.misc.y);
+    }
+    return vec4<f32>(to_target(rgb), in.color.a * coverage);
 }

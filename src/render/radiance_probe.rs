@@ -4,7 +4,7 @@
 
 use wgpu::util::DeviceExt;
 
-use super::error::{RenderError, RenderResult};
+use super::error::RenderResult;
 use super::sky_model::{storage_entry, AtmosphereUniform, LutBuilder, LutTables, LutUniform, SingleUniform};
 use super::{shaders, GpuContext, ShaderLibrary};
 use crate::atmosphere::analytic::{self, AnalyticModel};
@@ -142,12 +142,6 @@ impl RadianceProbe {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("RadianceProbe::readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("RadianceProbe::bind_group"),
             layout: &self.layout,
@@ -179,19 +173,9 @@ impl RadianceProbe {
             pass.set_bind_group(1, &bind_group, &[]);
             pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
         }
-        encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, size);
         ctx.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        readback.map_async(wgpu::MapMode::Read, .., move |r| {
-            let _ = tx.send(r);
-        });
-        ctx.wait_idle()?;
-        rx.recv().map_err(|_| RenderError::Readback("the readback callback never ran".into()))?.map_err(|e| RenderError::Readback(e.to_string()))?;
-        let out = {
-            let view = readback.get_mapped_range(..).map_err(|e| RenderError::Readback(e.to_string()))?;
-            bytemuck::cast_slice::<u8, [f32; 4]>(&view).iter().map(|v| [v[0], v[1], v[2]]).collect()
-        };
-        readback.unmap();
+        let bytes = super::headless::read_buffer(ctx, &output, size)?;
+        let out = bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes).iter().map(|v| [v[0], v[1], v[2]]).collect();
         Ok(out)
     }
 }

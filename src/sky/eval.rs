@@ -313,14 +313,7 @@ impl Sky {
         let (hour, hpd) = (input.hour.rem_euclid(self.hours_per_day), self.hours_per_day);
         let weather = input.weather.clamp(0.0, 1.0);
         let fog = self.fog_color.sample(hour, hpd, weather);
-        let color = |c: &Color| -> Rgba {
-            match c.mode {
-                ColorMode::Unused => c.value,
-                ColorMode::Fog => fog,
-                ColorMode::Bitmap => c.bitmap.as_ref().map_or(c.value, |b| b.sample(hour, hpd, weather)),
-                ColorMode::BitmapTimesFog => c.bitmap.as_ref().map_or(fog, |b| bitmap::mul(b.sample(hour, hpd, weather), fog)),
-            }
-        };
+        let color = |c: &Color| self.color_at(c, hour, weather);
         let version_frame = |version: usize, v: &Version| -> VersionFrame {
             let mut constants = [[1.0; 4]; 4];
             for (k, c) in v.constants.iter().enumerate() {
@@ -438,22 +431,27 @@ impl Sky {
         frame
     }
 
+    /// A colour slot's value at (hour, weather): its constant, the fog colour, or its bitmap
+    /// (NeL's sampling: docs/sky-format.md).
+    pub fn color_at(&self, c: &Color, hour: f32, weather: f32) -> Rgba {
+        let hpd = self.hours_per_day;
+        let fog = || self.fog_color.sample(hour, hpd, weather);
+        match c.mode {
+            ColorMode::Unused => c.value,
+            ColorMode::Fog => fog(),
+            ColorMode::Bitmap => c.bitmap.as_ref().map_or(c.value, |b| b.sample(hour, hpd, weather)),
+            ColorMode::BitmapTimesFog => c.bitmap.as_ref().map_or_else(fog, |b| bitmap::mul(b.sample(hour, hpd, weather), fog())),
+        }
+    }
+
     /// The alpha of an object's ref colour at this input's hour and weather, for its version at
     /// the best tier (what decides whether it is hidden by its ref colour, and whether its
     /// emitters give birth).
     pub fn object_ref_alpha(&self, index: usize, input: &FrameInput) -> f32 {
         let Some(o) = self.objects.get(index) else { return 0.0 };
-        let (hour, hpd) = (input.hour.rem_euclid(self.hours_per_day), self.hours_per_day);
+        let hour = input.hour.rem_euclid(self.hours_per_day);
         let weather = input.weather.clamp(0.0, 1.0);
-        let fog = self.fog_color.sample(hour, hpd, weather);
-        let color = |c: &Color| -> Rgba {
-            match c.mode {
-                ColorMode::Unused => c.value,
-                ColorMode::Fog => fog,
-                ColorMode::Bitmap => c.bitmap.as_ref().map_or(c.value, |b| b.sample(hour, hpd, weather)),
-                ColorMode::BitmapTimesFog => c.bitmap.as_ref().map_or(fog, |b| bitmap::mul(b.sample(hour, hpd, weather), fog)),
-            }
-        };
+        let color = |c: &Color| self.color_at(c, hour, weather);
         let v = if o.standard.stages.len() <= input.tier.stages() { &o.standard } else { o.fallback.first().unwrap_or(&o.standard) };
         let constant = |k: usize| v.constants.get(k).map_or(1.0, |c| color(c)[3]);
         match v.ref_color {

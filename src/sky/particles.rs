@@ -17,7 +17,7 @@ use glam::Vec3;
 
 use super::eval::{FrameSky, Hidden};
 use super::model::{EmitterKind, ParamTarget, ParticleShape};
-use super::resolved::{ColorMode, Emitter, EmitterAttach, Sky};
+use super::resolved::{Emitter, EmitterAttach, Sky};
 use super::Rgba;
 
 /// One particle as the GPU draws it. Keep in sync with `Particle` in shaders/particles.wgsl and
@@ -166,13 +166,7 @@ const BUCKET_S: f64 = 1.0 / 16.0;
 fn conditions(sky: &Sky, e: &Emitter, frame: &FrameSky, hour: f32, weather: f32, object_live: bool) -> Conditions {
     let hpd = sky.hours_per_day;
     let hour = hour.rem_euclid(hpd);
-    let fog = sky.fog_color.sample(hour, hpd, weather);
-    let tint = match e.emission.mode {
-        ColorMode::Unused => e.emission.value,
-        ColorMode::Fog => fog,
-        ColorMode::Bitmap => e.emission.bitmap.as_ref().map_or(e.emission.value, |b| b.sample(hour, hpd, weather)),
-        ColorMode::BitmapTimesFog => e.emission.bitmap.as_ref().map_or(fog, |b| super::bitmap::mul(b.sample(hour, hpd, weather), fog)),
-    };
+    let tint = sky.color_at(&e.emission, hour, weather);
     let mut c = Conditions { on: tint[0].max(tint[1]).max(tint[2]) > 0.5 / 255.0, rate: 1.0, speed: 1.0, size: 1.0, tint, rain_to_snow: e.rain_to_snow };
     for (bitmap, target) in &e.params {
         let v = bitmap.sample(hour, hpd, weather)[0].clamp(0.0, 1.0);
