@@ -236,7 +236,8 @@ pub fn simulate(sky: &Sky, input: &super::FrameInput, frame: &FrameSky) -> Parti
         input.particle_clock.unwrap_or(ParticleClock { time_s: input.game_hours * sky.particle_seconds_per_hour as f64, hours_per_s: 1.0 / sky.particle_seconds_per_hour as f64 });
     let mut out = ParticleFrame::default();
     for (index, e) in sky.emitters.iter().enumerate() {
-        if input.disabled.iter().any(|d| d == &e.name) {
+        // Switched off; or precipitation around a viewer in an environment map of the sky.
+        if input.disabled.iter().any(|d| d == &e.name) || (input.env_map && e.attach == EmitterAttach::Camera) {
             continue;
         }
         let f = simulate_emitter(sky, index, e, input, frame, clock);
@@ -374,8 +375,11 @@ impl Births<'_> {
             table.push(c.tint);
             table.push([c.rain_to_snow, 0.0, 0.0, 0.0]);
         }
+        // No bucket of the last lifetime gave birth (fair weather, daytime): nothing to evaluate
+        // nor draw.
+        let any_births = table.chunks(3).any(|c| c[0][0] > 0.5 && c[0][1] > 0.0);
         GpuBirths {
-            slots,
+            slots: if any_births { slots } else { 0 },
             first_age_s: (t - first_birth) as f32,
             slot_interval_s: (1.0 / self.slot_rate) as f32,
             acceptance: (self.e.rate as f64 / self.slot_rate).min(1.0) as f32,
