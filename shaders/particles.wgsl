@@ -5,11 +5,8 @@
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, p: Particle) -> ParticleOut {
-    var out: ParticleOut;
-    out.color = p.color;
-    out.misc = p.misc;
-    let corner = sprite_corner(vi);
-    out.local = corner;
+    var out = sprite_vertex(vi, p);
+    let corner = out.local;
     if (p.misc.x == 5u) {
         // Flash: a triangle strip over the whole screen.
         out.clip = vec4<f32>(corner * 3.0 - vec2<f32>(1.0), 0.5, 1.0);

@@ -5,11 +5,8 @@
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, p: Particle) -> ParticleOut {
-    var out: ParticleOut;
-    out.color = p.color;
-    out.misc = p.misc;
-    let corner = sprite_corner(vi);
-    out.local = corner;
+    var out = sprite_vertex(vi, p);
+    let corner = out.local;
     let view = normalize(p.position.xyz);
     let world = globals.camera_position.xyz + p.position.xyz + sprite_offset(corner, view, p.velocity.xyz, p.position.w, p.velocity.w);
     out.clip = globals.clip_from_world * vec4<f32>(world, 1.0);

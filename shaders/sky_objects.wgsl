@@ -169,7 +169,11 @@ fn stage_sample(i: u32, t: texture_2d<f32>, smp: sampler, in: VertexOut) -> vec4
 // normal faked from the depth's screen-space slope (thicker towards the middle of a cloud, so its
 // edges face outwards). The light is the sky model's (globals.cloud_sun = E T / pi as a display
 // value, so E T / (4 pi) is a quarter of it), in the target's space.
-fn lit_cloud(dir: vec3<f32>, depth: f32, d_depth: vec2<f32>, d_dir_x: vec3<f32>, d_dir_y: vec3<f32>) -> vec4<f32> {
+fn lit_cloud(world_dir: vec3<f32>, depth: f32) -> vec4<f32> {
+    let dir = normalize(world_dir);
+    let d_depth = vec2<f32>(dpdx(depth), dpdy(depth));
+    let d_dir_x = dpdx(world_dir);
+    let d_dir_y = dpdy(world_dir);
     let gx = d_dir_x / max(dot(d_dir_x, d_dir_x), 1e-12);
     let gy = d_dir_y / max(dot(d_dir_y, d_dir_y), 1e-12);
     // Depth slope per radian of view direction, scaled to a bump of a few degrees.
@@ -202,13 +206,10 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     if acc.has_term { sum = add_term(sum, acc.term, view, acc.term_has_view); }
     var color = sum;
 
-    // Lit clouds: derivatives only in uniform control flow (the lighting is per draw).
-    let depth = sum.a * bitcast<f32>(draw.misc.w);
-    let d_depth = vec2<f32>(dpdx(depth), dpdy(depth));
-    let d_dir_x = dpdx(in.world_dir);
-    let d_dir_y = dpdy(in.world_dir);
+    // Lit clouds. The lighting is per draw (uniform control flow), so the derivatives `lit_cloud`
+    // takes are computed only by the draws that use them.
     if draw.misc.y == 2u {
-        color = lit_cloud(normalize(in.world_dir), depth, d_depth, d_dir_x, d_dir_y);
+        color = lit_cloud(in.world_dir, sum.a * bitcast<f32>(draw.misc.w));
     }
 
     if draw.misc.y == 1u {

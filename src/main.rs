@@ -87,8 +87,11 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     let started = std::time::Instant::now();
     let units =
         "sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); default atmosphere (Hillaire 2020); sun disc and ground surface excluded";
-    let (out, comment) = match args.model {
-        cli::RadianceModel::Reference => reference_radiance(args, atm, &list),
+    let (out, units, comment) = match args.model {
+        cli::RadianceModel::Reference => {
+            let (out, comment) = reference_radiance(args, atm, &list);
+            (out, units, comment)
+        }
         cli::RadianceModel::Single => {
             let settings = skytune::atmosphere::SingleSettings {
                 view_steps: args.view_steps,
@@ -102,7 +105,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             let probe = skytune::render::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
             let out = probe.single(&ctx, &atm, &settings, &list)?;
             let out = out.into_iter().map(|c| c.map(f64::from)).collect();
-            (out, format!("model single on {}: {settings:?}", ctx.adapter_line()))
+            (out, units, format!("model single on {}: {settings:?}", ctx.adapter_line()))
         }
         cli::RadianceModel::Lut => {
             let (tw, th) = cli::parse_size(&args.transmittance_size)?;
@@ -118,7 +121,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             let probe = skytune::render::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
             let out = probe.lut(&ctx, &atm, &settings, &list)?;
             let out = out.into_iter().map(|c| c.map(f64::from)).collect();
-            (out, format!("model lut on {}: {settings:?}", ctx.adapter_line()))
+            (out, units, format!("model lut on {}: {settings:?}", ctx.adapter_line()))
         }
         cli::RadianceModel::Cells => {
             use skytune::atmosphere::cells::{CellModel, CellSettings};
@@ -134,7 +137,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
                     *o = model.radiance(c);
                 }
             }
-            (out, format!("model cells: {settings:?}"))
+            (out, units, format!("model cells: {settings:?}"))
         }
         cli::RadianceModel::Preetham | cli::RadianceModel::Hosek | cli::RadianceModel::Linear => {
             use skytune::atmosphere::analytic::{self, AnalyticModel, LinearParams};
@@ -167,22 +170,12 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
                 let probe = skytune::render::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
                 probe.analytic(&ctx, &list, per_case)?.into_iter().map(|c| c.map(f64::from)).collect()
             };
-            let place = if args.on_cpu { "CPU".to_string() } else { "GPU".to_string() };
-            (out, format!("units: {}\nmodel {} on the {place}: turbidity {}{albedo_note}", model.units(), model.name(), args.turbidity))
+            let place = if args.on_cpu { "CPU" } else { "GPU" };
+            (out, model.units(), format!("model {} on the {place}: turbidity {}{albedo_note}", model.name(), args.turbidity))
         }
     };
-    let name = match args.model {
-        cli::RadianceModel::Reference => "reference",
-        cli::RadianceModel::Single => "single",
-        cli::RadianceModel::Lut => "lut",
-        cli::RadianceModel::Cells => "cells",
-        cli::RadianceModel::Preetham => "preetham",
-        cli::RadianceModel::Hosek => "hosek",
-        cli::RadianceModel::Linear => "linear",
-    };
-    let header =
-        if comment.starts_with("units: ") { format!("skytune radiance --model {name}\n{comment}") } else { format!("skytune radiance --model {name}: {units}\n{comment}") };
-    cases::write_radiance(&args.out, &header, &list, &out)?;
+    let name = clap::ValueEnum::to_possible_value(&args.model).map_or_else(String::new, |v| v.get_name().to_string());
+    cases::write_radiance(&args.out, &format!("skytune radiance --model {name}: {units}\n{comment}"), &list, &out)?;
     println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());
     Ok(())
 }
@@ -296,13 +289,17 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
         }
         return Ok(());
     }
-    let image = if format.linear() {
-        export::render_linear(headless, sky, &input, &camera, &options)?
+    // PNG: the display image as rendered; EXR and HDR: linear light read back from the frame.
+    let (w, h) = if format.linear() {
+        let image = export::render_linear(headless, sky, &input, &camera, &options)?;
+        export::save(&image, format, &args.out)?;
+        image.dimensions()
     } else {
-        export::display_to_float(&headless.render(sky, &input, &camera, &options)?, false)
+        let image = headless.render(sky, &input, &camera, &options)?;
+        skytune::fsx::save_png(&image, &args.out)?;
+        image.dimensions()
     };
-    export::save(&image, format, &args.out)?;
-    println!("wrote {} ({}x{}, {about})", args.out.display(), image.width(), image.height());
+    println!("wrote {} ({w}x{h}, {about})", args.out.display());
     Ok(())
 }
 

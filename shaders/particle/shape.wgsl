@@ -38,6 +38,15 @@ fn sprite_corner(vi: u32) -> vec2<f32> {
     return corners[vi];
 }
 
+// The vertex output of corner `vi` of particle `p`, all but its clip position.
+fn sprite_vertex(vi: u32, p: Particle) -> ParticleOut {
+    var out: ParticleOut;
+    out.color = p.color;
+    out.misc = p.misc;
+    out.local = sprite_corner(vi);
+    return out;
+}
+
 // Coverage of the procedural shapes at `local` (x along the motion, y across, both -1..1).
 fn sprite_coverage(local: vec2<f32>, shape: u32, bits: u32) -> f32 {
     let r2 = dot(local, local);

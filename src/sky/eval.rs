@@ -264,6 +264,23 @@ pub struct FrameSky {
     pub particles: super::particles::ParticleFrame,
 }
 
+/// Below this ref alpha (half an 8-bit step) an object would contribute nothing: it is hidden and
+/// its fill skipped, and its emitters give no birth.
+pub const HIDDEN_ALPHA: f32 = 0.5 / 255.0;
+
+/// The alpha of a version's ref colour, from its diffuse colour and its constants (by index;
+/// unused ones white).
+fn ref_alpha(ref_color: RefColor, diffuse: Rgba, constant: impl Fn(usize) -> Rgba) -> f32 {
+    match ref_color {
+        RefColor::None => 1.0,
+        RefColor::Diffuse => diffuse[3],
+        RefColor::Constant0 => constant(0)[3],
+        RefColor::Constant1 => constant(1)[3],
+        RefColor::Constant2 => constant(2)[3],
+        RefColor::Constant3 => constant(3)[3],
+    }
+}
+
 /// Converts compass azimuth and elevation (degrees) to a unit direction.
 pub fn direction(azimuth_deg: f32, elevation_deg: f32) -> Vec3 {
     let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
@@ -370,16 +387,8 @@ impl Sky {
                         f.diffuse[3] *= alpha;
                     }
                     let first = &frames[0];
-                    let ref_alpha = match fitting[0].1.ref_color {
-                        RefColor::None => 1.0,
-                        RefColor::Diffuse => first.diffuse[3],
-                        RefColor::Constant0 => first.constants[0][3],
-                        RefColor::Constant1 => first.constants[1][3],
-                        RefColor::Constant2 => first.constants[2][3],
-                        RefColor::Constant3 => first.constants[3][3],
-                    };
-                    // Below half an 8-bit step the object would contribute nothing: skip its fill.
-                    if ref_alpha < 0.5 / 255.0 {
+                    let ref_alpha = ref_alpha(fitting[0].1.ref_color, first.diffuse, |k| first.constants[k]);
+                    if ref_alpha < HIDDEN_ALPHA {
                         Err(Hidden::RefAlphaZero(fitting[0].1.ref_color))
                     } else {
                         Ok(frames)
@@ -452,16 +461,11 @@ impl Sky {
         let hour = input.hour.rem_euclid(self.hours_per_day);
         let weather = input.weather.clamp(0.0, 1.0);
         let color = |c: &Color| self.color_at(c, hour, weather);
-        let v = if o.standard.stages.len() <= input.tier.stages() { &o.standard } else { o.fallback.first().unwrap_or(&o.standard) };
-        let constant = |k: usize| v.constants.get(k).map_or(1.0, |c| color(c)[3]);
-        match v.ref_color {
-            RefColor::None => 1.0,
-            RefColor::Diffuse => color(&v.diffuse)[3],
-            RefColor::Constant0 => constant(0),
-            RefColor::Constant1 => constant(1),
-            RefColor::Constant2 => constant(2),
-            RefColor::Constant3 => constant(3),
-        }
+        // The version the evaluation would draw: the standard one if the tier has its stages,
+        // else the first fallback pass that fits.
+        let tier = input.tier.stages();
+        let v = if o.standard.stages.len() <= tier { &o.standard } else { o.fallback.iter().find(|v| v.stages.len() <= tier).unwrap_or(&o.standard) };
+        ref_alpha(v.ref_color, color(&v.diffuse), |k| v.constants.get(k).map_or([1.0; 4], color))
     }
 
     /// Index of an object by name.

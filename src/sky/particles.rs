@@ -163,7 +163,7 @@ struct Conditions {
 const BUCKET_S: f64 = 1.0 / 16.0;
 
 /// The emitter's birth conditions at `hour`.
-fn conditions(sky: &Sky, e: &Emitter, frame: &FrameSky, hour: f32, weather: f32, object_live: bool) -> Conditions {
+fn conditions(sky: &Sky, e: &Emitter, hour: f32, weather: f32, object_live: bool) -> Conditions {
     let hpd = sky.hours_per_day;
     let hour = hour.rem_euclid(hpd);
     let tint = sky.color_at(&e.emission, hour, weather);
@@ -184,7 +184,6 @@ fn conditions(sky: &Sky, e: &Emitter, frame: &FrameSky, hour: f32, weather: f32,
     if let EmitterAttach::Object(index) = e.attach {
         // Hidden by its ref colour at that hour: no births (particles already born live on).
         c.on &= object_live && object_ref_visible(sky, index, hour, weather);
-        let _ = frame;
     }
     c
 }
@@ -192,7 +191,7 @@ fn conditions(sky: &Sky, e: &Emitter, frame: &FrameSky, hour: f32, weather: f32,
 /// Whether an object's ref colour lets it show at `hour` (the evaluation's rule).
 fn object_ref_visible(sky: &Sky, index: usize, hour: f32, weather: f32) -> bool {
     let input = super::FrameInput::new(hour, weather);
-    sky.object_ref_alpha(index, &input) >= 0.5 / 255.0
+    sky.object_ref_alpha(index, &input) >= super::eval::HIDDEN_ALPHA
 }
 
 /// A local frame around a dome direction: (right, up) tangent to the sky.
@@ -341,14 +340,19 @@ struct Births<'a> {
 }
 
 impl Births<'_> {
+    /// Birth conditions at simulation time `time_s`: the hour then, from the frame's hour and the clock.
+    fn conditions_at(&self, time_s: f64) -> Conditions {
+        let hour = self.frame.hour as f64 - (self.clock.time_s - time_s) * self.clock.hours_per_s;
+        conditions(self.sky, self.e, hour as f32, self.frame.weather, self.object_live)
+    }
+
     /// Birth conditions at `birth` (s), computed once per bucket of [`BUCKET_S`].
     fn conditions_cached(&self, bucket: &mut Option<(i64, Conditions)>, birth: f64) -> Conditions {
         let b = (birth / BUCKET_S).floor() as i64;
         match *bucket {
             Some((k, c)) if k == b => c,
             _ => {
-                let hour = self.frame.hour as f64 - (self.clock.time_s - b as f64 * BUCKET_S) * self.clock.hours_per_s;
-                let c = conditions(self.sky, self.e, self.frame, hour as f32, self.frame.weather, self.object_live);
+                let c = self.conditions_at(b as f64 * BUCKET_S);
                 *bucket = Some((b, c));
                 c
             }
@@ -368,9 +372,7 @@ impl Births<'_> {
         let buckets = (((first_birth + span) / bucket_s).floor() - first_bucket + 1.0).clamp(1.0, MAX_GPU_BUCKETS as f64 + 1.0) as usize;
         let mut table = Vec::with_capacity(buckets * 3);
         for b in 0..buckets {
-            let start = (first_bucket + b as f64) * bucket_s;
-            let hour = self.frame.hour as f64 - (t - start) * self.clock.hours_per_s;
-            let c = conditions(self.sky, self.e, self.frame, hour as f32, self.frame.weather, self.object_live);
+            let c = self.conditions_at((first_bucket + b as f64) * bucket_s);
             table.push([if c.on { 1.0 } else { 0.0 }, c.rate, c.speed, c.size]);
             table.push(c.tint);
             table.push([c.rain_to_snow, 0.0, 0.0, 0.0]);
@@ -463,13 +465,12 @@ fn particle(e: &Emitter, rng: &mut SlotRng, age: f32, c: &Conditions, placement:
             (p, v)
         }
         EmitterAttach::Object(_) => {
-            let spread_v = |axis: Vec3, u: f32, v: f32| in_cone(axis, spread, u, v);
-            let (p0, tangent_dir, centre) = match placement {
+            let (p0, tangent_dir) = match placement {
                 Some(centre) => {
                     // Born within `region_deg` of the object's centre, moving with it.
                     let p0 = in_cone(centre, e.region_deg.to_radians(), u1, u2);
                     let out = (p0 - centre * p0.dot(centre)).try_normalize().unwrap_or(tangent_frame(centre).0);
-                    (p0, out, centre)
+                    (p0, out)
                 }
                 None => {
                     // Over the sky above `min_elevation_deg`, uniform in solid angle.
@@ -478,12 +479,11 @@ fn particle(e: &Emitter, rng: &mut SlotRng, age: f32, c: &Conditions, placement:
                     let r = (1.0 - y * y).max(0.0).sqrt();
                     let phi = u2 * std::f32::consts::TAU;
                     let p0 = Vec3::new(r * phi.cos(), y, r * phi.sin());
-                    (p0, tangent_frame(p0).0, Vec3::Y)
+                    (p0, tangent_frame(p0).0)
                 }
             };
-            let _ = centre;
             let wanted = if e.direction.length_squared() > 0.0 { e.direction.normalize() } else { tangent_dir };
-            let dir = spread_v(wanted, u3, u4);
+            let dir = in_cone(wanted, spread, u3, u4);
             // Motion along the sky: the direction's part tangent to it at the birth point.
             let tangent = (dir - p0 * dir.dot(p0)).try_normalize().unwrap_or(tangent_dir);
             let w = speed.to_radians();
