@@ -54,6 +54,12 @@ pub enum Command {
     /// Measure the sky passes (depth split and tiers) and write a Markdown report;
     /// `skytune bench frame` compares whole frames with the adapter's fill-rate floor.
     Bench(BenchCommand),
+    /// Stability where methods fail: random parameter sets across and beyond every model's
+    /// domain, counting NaN, infinite, negative and discontinuous radiance (docs/stability.md).
+    Sweep(SweepArgs),
+    /// NeL gradient and halo bitmaps (24 hours x N weather steps) baked from a physical model,
+    /// written as a sky folder.
+    Bake(BakeArgs),
     /// Sky radiance of a list of cases (CSV in, CSV out) from a physical sky model.
     Radiance(RadianceArgs),
     /// Render the same view twice (two skies, models, tiers or times), print the difference
@@ -369,6 +375,90 @@ pub enum BenchWhat {
     /// Every sky at several hours, weathers and two views against a full-screen pass sampling one
     /// texture (the fill-rate floor), measured side by side; per-object and CPU costs; reload latency.
     Frame(FrameBenchArgs),
+    /// Every sky model at several quality settings: error against the reference over the dome
+    /// (sun -10 to 90 degrees, three atmospheres) against GPU cost; CSV, Markdown and charts.
+    Models(ModelBenchArgs),
+}
+
+/// The models `bake` can bake from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum BakeModel {
+    /// Single scattering (the sky file's settings).
+    Single,
+    /// LUT multiple scattering (the sky file's settings).
+    Lut,
+    /// The cell model (the sky file's iterations).
+    Cells,
+    /// Preetham (the sky file's turbidity).
+    Preetham,
+    /// Hosek-Wilkie (the sky file's turbidity).
+    Hosek,
+}
+
+/// `bake` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct BakeArgs {
+    /// The sky whose sun path and atmosphere are baked (default: the built-in sky).
+    pub sky: Option<PathBuf>,
+    /// The model to bake from.
+    #[arg(long, value_enum, default_value = "lut")]
+    pub model: BakeModel,
+    /// Gradient rows (zenith to 10 degrees below the horizon).
+    #[arg(long, default_value_t = 32)]
+    pub rows: usize,
+    /// Weather steps (one gradient bitmap each).
+    #[arg(long, default_value_t = 3)]
+    pub weathers: usize,
+    /// Folder to write (sky.toml and its bitmaps).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Force the software adapter (lavapipe).
+    #[arg(long)]
+    pub cpu: bool,
+}
+
+/// `sweep` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct SweepArgs {
+    /// Random parameter sets per model (each evaluated twice, the sun moved between).
+    #[arg(long, default_value_t = 100_000)]
+    pub count: usize,
+    /// Seed of the parameter sets (the same seed gives the same sets).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Markdown report to write.
+    #[arg(long, default_value = "docs/stability.md")]
+    pub out: PathBuf,
+    /// Force the software adapter (lavapipe).
+    #[arg(long)]
+    pub cpu: bool,
+}
+
+/// `bench models` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct ModelBenchArgs {
+    /// Few settings, one atmosphere, five sun elevations, few frames (CI: well under 5 minutes).
+    #[arg(long)]
+    pub quick: bool,
+    /// Measured frames per model for the cost (after 2 warm-up frames).
+    #[arg(long, default_value_t = 9)]
+    pub frames: u32,
+    /// Frame size of the cost measurement, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Folder the report, the CSV and the charts are written to (models.md, models.csv,
+    /// models-by-sun.csv, models-cost.svg/png, models-by-sun.svg/png).
+    #[arg(long, default_value = "docs")]
+    pub out: PathBuf,
+    /// The reference's radiance over the dome (computed and written when missing or stale).
+    #[arg(long, default_value = "assets/reference_dome.csv")]
+    pub reference: PathBuf,
+    /// Monte Carlo paths per direction of the reference.
+    #[arg(long, default_value_t = 1024)]
+    pub paths: u32,
+    /// Force the software adapter (lavapipe).
+    #[arg(long)]
+    pub cpu: bool,
 }
 
 /// `bench frame` arguments.

@@ -13,12 +13,16 @@
 
 pub mod app;
 pub mod atmosphere;
+pub mod auto_model;
+pub mod bake;
 pub mod compare;
 pub mod export;
 pub mod fsx;
 pub mod live;
+pub mod modelbench;
 pub mod render;
 pub mod sky;
 pub mod snapshot;
 pub mod soak;
+pub mod sweep;
 pub mod watch;

@@ -2,7 +2,10 @@
 
 mod bench;
 mod bench_frame;
+mod bench_models;
+mod charts;
 mod cli;
+mod sweep_cmd;
 
 use std::path::Path;
 use std::time::Duration;
@@ -49,10 +52,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             Ok(())
         }
         Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Frame(args)), .. })) => bench_frame::run(&args),
+        Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Models(args)), .. })) => bench_models::run(&args),
         Some(Command::Bench(cmd)) => bench::run(&cmd.args),
         Some(Command::Radiance(args)) => radiance(&args),
         Some(Command::Compare(args)) => compare(&args),
         Some(Command::Soak(args)) => soak(&args),
+        Some(Command::Sweep(args)) => sweep_cmd::run(&args),
+        Some(Command::Bake(args)) => bake(&args),
     }
 }
 
@@ -75,6 +81,35 @@ fn new_sky_folder(dir: &Path, palette: &procedural::Palette, seed: u64, force: b
         let _ = std::fs::remove_dir_all(&staging);
     }
     result.map(|_| dir.join("sky.toml"))
+}
+
+/// `skytune bake`: bakes a physical model into NeL bitmaps and writes a sky folder.
+fn bake(args: &cli::BakeArgs) -> anyhow::Result<()> {
+    use skytune::modelbench::Method;
+    let sky = spec_for(args.sky.as_deref(), None)?.load().map_err(|e| anyhow!("{e}"))?;
+    let m = &sky.model;
+    let method = match args.model {
+        cli::BakeModel::Single => Method::Single(m.single),
+        cli::BakeModel::Lut => Method::Lut(m.lut),
+        cli::BakeModel::Cells => Method::Cells(m.cell_iterations as usize),
+        cli::BakeModel::Preetham => Method::Preetham,
+        cli::BakeModel::Hosek => Method::Hosek,
+    };
+    let ctx = GpuContext::headless(adapter(args.cpu))?;
+    let ev = skytune::modelbench::Evaluator::new(&ctx)?;
+    let started = std::time::Instant::now();
+    let baked = skytune::bake::bake(&ev, &sky, method, args.rows, args.weathers)?;
+    skytune::bake::write_folder(&args.out, &sky, &baked, method.model_name()).with_context(|| format!("writing {}", args.out.display()))?;
+    println!(
+        "baked {} into {} ({} rows x 24 hours x {} weather steps) in {:.1} s; open it with `skytune {}`",
+        method.model_name(),
+        args.out.display(),
+        args.rows,
+        args.weathers,
+        started.elapsed().as_secs_f64(),
+        args.out.join("sky.toml").display()
+    );
+    Ok(())
 }
 
 /// `skytune radiance`: evaluates a model on every case of a CSV file.
@@ -433,10 +468,13 @@ fn compare(args: &cli::CompareArgs) -> anyhow::Result<()> {
 
 fn render(args: &RenderArgs) -> anyhow::Result<()> {
     let spec = spec_for(args.sky.as_deref(), args.frame.season.as_deref())?;
-    let sky = spec.load().map_err(|e| anyhow!("{e}"))?;
+    let mut sky = spec.load().map_err(|e| anyhow!("{e}"))?;
     let (w, h) = cli::parse_size(&args.size)?;
     let ctx = GpuContext::headless(adapter(args.frame.cpu))?;
     println!("adapter: {}", ctx.adapter_line());
+    if let Some(pick) = skytune::auto_model::resolve(&mut sky, &ctx)? {
+        println!("{}", pick.describe());
+    }
     let mut headless = Headless::new(ctx, w, h)?;
     headless.set_sky(&sky)?;
     render_to_file(&mut headless, &sky, args)
@@ -463,6 +501,12 @@ fn check(path: &Path) -> anyhow::Result<()> {
     }
     let sky = skytune::sky::load_sky_file(path).map_err(|e| anyhow!("{e}"))?;
     print!("{}", summary(&sky));
+    if let Some(budget) = sky.auto_model {
+        let ctx = GpuContext::headless(AdapterChoice::from_env())?;
+        let pick = skytune::auto_model::pick_cached(&sky, budget, &ctx)?;
+        println!("  {}", pick.describe());
+        println!("  measured at sun elevations {:?} degrees, over {} weather step(s)", pick.suns_deg, skytune::auto_model::sky_atmospheres(&sky).len());
+    }
     Ok(())
 }
 

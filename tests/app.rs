@@ -44,6 +44,8 @@ fn run_panels(controls: &mut Controls, events: Vec<egui::Event>) -> Vec<UiAction
         }),
         device_lost: true,
         floor_ms: Some(6.0),
+        auto_model: Some("auto model: lut-default (test)".into()),
+        auto_point: Some("lut-default".into()),
     };
     let ctx = egui::Context::default();
     let mut actions = Vec::new();

@@ -42,6 +42,20 @@ fn distance_to_top(atm: Atmosphere, r: f32, mu: f32) -> f32 {
     return max(0.0, -r * mu + sqrt(max(disc, 0.0)));
 }
 
+// The sun is a disc: the fraction of it above the horizon of a point at radius r, for the sun's
+// cosine mu_s to the point's vertical (smooth while the disc's centre crosses the horizon; a
+// point sun would switch samples on and off, and the sky would jump as the sun moves).
+fn sun_visible_fraction(atm: Atmosphere, r: f32, mu_s: f32) -> f32 {
+    let above = asin(clamp(mu_s, -1.0, 1.0)) - asin(horizon_mu(atm, r));
+    return smoothstep(-atm.shape.w, atm.shape.w, above);
+}
+
+// Cosine to the vertical of the geometric horizon seen from radius r (at most 0).
+fn horizon_mu(atm: Atmosphere, r: f32) -> f32 {
+    let sin_horizon = clamp(atm.shape.x / max(r, atm.shape.x), 0.0, 1.0);
+    return -sqrt(max(1.0 - sin_horizon * sin_horizon, 0.0));
+}
+
 // Distance to the ground along cosine mu, or -1 when the ray misses it.
 fn distance_to_ground(atm: Atmosphere, r: f32, mu: f32) -> f32 {
     let ground = atm.shape.x;

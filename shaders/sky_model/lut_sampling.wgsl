@@ -54,12 +54,14 @@ fn sample_transmittance(atm: Atmosphere, r: f32, mu: f32) -> vec3<f32> {
     return mix(top, bottom, b.w);
 }
 
-// Transmittance to the sun from radius r at sun cosine mu_s; 0 behind the planet.
+// Transmittance to the sun from radius r at sun cosine mu_s, times the visible fraction of the
+// sun's disc (0 behind the planet); the visible part is seen at grazing incidence at worst.
 fn sun_transmittance(atm: Atmosphere, r: f32, mu_s: f32) -> vec3<f32> {
-    if (distance_to_ground(atm, r, mu_s) >= 0.0) {
+    let visible = sun_visible_fraction(atm, r, mu_s);
+    if (visible <= 0.0) {
         return vec3<f32>(0.0);
     }
-    return sample_transmittance(atm, r, mu_s);
+    return visible * sample_transmittance(atm, r, max(mu_s, horizon_mu(atm, r) + 1e-4));
 }
 
 // Multiple-scattering table: u = (mu_s + 1) / 2, v = altitude / thickness.

@@ -35,12 +35,15 @@ fn single_scattering(atm: Atmosphere, s: SingleSettings, camera_km: f32, view: v
         let p = vec3<f32>(0.0, r, 0.0) + view * t;
         let r_p = atm.shape.x + h;
         let mu_s = dot(p, sun) / max(length(p), 1e-3);
-        let tau_sun = sun_optical_depth(atm, s, r_p, h, mu_s);
-        // A negative optical depth means the ground hides the sun from this sample.
-        if (tau_sun.x >= 0.0) {
-            let hh = max(h, 0.0);
-            let scattering = atm.rayleigh.xyz * exp(-hh / atm.rayleigh.w) * ray.phase_r + vec3<f32>(atm.mie.x * exp(-hh / atm.mie.z) * ray.phase_m);
-            sum += scattering * exp(-(tau_mid + tau_sun)) * dt;
+        // The visible part of the sun's disc is seen at grazing incidence at worst.
+        let visible = sun_visible_fraction(atm, r_p, mu_s);
+        if (visible > 0.0) {
+            let tau_sun = sun_optical_depth(atm, s, r_p, h, max(mu_s, horizon_mu(atm, r_p) + 1e-4));
+            if (tau_sun.x >= 0.0) {
+                let hh = max(h, 0.0);
+                let scattering = atm.rayleigh.xyz * exp(-hh / atm.rayleigh.w) * ray.phase_r + vec3<f32>(atm.mie.x * exp(-hh / atm.mie.z) * ray.phase_m);
+                sum += visible * scattering * exp(-(tau_mid + tau_sun)) * dt;
+            }
         }
     }
     return sum;

@@ -154,6 +154,7 @@ impl App {
                     Err(e) => self.gpu_error = Some(format!("GPU upload failed, keeping the previous sky: {e}")),
                 }
             }
+            self.resolve_auto_model();
         }
         if self.shaders_changed.swap(false, Ordering::AcqRel) {
             self.reload_shaders();
@@ -179,7 +180,9 @@ impl App {
     /// The frame the controls describe (no clock yet).
     fn frame_input(&self) -> FrameInput {
         let c = &self.controls;
-        FrameInput { game_hours: c.game_hours, tier: c.tier, disabled: c.disabled.clone(), sky_model: c.sky_model, ..FrameInput::new(c.hour, c.weather) }
+        // The panel's choice wins; else an auto sky's pick; else the sky file's model.
+        let auto = self.auto_pick.as_ref().and_then(|p| p.as_ref().ok()).map(|p| p.model(&self.live.sky().model));
+        FrameInput { game_hours: c.game_hours, tier: c.tier, disabled: c.disabled.clone(), sky_model: c.sky_model.or(auto), ..FrameInput::new(c.hour, c.weather) }
     }
 
     /// Every error to show, newest state of each source.
@@ -239,6 +242,8 @@ impl App {
             compare: None,
             device_lost: gpu.ctx.lost_reason().is_some(),
             floor_ms: gpu.floor_ms(self.clock.frames()),
+            auto_model: self.auto_pick.as_ref().map(|p| p.as_ref().map(|p| p.describe()).unwrap_or_else(|e| e.clone())),
+            auto_point: self.auto_pick.as_ref().and_then(|p| p.as_ref().ok()).map(|p| p.chosen.id.clone()),
         };
         let compare = self.controls.compare.open.then(|| {
             let c = &self.controls.compare;

@@ -127,6 +127,7 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         soak,
         test_lose_device_at: std::env::var("SKYTUNE_TEST_LOSE_DEVICE_AT").ok().and_then(|v| v.parse().ok()),
         snapshots: Vec::new(),
+        auto_pick: None,
     };
     event_loop.run_app(&mut app).context("running the window")?;
     app.settings.save();
@@ -180,6 +181,8 @@ pub struct App {
     test_lose_device_at: Option<u64>,
     /// Snapshots of the sky file shown (refreshed when the compare view opens and after saving one).
     snapshots: Vec<crate::snapshot::Snapshot>,
+    /// `kind = "auto"`: what was picked for the sky shown, or why nothing could be.
+    auto_pick: Option<Result<crate::auto_model::Pick, String>>,
 }
 
 impl App {
@@ -203,7 +206,21 @@ impl App {
         self.shader_error = shader_error;
         self.gpu = Some(gpu);
         self.refresh_snapshots();
+        self.resolve_auto_model();
         Ok(())
+    }
+
+    /// Picks the model of a `kind = "auto"` sky (cached per atmosphere and budget; the first pick
+    /// for a new atmosphere measures every candidate, seconds to minutes).
+    fn resolve_auto_model(&mut self) {
+        let sky = self.live.sky();
+        self.auto_pick = match (sky.auto_model, self.gpu.as_ref()) {
+            (Some(budget), Some(gpu)) => Some(crate::auto_model::pick_cached(sky, budget, &gpu.ctx).map_err(|e| format!("auto model: {e:#}"))),
+            _ => None,
+        };
+        if let Some(Ok(p)) = &self.auto_pick {
+            log::info!("{}", p.describe());
+        }
     }
 
     /// Watches the shader folder with the same facility as the sky files.

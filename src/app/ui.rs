@@ -189,6 +189,10 @@ pub struct UiInfo<'a> {
     pub device_lost: bool,
     /// The fill-rate floor at the window's size, ms (see `render::baseline`), once measured.
     pub floor_ms: Option<f32>,
+    /// `kind = "auto"`: the pick (model, error, cost, runner-up), or why there is none.
+    pub auto_model: Option<String>,
+    /// `kind = "auto"`: the picked point's id on the benchmark chart.
+    pub auto_point: Option<String>,
 }
 
 /// Keyboard shortcuts, shown in the help overlay.
@@ -288,7 +292,12 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
                     ui.radio_value(&mut c.tier, t, if t.stages() == 1 { "1 stage".to_string() } else { format!("{} stages", t.stages()) });
                 }
             });
+            if let Some(line) = &info.auto_model {
+                ui.label(line);
+            }
             sky_model_controls(ui, c, info.sky);
+            let current = info.auto_point.clone().filter(|_| c.sky_model.is_none()).or_else(|| crate::modelbench::point_for(&c.sky_model.unwrap_or(info.sky.model)));
+            ui.collapsing("speed against accuracy (skytune bench models)", |ui| model_chart(ui, current.as_deref()));
             if let Some(p) = info.model_progress {
                 ui.add(egui::ProgressBar::new(p).show_percentage().text("computing the sky in the background"));
             }
@@ -454,6 +463,42 @@ fn model_label(kind: SkyModelKind) -> &'static str {
         SkyModelKind::Hosek => "Hosek-Wilkie 2012 (analytic)",
         SkyModelKind::Linear => "Braun-Cohen linear (one colour)",
     }
+}
+
+/// The committed model benchmark (docs/models.csv) as in docs/models-cost.svg: mean dE2000
+/// against frame cost, both log10, the Pareto front, and the current model's point ringed.
+fn model_chart(ui: &mut egui::Ui, current: Option<&str>) {
+    let rows = match crate::modelbench::rows_from_csv(crate::modelbench::COMMITTED_CSV) {
+        Ok(r) if !r.is_empty() => r,
+        _ => {
+            ui.label("no benchmark in this build (run skytune bench models)");
+            return;
+        }
+    };
+    let at = |r: &crate::modelbench::ChartRow| [r.frame_ms().max(1e-3).log10(), r.error().max(1e-3).log10()];
+    let mut front: Vec<[f64; 2]> = rows.iter().filter(|r| r.pareto).map(at).collect();
+    front.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    ui.label("x: log10 frame ms in which the sun moved; y: log10 mean CIE dE2000 over the dome");
+    egui_plot::Plot::new("model_chart").height(220.0).allow_drag(false).allow_scroll(false).show(ui, |p| {
+        p.line(egui_plot::Line::new("Pareto front", front));
+        for r in &rows {
+            let [x, y] = at(r);
+            let mine = current == Some(r.id.as_str());
+            let colour = if mine {
+                egui::Color32::YELLOW
+            } else if r.pareto {
+                egui::Color32::LIGHT_GREEN
+            } else {
+                egui::Color32::GRAY
+            };
+            p.points(egui_plot::Points::new(r.id.clone(), vec![[x, y]]).radius(if mine { 6.0 } else { 3.0 }).color(colour).filled(true));
+            p.text(egui_plot::Text::new(r.id.clone(), egui_plot::PlotPoint::new(x, y + 0.04), r.id.clone()).color(colour));
+        }
+    });
+    match current.and_then(|id| rows.iter().find(|r| r.id == id)) {
+        Some(r) => ui.label(format!("current: {} - dE2000 {:.2} (p95 {:.2}), PSNR {:.1} dB, {:.1} ms", r.id, r.de_mean, r.de_p95, r.psnr_db, r.frame_ms())),
+        None => ui.label("current model: not a benchmark point"),
+    };
 }
 
 /// The skydome colour source: every model, switchable live, and the physical models' settings.

@@ -38,6 +38,10 @@ pub const PREETHAM_MIN_TURBIDITY: f64 = 1.7;
 /// default atmosphere, at turbidity 2.5 (measured with `skytune radiance`, docs/sky-models.md).
 pub const HOSEK_SCALE: f64 = 2.8e-3;
 
+/// Lowest sun elevation at which Hosek-Wilkie's coefficients are evaluated, degrees (lower suns
+/// use these coefficients; see [`Hosek::new`]).
+pub const HOSEK_MIN_ELEVATION_DEG: f64 = 2.0;
+
 /// The sky's brightness below the horizon relative to a sun on it: a decade every 3 degrees.
 pub fn twilight_fade(sun_elevation_rad: f64) -> f64 {
     if sun_elevation_rad >= 0.0 {
@@ -190,7 +194,16 @@ impl Preetham {
     pub fn new(turbidity: f64, towards_sun: [f64; 3]) -> Self {
         let t = if turbidity.is_finite() { turbidity.clamp(PREETHAM_MIN_TURBIDITY, 10.0) } else { 2.5 };
         let (sun, elevation) = clamped_sun(towards_sun);
-        let ts = FRAC_PI_2 - elevation.max(0.0);
+        let mut p = Self::unclamped(t, elevation.max(0.0), sun);
+        p.zenith[0] = p.zenith[0].max(0.0);
+        p.fade = twilight_fade(elevation);
+        p
+    }
+
+    /// The published fit as it stands, at any turbidity and sun elevation (no clamp, no fade):
+    /// what the stability sweep shows failing outside the domain.
+    pub fn unclamped(t: f64, sun_elevation_rad: f64, towards_sun: [f64; 3]) -> Self {
+        let ts = FRAC_PI_2 - sun_elevation_rad;
         let perez = [
             [0.1787 * t - 1.4630, -0.3554 * t + 0.4275, -0.0227 * t + 5.3251, 0.1206 * t - 2.5771, -0.0670 * t + 0.3703],
             [-0.0193 * t - 0.2592, -0.0665 * t + 0.0008, -0.0004 * t + 0.2125, -0.0641 * t - 0.8989, -0.0033 * t + 0.0452],
@@ -203,7 +216,7 @@ impl Preetham {
             t2 * (0.00166 * s3 - 0.00375 * s2 + 0.00209 * s) + t * (-0.02903 * s3 + 0.06377 * s2 - 0.03202 * s + 0.00394) + (0.11693 * s3 - 0.21196 * s2 + 0.06052 * s + 0.25886);
         let yz =
             t2 * (0.00275 * s3 - 0.00610 * s2 + 0.00317 * s) + t * (-0.04214 * s3 + 0.08970 * s2 - 0.04153 * s + 0.00516) + (0.15346 * s3 - 0.26756 * s2 + 0.06670 * s + 0.26688);
-        Self { perez, zenith: [yz_kcd.max(0.0) / SOLAR_ILLUMINANCE_KLX, xz, yz], sun_zenith: ts, towards_sun: sun, fade: twilight_fade(elevation) }
+        Self { perez, zenith: [yz_kcd / SOLAR_ILLUMINANCE_KLX, xz, yz], sun_zenith: ts, towards_sun, fade: 1.0 }
     }
 
     /// Luminance and chromaticity (Y relative, x, y) towards `view` (unit, y up), unclamped.
@@ -245,8 +258,11 @@ impl Hosek {
         let (sun, elevation) = clamped_sun(towards_sun);
         let t = if turbidity.is_finite() { turbidity.clamp(1.0, 10.0) } else { 2.5 };
         let a = if albedo.is_finite() { albedo.clamp(0.0, 1.0) } else { 0.3 };
-        let params =
-            hw_skymodel::rgb::SkyParams { elevation: (elevation.clamp(0.0, FRAC_PI_2) as f32).min(std::f32::consts::FRAC_PI_2), turbidity: t as f32, albedo: [a as f32; 3] };
+        // The dataset is interpolated in the cube root of the elevation, whose slope is infinite at
+        // the horizon: the sky would pop as the sun sets (`skytune sweep`). Below
+        // HOSEK_MIN_ELEVATION_DEG the coefficients stay those of that elevation.
+        let coefficient_elevation = elevation.clamp(HOSEK_MIN_ELEVATION_DEG.to_radians(), FRAC_PI_2);
+        let params = hw_skymodel::rgb::SkyParams { elevation: (coefficient_elevation as f32).min(std::f32::consts::FRAC_PI_2), turbidity: t as f32, albedo: [a as f32; 3] };
         // Every parameter is clamped into the crate's ranges above, so this cannot fail.
         let state = hw_skymodel::rgb::SkyState::new(&params).unwrap_or_else(|e| unreachable!("clamped Hosek parameters rejected: {e}"));
         Self { state, towards_sun: sun, fade: twilight_fade(elevation) }

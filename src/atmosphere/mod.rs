@@ -8,7 +8,9 @@
 pub mod analytic;
 pub mod cases;
 pub mod cells;
+pub mod dome;
 pub mod reference;
+pub mod represent;
 
 use std::f64::consts::PI;
 

@@ -100,10 +100,16 @@ impl RadianceProbe {
     /// the sun at the case's elevation, azimuth 0; `linear` at [`equinox_morning_hour`].
     /// `model_for` gives each case's model (Hosek's albedo comes from the case).
     pub fn analytic(&self, ctx: &GpuContext, cases: &[Case], model_for: impl Fn(&Case) -> AnalyticModel) -> RenderResult<Vec<[f32; 3]>> {
+        let models: Vec<AnalyticModel> = cases.iter().map(model_for).collect();
+        self.analytic_each(ctx, cases, &models)
+    }
+
+    /// Radiance of `models[i]` for `cases[i]` (each case its own model and settings).
+    pub fn analytic_each(&self, ctx: &GpuContext, cases: &[Case], models: &[AnalyticModel]) -> RenderResult<Vec<[f32; 3]>> {
         let coefficients: Vec<[f32; 4]> = cases
             .iter()
-            .flat_map(|c| {
-                let model = model_for(c);
+            .zip(models)
+            .flat_map(|(c, model)| {
                 let sun = analytic::direction(c.sun_elev_deg.to_radians(), 0.0);
                 model.coefficients(sun, analytic::equinox_morning_hour(c.sun_elev_deg)).vectors
             })

@@ -11,8 +11,12 @@ use std::sync::Arc;
 use toml::Spanned;
 
 use super::bitmap::ColorBitmap;
-use super::model::{self, FileRef, SkyFile};
+use super::model::{self, FileRef, ModelChoice, SkyFile};
 use super::resolved::*;
+
+/// The error budget of `kind = "auto"` without `budget`: mean CIE dE2000 over the dome (2.3 is
+/// about one just-noticeable difference).
+pub const DEFAULT_DE2000_BUDGET: f64 = 2.0;
 
 /// One problem in a sky file, located precisely.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -353,7 +357,11 @@ impl Validator<'_> {
                 view_steps: m.view_steps.0,
             };
             SkyModel {
-                kind: m.kind,
+                // Until `auto_model::resolve` picks, an auto sky renders with the default `lut`.
+                kind: match m.kind {
+                    ModelChoice::Model(k) => k,
+                    ModelChoice::Auto => SkyModelKind::Lut,
+                },
                 single: crate::atmosphere::SingleSettings { view_steps: m.view_steps.0, sun_steps: m.sun_steps.0, optical_depth: m.optical_depth },
                 exposure_ev: m.exposure_ev.map_or(if m.auto_exposure { 0.0 } else { 5.0 }, |e| e.get()),
                 tone_mapper: m.tone_mapper,
@@ -369,6 +377,16 @@ impl Validator<'_> {
                 linear: crate::atmosphere::analytic::LinearParams { hours_per_day: hours as f64, ..m.linear.as_ref().map_or_else(Default::default, |l| self.linear(l)) },
             }
         });
+        let auto_model = match f.sky_model.as_ref() {
+            Some(m) if m.kind == ModelChoice::Auto => Some(crate::auto_model::Budget { de2000: m.budget.as_ref().map_or(DEFAULT_DE2000_BUDGET, |b| b.de2000.get() as f64) }),
+            Some(m) => {
+                if m.budget.is_some() {
+                    self.err_in("[sky_model]", "budget", "sky_model.budget", "an error budget only applies with kind = \"auto\"");
+                }
+                None
+            }
+            None => None,
+        };
         if model.cell_iterations > 32 {
             self.err_in("[sky_model]", "cell_iterations", "sky_model.cell_iterations", format!("expected 1..=32, found {}", model.cell_iterations));
         }
@@ -424,6 +442,7 @@ impl Validator<'_> {
             model,
             atmosphere,
             atmosphere_by_weather,
+            auto_model,
         })
     }
 

@@ -321,9 +321,13 @@ impl ToneMapper {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SkyModelDef {
-    /// `bitmap` (NeL gradients), `single`, `lut`, `cells` or `reference`.
+    /// `bitmap` (NeL gradients), `single`, `lut`, `cells`, `reference`, `preetham`, `hosek`,
+    /// `linear`, or `auto` (the cheapest model within `budget`).
     #[serde(default)]
-    pub kind: SkyModelKind,
+    pub kind: ModelChoice,
+    /// `auto`: the error budget, e.g. `{ de2000 = 2.0 }`.
+    #[serde(default)]
+    pub budget: Option<BudgetDef>,
     /// Exposure in stops: display = tone_map(radiance x 2^exposure_ev), radiance in sr^-1 per unit
     /// of solar irradiance (default 5); with `auto_exposure`, a compensation (default 0).
     #[serde(default)]
@@ -383,6 +387,43 @@ pub struct SkyModelDef {
     /// `linear`: Braun and Cohen's parameters.
     #[serde(default)]
     pub linear: Option<LinearDef>,
+}
+
+/// `[sky_model] kind`: a model, or `auto`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelChoice {
+    /// This model.
+    Model(SkyModelKind),
+    /// The cheapest model within the budget (`crate::auto_model`).
+    Auto,
+}
+
+impl Default for ModelChoice {
+    fn default() -> Self {
+        ModelChoice::Model(SkyModelKind::Bitmap)
+    }
+}
+
+impl<'de> Deserialize<'de> for ModelChoice {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        if name == "auto" {
+            return Ok(ModelChoice::Auto);
+        }
+        SkyModelKind::ALL
+            .into_iter()
+            .find(|k| k.name() == name)
+            .map(ModelChoice::Model)
+            .ok_or_else(|| serde::de::Error::custom(format!("unknown model \"{name}\"; expected auto, {}", SkyModelKind::ALL.map(|k| k.name()).join(", "))))
+    }
+}
+
+/// `budget = { de2000 = 2.0 }` of `kind = "auto"`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BudgetDef {
+    /// Largest mean CIE dE2000 over the dome, at any hour and weather of the sky (> 0).
+    pub de2000: Positive,
 }
 
 /// `[sky_model.linear]`: Braun and Cohen's light parameters. `preset` starts from one of the

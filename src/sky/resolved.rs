@@ -63,6 +63,8 @@ pub struct Sky {
     pub atmosphere: crate::atmosphere::Atmosphere,
     /// One atmosphere per weather step (empty: `atmosphere` in every weather).
     pub atmosphere_by_weather: Vec<crate::atmosphere::Atmosphere>,
+    /// `kind = "auto"`: the error budget; `model` holds `lut` until `auto_model::resolve` picks.
+    pub auto_model: Option<crate::auto_model::Budget>,
 }
 
 /// A skydome colour source and its settings.

@@ -1,0 +1,435 @@
+//! The dome the sky models are measured on (`skytune bench models`, `model = "auto"`, the
+//! stability sweep): view directions with solid-angle weights, the sun elevations and atmospheres
+//! of the benchmark, the fixed-exposure display transform, the error figures (relative RMSE,
+//! PSNR, CIE dE2000) and the reference's radiance over that dome, cached on disk because it takes
+//! minutes. No GPU types.
+//!
+//! Radiance is in sr^-1 per unit of solar irradiance, as everywhere in [`crate::atmosphere`].
+
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use deltae::{DEMethod, DeltaE, LabValue, XyzValue};
+
+use super::reference::{Case, Reference, ReferenceSettings};
+use super::{Atmosphere, Rgb};
+
+/// One view direction of the dome and the solid angle it stands for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DomeDir {
+    /// Elevation above the horizon, degrees.
+    pub elev_deg: f64,
+    /// Azimuth relative to the sun's, degrees (0..180: the sky is symmetric about the sun's
+    /// vertical plane, so each direction also stands for its mirror image).
+    pub rel_az_deg: f64,
+    /// Solid angle this direction stands for, sr (the weights of a dome sum to 2 pi).
+    pub weight_sr: f64,
+}
+
+/// Directions over the upper hemisphere: `bands` bands of equal solid angle (sin(elevation)
+/// uniform, band centres) times `azimuths` azimuths over half a turn.
+pub fn dome_directions(bands: usize, azimuths: usize) -> Vec<DomeDir> {
+    let weight_sr = 2.0 * PI / (bands * azimuths) as f64;
+    (0..bands)
+        .flat_map(|i| {
+            let elev_deg = (((i as f64 + 0.5) / bands as f64).asin()).to_degrees();
+            (0..azimuths).map(move |j| DomeDir { elev_deg, rel_az_deg: (j as f64 + 0.5) * 180.0 / azimuths as f64, weight_sr })
+        })
+        .collect()
+}
+
+/// The benchmark's dome: 8 equal-area bands x 12 azimuths (96 directions).
+pub const BENCH_DOME: (usize, usize) = (8, 12);
+
+/// Sun elevations of the full benchmark, degrees: -10 to 90, finer near the horizon.
+pub const SUN_ELEVATIONS_DEG: [f64; 18] = [-10.0, -6.0, -4.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0, 5.0, 8.0, 12.0, 20.0, 30.0, 45.0, 60.0, 75.0, 90.0];
+
+/// Sun elevations of the quick benchmark (a subset of [`SUN_ELEVATIONS_DEG`]).
+pub const QUICK_SUN_ELEVATIONS_DEG: [f64; 5] = [-4.0, 0.0, 2.0, 12.0, 45.0];
+
+/// Camera altitude of the benchmark, km (the sky file's default).
+pub const CAMERA_KM: f64 = 0.0;
+
+/// Ground albedo of the benchmark (the sky file's default).
+pub const ALBEDO: f64 = 0.3;
+
+/// The benchmark's atmospheres: the default and two aerosol loads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Haze {
+    /// Hillaire 2020's Earth ([`Atmosphere::default`]).
+    Default,
+    /// Four times the default's aerosols (Mie scattering and extinction).
+    Hazy,
+    /// A quarter of the default's aerosols.
+    Clean,
+}
+
+impl Haze {
+    /// Every atmosphere of the full benchmark.
+    pub const ALL: [Haze; 3] = [Haze::Default, Haze::Hazy, Haze::Clean];
+
+    /// Name in tables and files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Haze::Default => "default",
+            Haze::Hazy => "hazy",
+            Haze::Clean => "clean",
+        }
+    }
+
+    /// The atmosphere.
+    pub fn atmosphere(self) -> Atmosphere {
+        let aerosols = |k: f64| {
+            let a = Atmosphere::default();
+            Atmosphere { mie_scattering_per_km: a.mie_scattering_per_km * k, mie_extinction_per_km: a.mie_extinction_per_km * k, ..a }
+        };
+        match self {
+            Haze::Default => Atmosphere::default(),
+            Haze::Hazy => aerosols(4.0),
+            Haze::Clean => aerosols(0.25),
+        }
+    }
+
+    /// The benchmark atmosphere equal to `atm`, if any.
+    pub fn of(atm: &Atmosphere) -> Option<Haze> {
+        Haze::ALL.into_iter().find(|h| h.atmosphere() == *atm)
+    }
+
+    /// From its name.
+    pub fn from_name(name: &str) -> Option<Haze> {
+        Haze::ALL.into_iter().find(|h| h.name() == name)
+    }
+}
+
+/// The radiance cases of one sun elevation over `dirs`.
+pub fn cases(sun_elev_deg: f64, dirs: &[DomeDir]) -> Vec<Case> {
+    dirs.iter().map(|d| Case { camera_km: CAMERA_KM, albedo: ALBEDO, sun_elev_deg, view_elev_deg: d.elev_deg, rel_azimuth_deg: d.rel_az_deg }).collect()
+}
+
+/// Fixed exposure of the error figures, stops: the sky file's default `exposure_ev`.
+pub const EXPOSURE_EV: f64 = 5.0;
+
+/// Linear display value of a radiance at the fixed exposure: 1 - exp(-L 2^EV) per channel (a
+/// tone curve with an exact inverse, so baked bitmaps can be turned back into radiance).
+pub fn display(l: Rgb) -> Rgb {
+    let k = EXPOSURE_EV.exp2();
+    l.map(|c| 1.0 - (-(c.max(0.0)) * k).exp())
+}
+
+/// Inverse of [`display`] (display values of 1 and above map to a large finite radiance).
+pub fn radiance_from_display(d: Rgb) -> Rgb {
+    let k = EXPOSURE_EV.exp2();
+    d.map(|c| -(1.0 - c.clamp(0.0, 1.0 - 1e-6)).ln() / k)
+}
+
+/// sRGB encoding of a linear value in 0..1.
+pub fn srgb_encode(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// sRGB decoding to a linear value in 0..1.
+pub fn srgb_decode(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    if x <= 0.040_45 {
+        x / 12.92
+    } else {
+        ((x + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// CIE L*a*b* (D50, as `deltae` defines it) of a linear Rec. 709 display colour, through the
+/// Bradford-adapted sRGB to XYZ(D50) matrix.
+fn lab(linear: Rgb) -> LabValue {
+    let [r, g, b] = linear.map(|c| c.clamp(0.0, 1.0));
+    let xyz = XyzValue {
+        x: (0.436_074_7 * r + 0.385_064_9 * g + 0.143_080_4 * b) as f32,
+        y: (0.222_504_5 * r + 0.716_878_6 * g + 0.060_616_9 * b) as f32,
+        z: (0.013_932_2 * r + 0.097_104_5 * g + 0.714_173_3 * b) as f32,
+    };
+    LabValue::from(xyz)
+}
+
+/// CIE dE2000 between two linear display colours.
+pub fn de2000(a: Rgb, b: Rgb) -> f64 {
+    *DeltaE::new(lab(a), lab(b), DEMethod::DE2000).value() as f64
+}
+
+/// How far a model is from the reference over one dome.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct DomeError {
+    /// Relative RMSE of radiance per channel, solid-angle weighted: sqrt(sum w (m - r)^2 / sum w r^2).
+    pub rel_rmse: Rgb,
+    /// PSNR of the sRGB-encoded display image (peak 1), dB; 99 for identical images.
+    pub psnr_db: f64,
+    /// Mean CIE dE2000 of the display colours, solid-angle weighted.
+    pub de_mean: f64,
+    /// 95th percentile of dE2000 (by solid angle).
+    pub de_p95: f64,
+}
+
+impl DomeError {
+    /// The mean of the three channels' relative RMSE.
+    pub fn rel_rmse_mean(&self) -> f64 {
+        self.rel_rmse.iter().sum::<f64>() / 3.0
+    }
+}
+
+/// Errors of `model` against `reference` over `dirs` (same order).
+pub fn dome_error(dirs: &[DomeDir], reference: &[Rgb], model: &[Rgb]) -> DomeError {
+    let mut num = [0.0; 3];
+    let mut den = [0.0; 3];
+    let (mut sq, mut w_sum) = (0.0, 0.0);
+    let mut des = Vec::with_capacity(dirs.len());
+    for ((d, r), m) in dirs.iter().zip(reference).zip(model) {
+        for c in 0..3 {
+            num[c] += d.weight_sr * (m[c] - r[c]).powi(2);
+            den[c] += d.weight_sr * r[c] * r[c];
+        }
+        let (dr, dm) = (display(*r), display(sanitize(*m)));
+        for c in 0..3 {
+            sq += d.weight_sr * (srgb_encode(dm[c]) - srgb_encode(dr[c])).powi(2) / 3.0;
+        }
+        w_sum += d.weight_sr;
+        des.push((de2000(dr, dm), d.weight_sr));
+    }
+    let rel_rmse = std::array::from_fn(|c| {
+        if den[c] > 0.0 {
+            (num[c] / den[c]).sqrt()
+        } else if num[c] > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        }
+    });
+    let mse = sq / w_sum.max(f64::MIN_POSITIVE);
+    let psnr_db = if mse > 1e-10 { (-10.0 * mse.log10()).min(99.0) } else { 99.0 };
+    let de_mean = des.iter().map(|(e, w)| e * w).sum::<f64>() / w_sum.max(f64::MIN_POSITIVE);
+    des.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut acc = 0.0;
+    let mut de_p95 = des.last().map_or(0.0, |d| d.0);
+    for (e, w) in &des {
+        acc += w;
+        if acc >= 0.95 * w_sum {
+            de_p95 = *e;
+            break;
+        }
+    }
+    DomeError { rel_rmse, psnr_db, de_mean, de_p95 }
+}
+
+/// NaN and negative radiance count as black for the display figures (the stability sweep counts them).
+fn sanitize(l: Rgb) -> Rgb {
+    l.map(|c| {
+        if c.is_finite() {
+            c.max(0.0)
+        } else if c == f64::INFINITY {
+            1e30
+        } else {
+            0.0
+        }
+    })
+}
+
+/// The reference's radiance over a dome for a set of atmospheres and sun elevations.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReferenceDome {
+    /// Monte Carlo paths per direction.
+    pub paths: u32,
+    /// Dome layout (bands, azimuths) of [`dome_directions`].
+    pub dome: (usize, usize),
+    /// One entry per (atmosphere, sun elevation): radiance and its standard error per direction.
+    pub suns: Vec<ReferenceSun>,
+}
+
+/// The reference's dome for one atmosphere and sun elevation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReferenceSun {
+    /// The atmosphere.
+    pub haze: Haze,
+    /// Sun elevation, degrees.
+    pub sun_elev_deg: f64,
+    /// Radiance per direction (all orders), sr^-1 per unit of solar irradiance.
+    pub radiance: Vec<Rgb>,
+    /// Monte Carlo standard error per direction.
+    pub std_err: Vec<Rgb>,
+}
+
+/// Why a cached reference dome could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum ReferenceDomeError {
+    /// Reading or writing failed.
+    #[error("{file}: {source}")]
+    Io {
+        /// The file.
+        file: String,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The file is not what [`ReferenceDome::save`] writes, or was written for other settings.
+    #[error("{file}:{line}: {message}")]
+    Format {
+        /// The file.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// The reference's radiance and standard error over a dome for every (atmosphere, sun) pair, on
+/// every core: (atmosphere index, sun elevation, radiance, standard error) in the order of the
+/// pairs. Jobs are handed out one direction at a time: low suns cost ten times more than high ones.
+pub fn compute_domes(
+    atmospheres: &[Atmosphere],
+    suns_deg: &[f64],
+    dome: (usize, usize),
+    paths: u32,
+    seed: u64,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Vec<(usize, f64, Vec<Rgb>, Vec<Rgb>)> {
+    let dirs = dome_directions(dome.0, dome.1);
+    let mut jobs: Vec<(usize, f64, Case)> = Vec::new();
+    for k in 0..atmospheres.len() {
+        for &s in suns_deg {
+            jobs.extend(cases(s, &dirs).into_iter().map(|c| (k, s, c)));
+        }
+    }
+    let references: Vec<Reference> = atmospheres.iter().map(|a| Reference::new(*a, ReferenceSettings { paths, seed, ..Default::default() })).collect();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let results = std::sync::Mutex::new(vec![None; jobs.len()]);
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some((k, _, case)) = jobs.get(i) else { break };
+                let e = references[*k].estimate(case);
+                results.lock().unwrap_or_else(|p| p.into_inner())[i] = Some(e);
+                progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, jobs.len());
+            });
+        }
+    });
+    let results = results.into_inner().unwrap_or_else(|p| p.into_inner());
+    jobs.chunks(dirs.len().max(1))
+        .zip(results.chunks(dirs.len().max(1)))
+        .map(|(chunk, estimates)| {
+            let estimates: Vec<_> = estimates.iter().flatten().collect();
+            (chunk[0].0, chunk[0].1, estimates.iter().map(|e| e.all).collect(), estimates.iter().map(|e| e.std_err).collect())
+        })
+        .collect()
+}
+
+/// The benchmark's reference dataset as committed (assets/reference_dome.csv, embedded).
+pub fn committed_reference() -> Result<ReferenceDome, ReferenceDomeError> {
+    ReferenceDome::parse(include_str!("../../assets/reference_dome.csv"), "assets/reference_dome.csv", COMMITTED_PATHS, BENCH_DOME)
+}
+
+/// Monte Carlo paths per direction of the committed reference dataset.
+pub const COMMITTED_PATHS: u32 = 1024;
+
+/// Seed of the benchmark's reference (fixed: the dataset is reproducible).
+pub const REFERENCE_SEED: u64 = 0x5eed;
+
+impl ReferenceDome {
+    /// Header line naming everything the values depend on; a cache with another header is stale.
+    pub fn header(paths: u32, dome: (usize, usize)) -> String {
+        let atmospheres: Vec<String> = Haze::ALL.iter().map(|h| format!("{}={:?}", h.name(), h.atmosphere())).collect();
+        format!(
+            "skytune reference dome v1: paths={paths} seed={REFERENCE_SEED} dome={}x{} camera_km={CAMERA_KM} albedo={ALBEDO} settings={:?} atmospheres=[{}]",
+            dome.0,
+            dome.1,
+            ReferenceSettings { paths, seed: REFERENCE_SEED, ..Default::default() },
+            atmospheres.join("; ")
+        )
+    }
+
+    /// Computes the reference for every (haze, sun) pair on every core; `progress(done, total)`
+    /// is called from the workers after each direction.
+    pub fn compute(hazes: &[Haze], suns_deg: &[f64], dome: (usize, usize), paths: u32, progress: &(dyn Fn(usize, usize) + Sync)) -> Self {
+        let atmospheres: Vec<Atmosphere> = hazes.iter().map(|h| h.atmosphere()).collect();
+        let domes = compute_domes(&atmospheres, suns_deg, dome, paths, REFERENCE_SEED, progress);
+        let suns = domes.into_iter().map(|(k, sun_elev_deg, radiance, std_err)| ReferenceSun { haze: hazes[k], sun_elev_deg, radiance, std_err }).collect();
+        Self { paths, dome, suns }
+    }
+
+    /// The dome for an atmosphere and sun elevation, if computed.
+    pub fn sun(&self, haze: Haze, sun_elev_deg: f64) -> Option<&ReferenceSun> {
+        self.suns.iter().find(|s| s.haze == haze && s.sun_elev_deg == sun_elev_deg)
+    }
+
+    /// Writes the dataset as CSV with its header.
+    pub fn save(&self, path: &Path) -> Result<(), ReferenceDomeError> {
+        let mut text = format!("# {}\nhaze,sun_elev_deg,view_elev_deg,rel_azimuth_deg,r,g,b,r_err,g_err,b_err\n", Self::header(self.paths, self.dome));
+        let dirs = dome_directions(self.dome.0, self.dome.1);
+        for s in &self.suns {
+            for ((d, l), e) in dirs.iter().zip(&s.radiance).zip(&s.std_err) {
+                let _ = writeln!(
+                    text,
+                    "{},{},{:.4},{:.4},{:.6e},{:.6e},{:.6e},{:.3e},{:.3e},{:.3e}",
+                    s.haze.name(),
+                    s.sun_elev_deg,
+                    d.elev_deg,
+                    d.rel_az_deg,
+                    l[0],
+                    l[1],
+                    l[2],
+                    e[0],
+                    e[1],
+                    e[2]
+                );
+            }
+        }
+        crate::fsx::write_atomic(path, text.as_bytes()).map_err(|e| ReferenceDomeError::Io { file: path.display().to_string(), source: e.source })
+    }
+
+    /// Reads a dataset written by [`Self::save`] for these settings.
+    pub fn load(path: &Path, paths: u32, dome: (usize, usize)) -> Result<Self, ReferenceDomeError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| ReferenceDomeError::Io { file: file.clone(), source })?;
+        Self::parse(&text, &file, paths, dome)
+    }
+
+    /// Parses [`Self::save`]'s format.
+    pub fn parse(text: &str, file: &str, paths: u32, dome: (usize, usize)) -> Result<Self, ReferenceDomeError> {
+        let bad = |line: usize, message: String| ReferenceDomeError::Format { file: file.into(), line, message };
+        let mut lines = text.lines().enumerate();
+        let expected = format!("# {}", Self::header(paths, dome));
+        match lines.next() {
+            Some((_, h)) if h == expected => {}
+            _ => return Err(bad(1, "written for other settings or atmospheres (header differs); recompute it".into())),
+        }
+        lines.next();
+        let n = dome.0 * dome.1;
+        let mut suns: Vec<ReferenceSun> = Vec::new();
+        for (i, line) in lines {
+            let f: Vec<&str> = line.split(',').collect();
+            if f.len() != 10 {
+                return Err(bad(i + 1, format!("expected 10 columns, found {}", f.len())));
+            }
+            let haze = Haze::from_name(f[0]).ok_or_else(|| bad(i + 1, format!("haze: unknown atmosphere \"{}\"", f[0])))?;
+            let num = |k: usize| f[k].trim().parse::<f64>().map_err(|e| bad(i + 1, format!("column {}: {e}", k + 1)));
+            let sun = num(1)?;
+            let l = [num(4)?, num(5)?, num(6)?];
+            let e = [num(7)?, num(8)?, num(9)?];
+            match suns.last_mut() {
+                Some(s) if s.haze == haze && s.sun_elev_deg == sun && s.radiance.len() < n => {
+                    s.radiance.push(l);
+                    s.std_err.push(e);
+                }
+                _ => suns.push(ReferenceSun { haze, sun_elev_deg: sun, radiance: vec![l], std_err: vec![e] }),
+            }
+        }
+        if let Some(s) = suns.iter().find(|s| s.radiance.len() != n) {
+            return Err(bad(0, format!("{} at sun {} has {} directions, expected {n}", s.haze.name(), s.sun_elev_deg, s.radiance.len())));
+        }
+        Ok(Self { paths, dome, suns })
+    }
+}

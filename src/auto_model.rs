@@ -1,0 +1,261 @@
+//! `kind = "auto"` in `[sky_model]`: the cheapest model and setting whose error against the
+//! reference, over the sky's own range of sun elevations and weathers, stays within the budget.
+//!
+//! - Candidates: the benchmark's points a sky file can select ([`Method::is_runtime_model`]),
+//!   ranked by the frame cost of the committed benchmark (docs/models.csv, embedded), ties by id:
+//!   the same inputs give the same pick on any machine.
+//! - Error: for each weather step's atmosphere and each sun elevation of the benchmark that the
+//!   sky's sun reaches (plus the one on either side of its range), the mean CIE dE2000 over the
+//!   benchmark's dome at its fixed exposure; a candidate's error is the worst of these. Analytic
+//!   models are measured as they render: their own units, the turbidity fitted to the atmosphere.
+//! - Reference: the committed dataset for the benchmark's atmospheres, else computed once (256
+//!   paths) and cached on disk per atmosphere, as are picks, so loading stays fast.
+
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+use crate::atmosphere::dome::{self, DomeDir, Haze};
+use crate::atmosphere::{Atmosphere, Rgb};
+use crate::modelbench::{self, Evaluator, FitTarget, Method, Prepared};
+use crate::sky::resolved::{SkyModel, SkyModelKind};
+use crate::sky::Sky;
+
+/// An error budget (`budget = { de2000 = 2.0 }`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Budget {
+    /// Largest mean CIE dE2000 over the dome, at any of the sky's sun elevations and weathers.
+    pub de2000: f64,
+}
+
+/// A candidate with its measured error and cost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scored {
+    /// Point id (`lut-small`).
+    pub id: String,
+    /// The model and settings.
+    pub method: Method,
+    /// Turbidity fitted per weather step (analytic models; the first is used).
+    pub turbidity: f64,
+    /// Worst mean dE2000 over the sky's conditions.
+    pub de2000: f64,
+    /// Frame cost in the committed benchmark, ms.
+    pub cost_ms: f64,
+}
+
+/// What `auto` picked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pick {
+    /// The cheapest candidate within the budget (or the most accurate when none is).
+    pub chosen: Scored,
+    /// The next cheapest candidate within the budget.
+    pub runner_up: Option<Scored>,
+    /// Whether the chosen one meets the budget.
+    pub within_budget: bool,
+    /// The budget.
+    pub budget: Budget,
+    /// Sun elevations measured, degrees.
+    pub suns_deg: Vec<f64>,
+}
+
+impl Pick {
+    /// One line for `skytune check` and the app.
+    pub fn describe(&self) -> String {
+        let c = &self.chosen;
+        let runner = self.runner_up.as_ref().map_or_else(|| "none".to_string(), |r| format!("{} (dE2000 {:.2}, {:.1} ms)", r.id, r.de2000, r.cost_ms));
+        format!(
+            "auto model: {} (dE2000 {:.2} {} budget {:.2}, {:.1} ms per frame in the committed benchmark); runner-up {runner}",
+            c.id,
+            c.de2000,
+            if self.within_budget { "within" } else { "OVER" },
+            self.budget.de2000,
+            c.cost_ms
+        )
+    }
+
+    /// The sky model the pick stands for, from `base` (exposure, tone mapper, ...).
+    pub fn model(&self, base: &SkyModel) -> SkyModel {
+        let c = &self.chosen;
+        match c.method {
+            Method::Single(s) => SkyModel { kind: SkyModelKind::Single, single: s, ..*base },
+            Method::Lut(s) => SkyModel { kind: SkyModelKind::Lut, lut: s, ..*base },
+            Method::Cells(i) => SkyModel { kind: SkyModelKind::Cells, cell_iterations: i as u32, ..*base },
+            Method::Preetham => SkyModel { kind: SkyModelKind::Preetham, turbidity: c.turbidity as f32, ..*base },
+            Method::Hosek => SkyModel { kind: SkyModelKind::Hosek, turbidity: c.turbidity as f32, ..*base },
+            _ => *base,
+        }
+    }
+}
+
+/// The candidates with their committed costs, cheapest first (ties by id).
+pub fn candidates() -> Vec<(modelbench::Point, f64)> {
+    let costs: HashMap<String, f64> = modelbench::rows_from_csv(modelbench::COMMITTED_CSV).unwrap_or_default().into_iter().map(|r| (r.id.clone(), r.frame_ms())).collect();
+    let mut out: Vec<(modelbench::Point, f64)> =
+        modelbench::points().into_iter().filter(|p| p.method.is_runtime_model()).filter_map(|p| costs.get(&p.id).copied().map(|c| (p, c))).collect();
+    out.sort_by(|a, b| a.1.total_cmp(&b.1).then_with(|| a.0.id.cmp(&b.0.id)));
+    out
+}
+
+/// The benchmark's sun elevations the sky needs: those within the range its sun reaches over a
+/// day, and one on either side.
+pub fn sky_suns(sky: &Sky) -> Vec<f64> {
+    let steps = 96;
+    let elevations: Vec<f64> = (0..steps).map(|k| sky.path_at(sky.sun_path, k as f32 / steps as f32 * sky.hours_per_day).0.y.clamp(-1.0, 1.0).asin().to_degrees() as f64).collect();
+    let lo = elevations.iter().cloned().fold(f64::MAX, f64::min);
+    let hi = elevations.iter().cloned().fold(f64::MIN, f64::max);
+    let table = &dome::SUN_ELEVATIONS_DEG;
+    let first = table.iter().rposition(|s| *s <= lo).unwrap_or(0);
+    let last = table.iter().position(|s| *s >= hi).unwrap_or(table.len() - 1);
+    table[first..=last].to_vec()
+}
+
+/// The atmospheres of the sky's weather steps (one when it has no weather table).
+pub fn sky_atmospheres(sky: &Sky) -> Vec<Atmosphere> {
+    if sky.atmosphere_by_weather.is_empty() {
+        vec![sky.atmosphere]
+    } else {
+        sky.atmosphere_by_weather.clone()
+    }
+}
+
+/// Where computed references and picks are cached ($XDG_CACHE_HOME/skytune, ~/.cache/skytune).
+fn cache_dir() -> Option<PathBuf> {
+    std::env::var_os("XDG_CACHE_HOME").map(PathBuf::from).or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache"))).map(|d| d.join("skytune"))
+}
+
+fn hash_of(x: &impl std::fmt::Debug) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    format!("{x:?}").hash(&mut h);
+    h.finish()
+}
+
+/// Paths per direction of references computed for atmospheres outside the benchmark.
+pub const CUSTOM_REFERENCE_PATHS: u32 = 256;
+
+/// The reference over the benchmark's dome for `atm` at `suns`: the committed dataset when `atm`
+/// is one of the benchmark's atmospheres, else computed (and cached on disk).
+pub fn reference_for(atm: &Atmosphere, suns: &[f64]) -> anyhow::Result<Vec<Vec<Rgb>>> {
+    if let Some(haze) = Haze::of(atm) {
+        let committed = dome::committed_reference()?;
+        return suns.iter().map(|s| committed.sun(haze, *s).map(|r| r.radiance.clone()).ok_or_else(|| anyhow::anyhow!("the committed reference lacks sun {s}"))).collect();
+    }
+    let key = hash_of(&(atm, suns, CUSTOM_REFERENCE_PATHS, dome::BENCH_DOME));
+    let file = cache_dir().map(|d| d.join(format!("reference-{key:016x}.csv")));
+    if let Some(text) = file.as_ref().and_then(|f| std::fs::read_to_string(f).ok()) {
+        let rows: Vec<Vec<Rgb>> = text.lines().map(|l| l.split(';').map(|v| parse_rgb(v).unwrap_or([f64::NAN; 3])).collect()).collect();
+        if rows.len() == suns.len() && rows.iter().flatten().flatten().all(|v| v.is_finite()) {
+            return Ok(rows);
+        }
+    }
+    log::info!("auto model: computing the reference for this atmosphere at {} sun elevations (once; cached)", suns.len());
+    let domes = dome::compute_domes(&[*atm], suns, dome::BENCH_DOME, CUSTOM_REFERENCE_PATHS, dome::REFERENCE_SEED, &|_, _| {});
+    let rows: Vec<Vec<Rgb>> = domes.into_iter().map(|d| d.2).collect();
+    if let Some(f) = file {
+        let text: String = rows.iter().map(|r| r.iter().map(|c| format!("{:e},{:e},{:e}", c[0], c[1], c[2])).collect::<Vec<_>>().join(";") + "\n").collect();
+        if let Some(dir) = f.parent() {
+            let _ = std::fs::create_dir_all(dir);
+        }
+        if let Err(e) = crate::fsx::write_atomic(&f, text.as_bytes()) {
+            log::warn!("auto model: cannot cache the reference: {e}");
+        }
+    }
+    Ok(rows)
+}
+
+fn parse_rgb(s: &str) -> Option<Rgb> {
+    let v: Vec<f64> = s.split(',').filter_map(|x| x.trim().parse().ok()).collect();
+    (v.len() == 3).then(|| [v[0], v[1], v[2]])
+}
+
+/// Picks a model for `sky` within `budget`, measuring every candidate on `ev`.
+pub fn pick(sky: &Sky, budget: Budget, ev: &Evaluator<'_>) -> anyhow::Result<Pick> {
+    let suns = sky_suns(sky);
+    let atmospheres = sky_atmospheres(sky);
+    let dirs: Vec<DomeDir> = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
+    let references: Vec<Vec<Vec<Rgb>>> = atmospheres.iter().map(|a| reference_for(a, &suns)).collect::<anyhow::Result<_>>()?;
+    let mut scored = Vec::new();
+    for (point, cost_ms) in candidates() {
+        let mut worst = 0.0f64;
+        let mut turbidity = 0.0;
+        for (w, (atm, refs)) in atmospheres.iter().zip(&references).enumerate() {
+            let targets: Vec<FitTarget<'_>> = suns.iter().zip(refs).map(|(s, r)| FitTarget { sun_elev_deg: *s, dirs: &dirs, radiance: r }).collect();
+            // Analytic models render in their own units: fit the turbidity only (scale 1).
+            let prepared = match point.method {
+                Method::Preetham | Method::Hosek => {
+                    let t = ev.fit_turbidity_unscaled(&point.method, &targets)?;
+                    if w == 0 {
+                        turbidity = t;
+                    }
+                    Prepared::Analytic(point.method, modelbench::Fit { turbidity: t, scale: 1.0 })
+                }
+                m => ev.prepare(&m, atm, &targets)?,
+            };
+            for (s, r) in suns.iter().zip(refs) {
+                let model = ev.radiance(&prepared, atm, *s, &dome::cases(*s, &dirs))?;
+                worst = worst.max(dome::dome_error(&dirs, r, &model).de_mean);
+            }
+        }
+        scored.push(Scored { id: point.id.clone(), method: point.method, turbidity, de2000: worst, cost_ms });
+    }
+    anyhow::ensure!(!scored.is_empty(), "no candidate model has a cost in the committed benchmark (docs/models.csv)");
+    let mut within = scored.iter().filter(|s| s.de2000 <= budget.de2000);
+    let (chosen, runner_up, within_budget) = match within.next() {
+        Some(first) => (first.clone(), within.next().cloned(), true),
+        None => {
+            let best = scored.iter().min_by(|a, b| a.de2000.total_cmp(&b.de2000).then(a.cost_ms.total_cmp(&b.cost_ms))).cloned().expect("not empty");
+            (best, None, false)
+        }
+    };
+    Ok(Pick { chosen, runner_up, within_budget, budget, suns_deg: suns })
+}
+
+/// Picks already made in this process, by everything a pick depends on.
+static PICKS: Mutex<Vec<(u64, Pick)>> = Mutex::new(Vec::new());
+
+/// The pick for `sky` within `budget`: from this process's cache, the disk cache, or measured.
+pub fn pick_cached(sky: &Sky, budget: Budget, ev_or_ctx: &crate::render::GpuContext) -> anyhow::Result<Pick> {
+    let key = hash_of(&(sky_atmospheres(sky), sky_suns(sky), budget, modelbench::COMMITTED_CSV.len(), hash_of(&modelbench::COMMITTED_CSV)));
+    if let Some((_, p)) = PICKS.lock().unwrap_or_else(|p| p.into_inner()).iter().find(|(k, _)| *k == key) {
+        return Ok(p.clone());
+    }
+    let file = cache_dir().map(|d| d.join(format!("auto-{key:016x}.txt")));
+    let points = modelbench::points();
+    let from_disk = file.as_ref().and_then(|f| std::fs::read_to_string(f).ok()).and_then(|text| {
+        let lines: Vec<&str> = text.lines().collect();
+        let scored = |line: &str| -> Option<Scored> {
+            let f: Vec<&str> = line.split(',').collect();
+            let id = *f.first()?;
+            let point = points.iter().find(|p| p.id == id)?;
+            Some(Scored { id: point.id.clone(), method: point.method, turbidity: f.get(1)?.parse().ok()?, de2000: f.get(2)?.parse().ok()?, cost_ms: f.get(3)?.parse().ok()? })
+        };
+        Some(Pick { chosen: scored(lines.first()?)?, runner_up: lines.get(1).and_then(|l| scored(l)), within_budget: lines.get(2)? == &"within", budget, suns_deg: sky_suns(sky) })
+    });
+    let pick = match from_disk {
+        Some(p) => p,
+        None => {
+            let ev = Evaluator::new(ev_or_ctx)?;
+            let p = pick(sky, budget, &ev)?;
+            if let Some(f) = &file {
+                let line = |s: &Scored| format!("{},{},{},{}", s.id, s.turbidity, s.de2000, s.cost_ms);
+                let text = format!("{}\n{}\n{}\n", line(&p.chosen), p.runner_up.as_ref().map_or_else(|| "-".into(), line), if p.within_budget { "within" } else { "over" });
+                if let Some(dir) = f.parent() {
+                    let _ = std::fs::create_dir_all(dir);
+                }
+                let _ = crate::fsx::write_atomic(f, text.as_bytes());
+            }
+            p
+        }
+    };
+    PICKS.lock().unwrap_or_else(|p| p.into_inner()).push((key, pick.clone()));
+    Ok(pick)
+}
+
+/// Resolves `kind = "auto"`: replaces the sky's model with the pick. Returns the pick, or `None`
+/// for skies that name their model.
+pub fn resolve(sky: &mut Sky, ctx: &crate::render::GpuContext) -> anyhow::Result<Option<Pick>> {
+    let Some(budget) = sky.auto_model else { return Ok(None) };
+    let p = pick_cached(sky, budget, ctx)?;
+    sky.model = p.model(&sky.model);
+    Ok(Some(p))
+}

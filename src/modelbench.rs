@@ -1,0 +1,428 @@
+//! The points of the speed-against-accuracy chart: every sky model at several quality settings,
+//! and cheap representations of a model, each evaluated over the measurement dome
+//! ([`crate::atmosphere::dome`]). Used by `skytune bench models`, `skytune bake`, the stability
+//! sweep and `model = "auto"`.
+//!
+//! GPU models are evaluated where they ship, through the radiance probe; CPU models and
+//! representations on the CPU.
+
+use crate::atmosphere::analytic::{self, AnalyticModel, LinearParams};
+use crate::atmosphere::cells::{CellModel, CellSettings};
+use crate::atmosphere::dome::{self, DomeDir};
+use crate::atmosphere::reference::Case;
+use crate::atmosphere::represent::{self, Baked, DomeMapTable, Regression};
+use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, Rgb, SingleSettings};
+use crate::render::radiance_probe::RadianceProbe;
+use crate::render::{GpuContext, ShaderLibrary};
+
+/// A model and its quality settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Method {
+    /// `single` on the GPU.
+    Single(SingleSettings),
+    /// `lut` on the GPU.
+    Lut(LutSettings),
+    /// `cells` on the CPU with this many iterations.
+    Cells(usize),
+    /// `preetham` (turbidity and scale fitted per atmosphere).
+    Preetham,
+    /// `hosek` (turbidity and scale fitted per atmosphere).
+    Hosek,
+    /// `linear`, Braun and Cohen (scale fitted per atmosphere; its colours decoded from sRGB).
+    Linear,
+    /// The sky-dome map of the default `lut` model, `res` texels a side, 16 sun elevations.
+    DomeMap(usize),
+    /// The sky-dome regression of the default `lut` model.
+    Regression,
+    /// NeL bitmaps baked from the default `lut` model, this many gradient rows.
+    Baked(usize),
+}
+
+impl Method {
+    /// The model's name in the sky file.
+    pub fn model_name(&self) -> &'static str {
+        match self {
+            Method::Single(_) => "single",
+            Method::Lut(_) => "lut",
+            Method::Cells(_) => "cells",
+            Method::Preetham => "preetham",
+            Method::Hosek => "hosek",
+            Method::Linear => "linear",
+            Method::DomeMap(_) => "dome-map",
+            Method::Regression => "regression",
+            Method::Baked(_) => "baked",
+        }
+    }
+
+    /// Whether the sky file can select it (`model = "auto"` picks among these).
+    pub fn is_runtime_model(&self) -> bool {
+        matches!(self, Method::Single(_) | Method::Lut(_) | Method::Cells(_) | Method::Preetham | Method::Hosek)
+    }
+}
+
+/// One point of the chart.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    /// Label on the chart and key in the CSV (`single-erf-16`).
+    pub id: String,
+    /// What it evaluates.
+    pub method: Method,
+    /// Part of the quick benchmark (CI).
+    pub quick: bool,
+}
+
+/// Every point of the benchmark.
+pub fn points() -> Vec<Point> {
+    let p = |id: &str, method: Method, quick: bool| Point { id: id.into(), method, quick };
+    let single = |view_steps: u32, sun_steps: u32, optical_depth| Method::Single(SingleSettings { view_steps, sun_steps, optical_depth });
+    let lut = LutSettings::default();
+    vec![
+        p("single-erf-8", single(8, 16, OpticalDepth::Erf), false),
+        p("single-erf-16", single(16, 16, OpticalDepth::Erf), true),
+        p("single-erf-32", single(32, 16, OpticalDepth::Erf), true),
+        p("single-erf-64", single(64, 16, OpticalDepth::Erf), false),
+        p("single-numerical-32x16", single(32, 16, OpticalDepth::Numerical), false),
+        p("single-numerical-128x128", single(128, 128, OpticalDepth::Numerical), false),
+        p(
+            "lut-small",
+            Method::Lut(LutSettings {
+                transmittance_size: [64, 16],
+                transmittance_steps: 20,
+                multiscattering_size: 16,
+                multiscattering_grid: 4,
+                multiscattering_steps: 10,
+                view_steps: 16,
+            }),
+            true,
+        ),
+        p("lut-default", Method::Lut(lut), true),
+        p(
+            "lut-large",
+            Method::Lut(LutSettings {
+                transmittance_size: [512, 128],
+                transmittance_steps: 80,
+                multiscattering_size: 64,
+                multiscattering_grid: 8,
+                multiscattering_steps: 40,
+                view_steps: 64,
+            }),
+            false,
+        ),
+        p("cells-0", Method::Cells(0), false),
+        p("cells-2", Method::Cells(2), false),
+        p("cells-6", Method::Cells(6), false),
+        p("preetham", Method::Preetham, true),
+        p("hosek", Method::Hosek, true),
+        p("linear", Method::Linear, true),
+        p("dome-map-8", Method::DomeMap(8), false),
+        p("dome-map-24", Method::DomeMap(24), true),
+        p("dome-map-48", Method::DomeMap(48), false),
+        p("regression", Method::Regression, true),
+        p("baked-8", Method::Baked(8), false),
+        p("baked-32", Method::Baked(32), true),
+        p("baked-128", Method::Baked(128), false),
+    ]
+}
+
+/// Turbidity and radiance scale of an analytic model fitted to the reference.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fit {
+    /// Turbidity (none for `linear`).
+    pub turbidity: f64,
+    /// Factor applied to the model's radiance.
+    pub scale: f64,
+}
+
+/// Turbidities the fit tries (Preetham's clamp is 1.7; Hosek's data starts at 1).
+const TURBIDITIES: [f64; 12] = [1.0, 1.3, 1.7, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0, 6.0, 8.0, 10.0];
+
+/// A point made ready for one atmosphere: tables built, fits done.
+pub enum Prepared {
+    /// Evaluated on the GPU per case.
+    Gpu(Method),
+    /// An analytic model with its fit.
+    Analytic(Method, Fit),
+    /// The cell model, solved.
+    Cells(Box<CellModel>),
+    /// A sky-dome map table.
+    DomeMap(DomeMapTable),
+    /// A regression.
+    Regression(Regression),
+    /// Baked bitmaps (one weather step).
+    Baked(Baked),
+}
+
+/// The reference over a dome at one sun elevation: what analytic fits are fitted against.
+pub struct FitTarget<'a> {
+    /// Sun elevation, degrees.
+    pub sun_elev_deg: f64,
+    /// Directions.
+    pub dirs: &'a [DomeDir],
+    /// The reference's radiance per direction.
+    pub radiance: &'a [Rgb],
+}
+
+/// Evaluates points on one GPU.
+pub struct Evaluator<'a> {
+    ctx: &'a GpuContext,
+    probe: RadianceProbe,
+}
+
+impl<'a> Evaluator<'a> {
+    /// The probe's pipelines on `ctx`.
+    pub fn new(ctx: &'a GpuContext) -> anyhow::Result<Self> {
+        Ok(Self { ctx, probe: RadianceProbe::new(ctx, &ShaderLibrary::embedded())? })
+    }
+
+    /// The GPU context.
+    pub fn ctx(&self) -> &GpuContext {
+        self.ctx
+    }
+
+    /// Radiance of a GPU or analytic method (unfitted: the model's own units) for `cases`.
+    pub fn gpu(&self, method: &Method, atm: &Atmosphere, turbidity: f64, cases: &[Case]) -> anyhow::Result<Vec<Rgb>> {
+        let widen = |v: Vec<[f32; 3]>| v.into_iter().map(|c| c.map(f64::from)).collect();
+        Ok(match *method {
+            Method::Single(s) => widen(self.probe.single(self.ctx, atm, &s, cases)?),
+            Method::Lut(s) => widen(self.probe.lut(self.ctx, atm, &s, cases)?),
+            Method::Preetham => widen(self.probe.analytic(self.ctx, cases, |_| AnalyticModel::Preetham { turbidity })?),
+            Method::Hosek => widen(self.probe.analytic(self.ctx, cases, |c| AnalyticModel::Hosek { turbidity, albedo: c.albedo })?),
+            Method::Linear => {
+                let v: Vec<Rgb> = widen(self.probe.analytic(self.ctx, cases, |_| AnalyticModel::Linear(LinearParams::default()))?);
+                v.into_iter().map(|c| c.map(dome::srgb_decode)).collect()
+            }
+            other => anyhow::bail!("{} is not evaluated on the GPU", other.model_name()),
+        })
+    }
+
+    /// Radiance of `models[i]` for `cases[i]` on the GPU (the models' own units).
+    pub fn analytic_each(&self, cases: &[Case], models: &[AnalyticModel]) -> anyhow::Result<Vec<Rgb>> {
+        Ok(self.probe.analytic_each(self.ctx, cases, models)?.into_iter().map(|c| c.map(f64::from)).collect())
+    }
+
+    /// Makes `method` ready for `atm`: fits analytic models against `targets`, builds tables
+    /// from the default `lut` model.
+    pub fn prepare(&self, method: &Method, atm: &Atmosphere, targets: &[FitTarget<'_>]) -> anyhow::Result<Prepared> {
+        let lut = Method::Lut(LutSettings::default());
+        let mut source = |sun: f64, cases: &[Case]| -> anyhow::Result<Vec<Rgb>> {
+            let _ = sun;
+            self.gpu(&lut, atm, 0.0, cases)
+        };
+        Ok(match *method {
+            Method::Single(_) | Method::Lut(_) => Prepared::Gpu(*method),
+            Method::Preetham | Method::Hosek | Method::Linear => Prepared::Analytic(*method, self.fit(method, targets)?),
+            Method::Cells(iterations) => Prepared::Cells(Box::new(CellModel::solve(*atm, dome::ALBEDO, CellSettings { iterations, ..Default::default() }))),
+            Method::DomeMap(res) => Prepared::DomeMap(DomeMapTable::build(res, &mut source)?),
+            Method::Regression => Prepared::Regression(Regression::build(&mut source)?),
+            Method::Baked(rows) => {
+                let hours: [f64; represent::BAKED_HOURS] = std::array::from_fn(|h| represent::equinox_elevation_deg(h as f64));
+                Prepared::Baked(Baked::build(rows, &hours, &mut [&mut source])?)
+            }
+        })
+    }
+
+    /// The turbidity and scale that bring an analytic model closest to the reference (least
+    /// squares of the relative error, every sun elevation of `targets` counting alike).
+    pub fn fit(&self, method: &Method, targets: &[FitTarget<'_>]) -> anyhow::Result<Fit> {
+        self.fit_with(method, targets, true)
+    }
+
+    /// The turbidity that brings an analytic model closest to the reference in mean dE2000 as it
+    /// renders (its own units, no scale).
+    pub fn fit_turbidity_unscaled(&self, method: &Method, targets: &[FitTarget<'_>]) -> anyhow::Result<f64> {
+        Ok(self.fit_with(method, targets, false)?.turbidity)
+    }
+
+    fn fit_with(&self, method: &Method, targets: &[FitTarget<'_>], scaled: bool) -> anyhow::Result<Fit> {
+        let turbidities: Vec<f64> = match method {
+            Method::Linear => vec![0.0],
+            // Below its clamp Preetham's fit is the clamp's: the same point under another name.
+            Method::Preetham => TURBIDITIES.into_iter().filter(|t| *t >= analytic::PREETHAM_MIN_TURBIDITY).collect(),
+            _ => TURBIDITIES.to_vec(),
+        };
+        let mut best: Option<(f64, Fit)> = None;
+        for turbidity in turbidities {
+            let mut values = Vec::new();
+            for t in targets {
+                values.push(self.gpu(method, &Atmosphere::default(), turbidity, &dome::cases(t.sun_elev_deg, t.dirs))?);
+            }
+            let (mut num, mut den) = (0.0, 0.0);
+            for (t, m) in targets.iter().zip(&values) {
+                let norm: f64 = t.dirs.iter().zip(t.radiance).map(|(d, r)| d.weight_sr * r.iter().map(|x| x * x).sum::<f64>()).sum::<f64>().max(1e-300);
+                for ((d, r), m) in t.dirs.iter().zip(t.radiance).zip(m) {
+                    for c in 0..3 {
+                        num += d.weight_sr * m[c] * r[c] / norm;
+                        den += d.weight_sr * m[c] * m[c] / norm;
+                    }
+                }
+            }
+            let scale = if !scaled {
+                1.0
+            } else if den > 0.0 {
+                num / den
+            } else {
+                1.0
+            };
+            let error: f64 = targets
+                .iter()
+                .zip(&values)
+                .map(|(t, m)| {
+                    let with_scale: Vec<Rgb> = m.iter().map(|x| x.map(|c| c * scale)).collect();
+                    let e = dome::dome_error(t.dirs, t.radiance, &with_scale);
+                    if scaled {
+                        e.rel_rmse_mean()
+                    } else {
+                        e.de_mean
+                    }
+                })
+                .sum();
+            if best.as_ref().is_none_or(|(e, _)| error < *e) {
+                best = Some((error, Fit { turbidity, scale }));
+            }
+        }
+        best.map(|b| b.1).ok_or_else(|| anyhow::anyhow!("no turbidity to fit"))
+    }
+
+    /// Radiance of a prepared point at one sun elevation (morning of the equinox day for the
+    /// baked bitmaps) over `cases`.
+    pub fn radiance(&self, prepared: &Prepared, atm: &Atmosphere, sun_elev_deg: f64, cases: &[Case]) -> anyhow::Result<Vec<Rgb>> {
+        let each = |f: &dyn Fn(&Case) -> Rgb| cases.iter().map(f).collect::<Vec<Rgb>>();
+        Ok(match prepared {
+            Prepared::Gpu(m) => self.gpu(m, atm, 0.0, cases)?,
+            Prepared::Analytic(m, fit) => self.gpu(m, atm, fit.turbidity, cases)?.into_iter().map(|c| c.map(|x| x * fit.scale)).collect(),
+            Prepared::Cells(model) => each(&|c| model.radiance(c)),
+            Prepared::DomeMap(t) => each(&|c| t.radiance(sun_elev_deg, c.view_elev_deg, c.rel_azimuth_deg)),
+            Prepared::Regression(r) => each(&|c| r.radiance(sun_elev_deg, c.view_elev_deg, c.rel_azimuth_deg)),
+            Prepared::Baked(b) => {
+                let hour = analytic::equinox_morning_hour(sun_elev_deg);
+                each(&|c| b.radiance(0, hour, sun_elev_deg, c.view_elev_deg, c.rel_azimuth_deg))
+            }
+        })
+    }
+}
+
+/// One point's figures: a row of docs/models.csv.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ChartRow {
+    /// Point id.
+    pub id: String,
+    /// Model name.
+    pub model: String,
+    /// Mean relative RMSE of red.
+    pub rel_rmse_r: f64,
+    /// Mean relative RMSE of green.
+    pub rel_rmse_g: f64,
+    /// Mean relative RMSE of blue.
+    pub rel_rmse_b: f64,
+    /// Mean PSNR of the display image, dB.
+    pub psnr_db: f64,
+    /// Mean dE2000.
+    pub de_mean: f64,
+    /// Mean of the 95th percentiles of dE2000.
+    pub de_p95: f64,
+    /// GPU ms of a frame of the skydome in which the sun moved.
+    pub gpu_frame_ms: f64,
+    /// CPU ms when the sun moves.
+    pub cpu_ms: f64,
+    /// One-off ms (tables, solving, fitting, baking).
+    pub build_ms: f64,
+    /// Fitted turbidity in the default atmosphere (analytic models).
+    pub fit_turbidity: Option<f64>,
+    /// Fitted radiance scale in the default atmosphere (analytic models).
+    pub fit_scale: Option<f64>,
+    /// On the Pareto front of (frame ms, mean dE2000).
+    pub pareto: bool,
+}
+
+impl ChartRow {
+    /// Mean relative RMSE per channel.
+    pub fn rel_rmse(&self) -> Rgb {
+        [self.rel_rmse_r, self.rel_rmse_g, self.rel_rmse_b]
+    }
+
+    /// Cost of a frame in which the sun moved, ms.
+    pub fn frame_ms(&self) -> f64 {
+        self.gpu_frame_ms + self.cpu_ms
+    }
+
+    /// The chart's error axis: mean dE2000.
+    pub fn error(&self) -> f64 {
+        self.de_mean
+    }
+}
+
+/// Marks the rows no other row beats in both frame cost and error.
+pub fn mark_pareto(rows: &mut [ChartRow]) {
+    let figures: Vec<(f64, f64)> = rows.iter().map(|r| (r.frame_ms(), r.error())).collect();
+    for (i, r) in rows.iter_mut().enumerate() {
+        let (c, e) = figures[i];
+        r.pareto = !figures.iter().enumerate().any(|(j, &(c2, e2))| j != i && c2 <= c && e2 <= e && (c2 < c || e2 < e));
+    }
+}
+
+/// docs/models.csv.
+pub fn rows_to_csv(rows: &[ChartRow]) -> String {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        let _ = w.serialize(r);
+    }
+    String::from_utf8_lossy(&w.into_inner().unwrap_or_default()).into_owned()
+}
+
+/// Reads docs/models.csv (as [`rows_to_csv`] writes it).
+pub fn rows_from_csv(text: &str) -> Result<Vec<ChartRow>, csv::Error> {
+    csv::Reader::from_reader(text.as_bytes()).deserialize().collect()
+}
+
+/// The last committed benchmark (docs/models.csv at build time): what the app charts and what
+/// `model = "auto"` ranks costs by.
+pub const COMMITTED_CSV: &str = include_str!("../docs/models.csv");
+
+/// One point's errors at one atmosphere and sun elevation: a row of docs/models-by-sun.csv.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SunRow {
+    /// Point id.
+    pub id: String,
+    /// Atmosphere name.
+    pub haze: String,
+    /// Sun elevation, degrees.
+    pub sun_elev_deg: f64,
+    /// Errors over the dome.
+    pub error: dome::DomeError,
+}
+
+/// docs/models-by-sun.csv.
+pub fn sun_rows_to_csv(rows: &[SunRow]) -> String {
+    let mut s = String::from("id,haze,sun_elev_deg,rel_rmse_r,rel_rmse_g,rel_rmse_b,psnr_db,de_mean,de_p95\n");
+    for r in rows {
+        let e = &r.error;
+        s.push_str(&format!(
+            "{},{},{},{:.5},{:.5},{:.5},{:.2},{:.4},{:.4}\n",
+            r.id, r.haze, r.sun_elev_deg, e.rel_rmse[0], e.rel_rmse[1], e.rel_rmse[2], e.psnr_db, e.de_mean, e.de_p95
+        ));
+    }
+    s
+}
+
+/// The benchmark point a sky model is, if it is one (settings equal), else the point of its model
+/// at default settings: where the app marks the current model on the chart.
+pub fn point_for(model: &crate::sky::resolved::SkyModel) -> Option<String> {
+    use crate::sky::resolved::SkyModelKind;
+    let all = points();
+    let exact = all.iter().find(|p| match p.method {
+        Method::Single(s) => model.kind == SkyModelKind::Single && model.single == s,
+        Method::Lut(s) => model.kind == SkyModelKind::Lut && model.lut == s,
+        Method::Cells(i) => model.kind == SkyModelKind::Cells && model.cell_iterations as usize == i,
+        Method::Preetham => model.kind == SkyModelKind::Preetham,
+        Method::Hosek => model.kind == SkyModelKind::Hosek,
+        Method::Linear => model.kind == SkyModelKind::Linear,
+        _ => false,
+    });
+    let default = match model.kind {
+        SkyModelKind::Single => Some("single-erf-32"),
+        SkyModelKind::Lut => Some("lut-default"),
+        SkyModelKind::Cells => Some("cells-6"),
+        _ => None,
+    };
+    exact.map(|p| p.id.clone()).or(default.map(String::from))
+}
