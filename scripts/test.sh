@@ -36,6 +36,10 @@ done
 ./target/debug/skytune render --size 320x180 --out "$out/builtin.png" >/dev/null
 echo "smoke: $count sky files rendered at 4 (hour, weather) pairs each, plus the built-in sky"
 
+echo "models: the quick speed-against-accuracy benchmark and a stability sweep (docs/models.md, docs/stability.md)"
+./target/debug/skytune bench models --quick --frames 3 --out "$out/models" >/dev/null
+./target/debug/skytune sweep --count 2000 --out "$out/stability.md" >/dev/null
+
 echo "soak: 1000 frames of random changes, sky reloads (good and broken) and shader rebuilds"
 ./target/debug/skytune soak --frames 1000 --size 96x54 --warm-up-frames 500 --max-rss-growth-percent 10 --report "$out/reliability.md" >/dev/null
 

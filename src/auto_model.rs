@@ -168,8 +168,8 @@ fn parse_rgb(s: &str) -> Option<Rgb> {
     (v.len() == 3).then(|| [v[0], v[1], v[2]])
 }
 
-/// Picks a model for `sky` within `budget`, measuring every candidate on `ev`.
-pub fn pick(sky: &Sky, budget: Budget, ev: &Evaluator<'_>) -> anyhow::Result<Pick> {
+/// Every candidate's worst error over the sky's conditions, measured on `ev`, cheapest first.
+pub fn score(sky: &Sky, ev: &Evaluator<'_>) -> anyhow::Result<Vec<Scored>> {
     let suns = sky_suns(sky);
     let atmospheres = sky_atmospheres(sky);
     let dirs: Vec<DomeDir> = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
@@ -199,56 +199,67 @@ pub fn pick(sky: &Sky, budget: Budget, ev: &Evaluator<'_>) -> anyhow::Result<Pic
         scored.push(Scored { id: point.id.clone(), method: point.method, turbidity, de2000: worst, cost_ms });
     }
     anyhow::ensure!(!scored.is_empty(), "no candidate model has a cost in the committed benchmark (docs/models.csv)");
+    Ok(scored)
+}
+
+/// The cheapest of `scored` (cheapest first) within `budget`, and the next one; the most accurate
+/// when none is within.
+pub fn choose(scored: &[Scored], budget: Budget, suns_deg: Vec<f64>) -> Pick {
     let mut within = scored.iter().filter(|s| s.de2000 <= budget.de2000);
     let (chosen, runner_up, within_budget) = match within.next() {
         Some(first) => (first.clone(), within.next().cloned(), true),
         None => {
-            let best = scored.iter().min_by(|a, b| a.de2000.total_cmp(&b.de2000).then(a.cost_ms.total_cmp(&b.cost_ms))).cloned().expect("not empty");
-            (best, None, false)
+            let best = scored.iter().min_by(|a, b| a.de2000.total_cmp(&b.de2000).then(a.cost_ms.total_cmp(&b.cost_ms)));
+            (best.cloned().unwrap_or_else(|| scored[0].clone()), None, false)
         }
     };
-    Ok(Pick { chosen, runner_up, within_budget, budget, suns_deg: suns })
+    Pick { chosen, runner_up, within_budget, budget, suns_deg }
 }
 
-/// Picks already made in this process, by everything a pick depends on.
-static PICKS: Mutex<Vec<(u64, Pick)>> = Mutex::new(Vec::new());
+/// Scores already measured in this process, by everything they depend on.
+static SCORES: Mutex<Vec<(u64, Vec<Scored>)>> = Mutex::new(Vec::new());
 
-/// The pick for `sky` within `budget`: from this process's cache, the disk cache, or measured.
-pub fn pick_cached(sky: &Sky, budget: Budget, ev_or_ctx: &crate::render::GpuContext) -> anyhow::Result<Pick> {
-    let key = hash_of(&(sky_atmospheres(sky), sky_suns(sky), budget, modelbench::COMMITTED_CSV.len(), hash_of(&modelbench::COMMITTED_CSV)));
-    if let Some((_, p)) = PICKS.lock().unwrap_or_else(|p| p.into_inner()).iter().find(|(k, _)| *k == key) {
-        return Ok(p.clone());
+/// Every candidate's score for `sky`: from this process's cache, the disk cache, or measured on `ctx`.
+pub fn score_cached(sky: &Sky, ctx: &crate::render::GpuContext) -> anyhow::Result<Vec<Scored>> {
+    let key = hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&modelbench::COMMITTED_CSV)));
+    if let Some((_, s)) = SCORES.lock().unwrap_or_else(|p| p.into_inner()).iter().find(|(k, _)| *k == key) {
+        return Ok(s.clone());
     }
-    let file = cache_dir().map(|d| d.join(format!("auto-{key:016x}.txt")));
+    let file = cache_dir().map(|d| d.join(format!("auto-{key:016x}.csv")));
     let points = modelbench::points();
-    let from_disk = file.as_ref().and_then(|f| std::fs::read_to_string(f).ok()).and_then(|text| {
-        let lines: Vec<&str> = text.lines().collect();
-        let scored = |line: &str| -> Option<Scored> {
-            let f: Vec<&str> = line.split(',').collect();
-            let id = *f.first()?;
-            let point = points.iter().find(|p| p.id == id)?;
-            Some(Scored { id: point.id.clone(), method: point.method, turbidity: f.get(1)?.parse().ok()?, de2000: f.get(2)?.parse().ok()?, cost_ms: f.get(3)?.parse().ok()? })
-        };
-        Some(Pick { chosen: scored(lines.first()?)?, runner_up: lines.get(1).and_then(|l| scored(l)), within_budget: lines.get(2)? == &"within", budget, suns_deg: sky_suns(sky) })
+    let from_disk: Option<Vec<Scored>> = file.as_ref().and_then(|f| std::fs::read_to_string(f).ok()).and_then(|text| {
+        text.lines()
+            .map(|line| {
+                let f: Vec<&str> = line.split(',').collect();
+                let id = *f.first()?;
+                let point = points.iter().find(|p| p.id == id)?;
+                Some(Scored { id: point.id.clone(), method: point.method, turbidity: f.get(1)?.parse().ok()?, de2000: f.get(2)?.parse().ok()?, cost_ms: f.get(3)?.parse().ok()? })
+            })
+            .collect()
     });
-    let pick = match from_disk {
-        Some(p) => p,
+    let scored = match from_disk.filter(|s| !s.is_empty()) {
+        Some(s) => s,
         None => {
-            let ev = Evaluator::new(ev_or_ctx)?;
-            let p = pick(sky, budget, &ev)?;
+            let s = score(sky, &Evaluator::new(ctx)?)?;
             if let Some(f) = &file {
-                let line = |s: &Scored| format!("{},{},{},{}", s.id, s.turbidity, s.de2000, s.cost_ms);
-                let text = format!("{}\n{}\n{}\n", line(&p.chosen), p.runner_up.as_ref().map_or_else(|| "-".into(), line), if p.within_budget { "within" } else { "over" });
+                let text: String = s.iter().map(|x| format!("{},{},{},{}\n", x.id, x.turbidity, x.de2000, x.cost_ms)).collect();
                 if let Some(dir) = f.parent() {
                     let _ = std::fs::create_dir_all(dir);
                 }
-                let _ = crate::fsx::write_atomic(f, text.as_bytes());
+                if let Err(e) = crate::fsx::write_atomic(f, text.as_bytes()) {
+                    log::warn!("auto model: cannot cache the scores: {e}");
+                }
             }
-            p
+            s
         }
     };
-    PICKS.lock().unwrap_or_else(|p| p.into_inner()).push((key, pick.clone()));
-    Ok(pick)
+    SCORES.lock().unwrap_or_else(|p| p.into_inner()).push((key, scored.clone()));
+    Ok(scored)
+}
+
+/// The pick for `sky` within `budget` (scores cached per atmospheres and sun range).
+pub fn pick_cached(sky: &Sky, budget: Budget, ctx: &crate::render::GpuContext) -> anyhow::Result<Pick> {
+    Ok(choose(&score_cached(sky, ctx)?, budget, sky_suns(sky)))
 }
 
 /// Resolves `kind = "auto"`: replaces the sky's model with the pick. Returns the pick, or `None`

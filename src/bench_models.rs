@@ -38,7 +38,11 @@ pub fn reference_dome(path: &Path, paths: u32) -> anyhow::Result<ReferenceDome> 
     match ReferenceDome::load(path, paths, dome::BENCH_DOME) {
         Ok(r) if r.suns.len() == Haze::ALL.len() * dome::SUN_ELEVATIONS_DEG.len() => return Ok(r),
         Ok(_) => log::warn!("{}: incomplete; recomputing", path.display()),
-        Err(e) => log::warn!("{e}; computing the reference dome (once, minutes)"),
+        Err(e) => match dome::committed_reference() {
+            // Run from elsewhere than the checkout: the dataset built into the binary.
+            Ok(r) if paths == dome::COMMITTED_PATHS => return Ok(r),
+            _ => log::warn!("{e}; computing the reference dome (once, minutes)"),
+        },
     }
     let bar = progress_bar(0, "reference");
     let reference = ReferenceDome::compute(&Haze::ALL, &dome::SUN_ELEVATIONS_DEG, dome::BENCH_DOME, paths, &|done, total| {

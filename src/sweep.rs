@@ -18,8 +18,7 @@ pub const JUMP_DELTA_DEG: f64 = 0.05;
 pub const JUMP_RELATIVE: f64 = 0.25;
 /// A jump's step is also this many times larger than the neighbouring step.
 pub const JUMP_STEP_RATIO: f64 = 4.0;
-/// A candidate's step is re-evaluated in this many sub-steps: it is a jump if one sub-step holds
-/// more than half of the change (a kink or a steep smooth change spreads over the sub-steps).
+/// A candidate's step is re-evaluated in this many sub-steps (see [`refined_is_jump`]).
 pub const JUMP_REFINE: usize = 8;
 /// Changes below this are not jumps, sr^-1 (a thousandth of a dark twilight sky).
 pub const JUMP_FLOOR_SR: f64 = 1e-7;
@@ -148,7 +147,7 @@ impl Counters {
 /// brightest channel plus [`JUMP_FLOOR_SR`], and by more than [`JUMP_STEP_RATIO`] times the other
 /// step (a steep but smooth change, as a twilight on a small planet, changes alike over both).
 /// Returns the channel and where its step starts relative to the middle sun elevation.
-fn jump_candidate(v: [Rgb; 3]) -> Option<(usize, f64)> {
+pub fn jump_candidate(v: [Rgb; 3]) -> Option<(usize, f64)> {
     if v.iter().flatten().any(|c| !c.is_finite()) {
         return None;
     }
@@ -158,6 +157,22 @@ fn jump_candidate(v: [Rgb; 3]) -> Option<(usize, f64)> {
         let (big, small) = (d1.max(d2), d1.min(d2));
         (big > JUMP_RELATIVE * brightest + JUMP_FLOOR_SR && big > JUMP_STEP_RATIO * small + JUMP_FLOOR_SR).then_some((c, if d1 >= d2 { -JUMP_DELTA_DEG } else { 0.0 }))
     })
+}
+
+/// Whether a candidate's step is a jump, from one channel re-evaluated at [`JUMP_REFINE`] + 3 evenly
+/// spaced sun elevations: one sub-step before the step, the step in [`JUMP_REFINE`] sub-steps, one
+/// after. A jump: one inner sub-step holds more than half of the step's change and is more than
+/// [`JUMP_STEP_RATIO`] times each of its neighbours (a kink, even at the step's end, continues into
+/// the neighbouring sub-step; a discontinuity does not).
+pub fn refined_is_jump(v: &[f64]) -> bool {
+    let n = v.len();
+    if n < 4 {
+        return false;
+    }
+    let step = |k: usize| (v[k + 1] - v[k]).abs();
+    let whole = (v[n - 2] - v[1]).abs();
+    let Some(k) = (1..n - 2).max_by(|a, b| step(*a).total_cmp(&step(*b))) else { return false };
+    step(k) > 0.5 * whole && step(k) > JUMP_STEP_RATIO * step(k - 1).max(step(k + 1))
 }
 
 /// A small deterministic generator (splitmix64), so a sweep is reproducible from its seed.
@@ -200,10 +215,14 @@ fn random_atmosphere(rng: &mut Rng) -> Atmosphere {
 pub fn random_cases(count: usize, per_atmosphere: usize, seed: u64) -> Vec<SweepCase> {
     let mut rng = Rng(seed);
     let mut out = Vec::with_capacity(count);
+    // The ground albedo goes with the atmosphere: the `lut` tables and the cell model are built
+    // per (atmosphere, albedo).
     let mut atmosphere = random_atmosphere(&mut rng);
+    let mut albedo = rng.next();
     for i in 0..count {
         if i % per_atmosphere.max(1) == 0 && i > 0 {
             atmosphere = random_atmosphere(&mut rng);
+            albedo = rng.next();
         }
         let top = atmosphere.thickness_km();
         let camera_km = match rng.next() {
@@ -213,7 +232,7 @@ pub fn random_cases(count: usize, per_atmosphere: usize, seed: u64) -> Vec<Sweep
         };
         let sun_elev_deg = if rng.next() < 0.5 { rng.range(-18.0, 90.0) } else { rng.range(-3.0, 3.0) };
         let view_elev_deg = if rng.next() < 0.5 { rng.range(-90.0, 90.0) } else { rng.range(-5.0, 5.0) };
-        let case = Case { camera_km, albedo: rng.next(), sun_elev_deg, view_elev_deg, rel_azimuth_deg: rng.range(0.0, 360.0) };
+        let case = Case { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg: rng.range(0.0, 360.0) };
         out.push(SweepCase { atmosphere, case, turbidity: rng.range(0.5, 15.0) });
     }
     out
@@ -233,8 +252,11 @@ pub fn sweep(ev: &Evaluator<'_>, model: SweptModel, count: usize, seed: u64, pro
     let mut counters = Counters::default();
     for batch in cases.chunks(per_atmosphere(model)) {
         let atm = batch[0].atmosphere;
+        // The cell model is solved once per atmosphere (and ground albedo of its first case).
+        let cells = (model == SweptModel::Cells).then(|| CellModel::solve(atm, batch[0].case.albedo, CellSettings::default()));
+        let evaluate = |cases: &[SweepCase]| evaluate(ev, model, cells.as_ref(), &atm, cases);
         let at = |d: f64| -> Vec<SweepCase> { batch.iter().map(|c| SweepCase { case: Case { sun_elev_deg: c.case.sun_elev_deg + d, ..c.case }, ..*c }).collect() };
-        let (a, b, c) = (evaluate(ev, model, &atm, &at(-JUMP_DELTA_DEG))?, evaluate(ev, model, &atm, batch)?, evaluate(ev, model, &atm, &at(JUMP_DELTA_DEG))?);
+        let (a, b, c) = (evaluate(&at(-JUMP_DELTA_DEG))?, evaluate(batch)?, evaluate(&at(JUMP_DELTA_DEG))?);
         let mut candidates = Vec::new();
         for (i, case) in batch.iter().enumerate() {
             match (a[i], b[i], c[i]) {
@@ -253,17 +275,15 @@ pub fn sweep(ev: &Evaluator<'_>, model: SweptModel, count: usize, seed: u64, pro
         // A candidate is a jump only if the change does not spread when the step is refined.
         let mut refined = Vec::new();
         for &(i, _, from_deg) in &candidates {
-            for k in 0..=JUMP_REFINE {
-                let sun = batch[i].case.sun_elev_deg + from_deg + JUMP_DELTA_DEG * k as f64 / JUMP_REFINE as f64;
+            for k in 0..JUMP_REFINE + 3 {
+                let sun = batch[i].case.sun_elev_deg + from_deg + JUMP_DELTA_DEG * (k as f64 - 1.0) / JUMP_REFINE as f64;
                 refined.push(SweepCase { case: Case { sun_elev_deg: sun, ..batch[i].case }, ..batch[i] });
             }
         }
-        let values = if refined.is_empty() { Vec::new() } else { evaluate(ev, model, &atm, &refined)? };
+        let values = if refined.is_empty() { Vec::new() } else { evaluate(&refined)? };
         for (n, &(i, channel, _)) in candidates.iter().enumerate() {
-            let v: Vec<f64> = values[n * (JUMP_REFINE + 1)..(n + 1) * (JUMP_REFINE + 1)].iter().map(|x| x.map_or(f64::NAN, |x| x[channel])).collect();
-            let whole = (v[JUMP_REFINE] - v[0]).abs();
-            let largest = v.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0, f64::max);
-            if largest > 0.5 * whole {
+            let v: Vec<f64> = values[n * (JUMP_REFINE + 3)..(n + 1) * (JUMP_REFINE + 3)].iter().map(|x| x.map_or(f64::NAN, |x| x[channel])).collect();
+            if refined_is_jump(&v) {
                 counters.discontinuous += 1;
                 counters
                     .note(format!("jump in channel {channel}: {:.4e} to {:.4e} within {:.4} degrees of sun", v[0], v[JUMP_REFINE], JUMP_DELTA_DEG / JUMP_REFINE as f64), &batch[i]);
@@ -275,7 +295,7 @@ pub fn sweep(ev: &Evaluator<'_>, model: SweptModel, count: usize, seed: u64, pro
 }
 
 /// One model over cases that share an atmosphere; `None` where the model refuses.
-fn evaluate(ev: &Evaluator<'_>, model: SweptModel, atm: &Atmosphere, cases: &[SweepCase]) -> anyhow::Result<Vec<Option<Rgb>>> {
+fn evaluate(ev: &Evaluator<'_>, model: SweptModel, cells: Option<&CellModel>, atm: &Atmosphere, cases: &[SweepCase]) -> anyhow::Result<Vec<Option<Rgb>>> {
     let plain: Vec<Case> = cases.iter().map(|c| c.case).collect();
     let some = |v: Vec<Rgb>| v.into_iter().map(Some).collect();
     let single = |optical_depth| Method::Single(SingleSettings { optical_depth, ..Default::default() });
@@ -286,7 +306,7 @@ fn evaluate(ev: &Evaluator<'_>, model: SweptModel, atm: &Atmosphere, cases: &[Sw
         SweptModel::SingleNumerical => some(ev.gpu(&single(OpticalDepth::Numerical), atm, 0.0, &plain)?),
         SweptModel::Lut => some(ev.gpu(&Method::Lut(LutSettings::default()), atm, 0.0, &plain)?),
         SweptModel::Cells => {
-            let m = CellModel::solve(*atm, cases[0].case.albedo, CellSettings::default());
+            let m = cells.ok_or_else(|| anyhow::anyhow!("the cell model was not solved"))?;
             plain.iter().map(|c| Some(m.radiance(c))).collect()
         }
         SweptModel::Preetham | SweptModel::Hosek | SweptModel::Linear => {

@@ -18,6 +18,8 @@
 //! - Sun below the horizon (neither model covers it): the sky of a sun on the horizon (same
 //!   azimuth), darkened by [`twilight_fade`] (a decade every 3 degrees: 1e-2 at -6 degrees, 1e-6
 //!   at -18), an artistic continuation, not a physical one.
+//! - Hosek-Wilkie's coefficients are evaluated no lower than [`HOSEK_MIN_ELEVATION_DEG`] (their
+//!   interpolation in the cube root of the elevation has an infinite slope at the horizon).
 //! - View rays below the horizon: the horizon's value (the Perez and Hosek formulas blow up or
 //!   mirror there).
 //! - Colours outside the Rec. 709 gamut (Preetham's chromaticities near the horizon) clamp at 0.

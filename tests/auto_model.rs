@@ -1,0 +1,115 @@
+//! `kind = "auto"`: the pick meets its budget on every committed sky, measured against the
+//! reference at the sky's own hours (not the table sun elevations the pick was made on, and a
+//! reference with another seed); a tighter budget never picks a cheaper model; picks are
+//! reproducible; the sky file's keys are checked.
+
+use skytune::atmosphere::dome;
+use skytune::atmosphere::reference::{Case, Reference, ReferenceSettings};
+use skytune::auto_model::{self, Budget};
+use skytune::modelbench::{Evaluator, Method, Prepared};
+use skytune::render::{AdapterChoice, GpuContext};
+use skytune::sky::Sky;
+
+fn committed_skies() -> Vec<Sky> {
+    let mut skies = vec![skytune::sky::builtin::default_sky()];
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("skies");
+    let mut paths: Vec<_> = std::fs::read_dir(&dir).expect("skies/").flatten().map(|e| e.path().join("sky.toml")).filter(|p| p.exists()).collect();
+    paths.sort();
+    for p in paths {
+        skies.push(skytune::sky::load_sky_file(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display())));
+    }
+    skies
+}
+
+#[test]
+fn auto_pick_meets_its_budget_against_the_reference_on_every_committed_sky() {
+    let ctx = GpuContext::headless(AdapterChoice::Cpu).expect("lavapipe");
+    let ev = Evaluator::new(&ctx).expect("probe");
+    let budget = Budget { de2000: 2.0 };
+    // An independent check: 4 x 6 directions offset from the benchmark's, another seed, the
+    // sky's own sun at hours of its day that are not the table's sun elevations, and enough paths
+    // that the reference's own noise (which adds to any error) stays small.
+    let dirs = dome::dome_directions(4, 6);
+    // Skies that share a sun path and an atmosphere share the reference's answers.
+    let mut truths: std::collections::HashMap<String, Vec<[f64; 3]>> = std::collections::HashMap::new();
+    for sky in committed_skies() {
+        let scored = auto_model::score(&sky, &ev).expect("scored");
+        let pick = auto_model::choose(&scored, budget, auto_model::sky_suns(&sky));
+        assert!(pick.within_budget, "{}: no model within {budget:?}: {scored:?}", sky.name);
+        let model = pick.model(&sky.model);
+        // Mid-morning, noon, and the sunset's hardest moment: the sun just above the horizon.
+        let sunset = (0..960)
+            .map(|k| sky.hours_per_day * (0.5 + k as f32 / 1920.0))
+            .find(|h| sky.path_at(sky.sun_path, *h).0.y.asin().to_degrees() < 1.0)
+            .unwrap_or(sky.hours_per_day * 0.75);
+        let hours = [sky.hours_per_day * 0.3, sky.hours_per_day * 0.5, sunset];
+        for (w, atm) in auto_model::sky_atmospheres(&sky).iter().enumerate() {
+            let reference = Reference::new(*atm, ReferenceSettings { paths: 2048, seed: 0xbeef + w as u64, ..Default::default() });
+            let prepared = match pick.chosen.method {
+                Method::Preetham | Method::Hosek => Prepared::Analytic(pick.chosen.method, skytune::modelbench::Fit { turbidity: model.turbidity as f64, scale: 1.0 }),
+                m => ev.prepare(&m, atm, &[]).expect("prepared"),
+            };
+            for &hour in &hours {
+                let sun = sky.path_at(sky.sun_path, hour).0.y.clamp(-1.0, 1.0).asin().to_degrees() as f64;
+                let cases: Vec<Case> = dome::cases(sun, &dirs);
+                let truth = truths.entry(format!("{atm:?} {sun:.6}")).or_insert_with(|| cases.iter().map(|c| reference.radiance(c)).collect()).clone();
+                let got = ev.radiance(&prepared, atm, sun, &cases).expect("evaluated");
+                let e = dome::dome_error(&dirs, &truth, &got);
+                eprintln!("{}: {} at hour {hour:.2} (sun {sun:.1} deg): dE2000 {:.2}", sky.name, pick.chosen.id, e.de_mean);
+                assert!(e.de_mean <= budget.de2000, "{}: {} at hour {hour} (sun {sun:.1} deg): dE2000 {:.2} over the budget", sky.name, pick.chosen.id, e.de_mean);
+            }
+        }
+    }
+}
+
+#[test]
+fn tighter_budgets_never_pick_cheaper_models_and_picks_are_reproducible() {
+    let ctx = GpuContext::headless(AdapterChoice::Cpu).expect("lavapipe");
+    let ev = Evaluator::new(&ctx).expect("probe");
+    let sky = skytune::sky::builtin::default_sky();
+    let scored = auto_model::score(&sky, &ev).expect("scored");
+    assert_eq!(scored, auto_model::score(&sky, &ev).expect("scored again"), "same inputs, same scores");
+    assert!(scored.windows(2).all(|w| w[0].cost_ms <= w[1].cost_ms), "candidates cheapest first");
+    let mut last_cost = 0.0;
+    for de2000 in [50.0, 20.0, 10.0, 5.0, 3.0, 2.0, 1.5, 1.2, 1.0, 0.5] {
+        let pick = auto_model::choose(&scored, Budget { de2000 }, auto_model::sky_suns(&sky));
+        if pick.within_budget {
+            assert!(pick.chosen.de2000 <= de2000);
+            assert!(pick.chosen.cost_ms >= last_cost, "budget {de2000}: {} is cheaper than the looser budget's pick", pick.chosen.id);
+            last_cost = pick.chosen.cost_ms;
+            // Nothing cheaper was within the budget.
+            assert!(scored.iter().filter(|s| s.cost_ms < pick.chosen.cost_ms).all(|s| s.de2000 > de2000));
+            if let Some(r) = &pick.runner_up {
+                assert!(r.cost_ms >= pick.chosen.cost_ms && r.de2000 <= de2000);
+            }
+        } else {
+            let best = scored.iter().map(|s| s.de2000).fold(f64::MAX, f64::min);
+            assert!(best > de2000 && pick.chosen.de2000 == best, "over budget: the most accurate model");
+        }
+    }
+}
+
+fn load(text: &str) -> Result<Sky, String> {
+    let dir = tempfile::tempdir().expect("temp dir");
+    skytune::sky::builtin::write_sky_folder(dir.path(), &skytune::sky::procedural::PRESETS[0], 1).expect("written");
+    let path = dir.path().join("sky.toml");
+    let mut toml = std::fs::read_to_string(&path).expect("read");
+    toml.push_str(text);
+    std::fs::write(&path, toml).expect("write");
+    skytune::sky::load_sky_file(&path).map_err(|e| e.to_string())
+}
+
+#[test]
+fn sky_file_keys_of_auto() {
+    let sky = load("\n[sky_model]\nkind = \"auto\"\nbudget = { de2000 = 3.5 }\n").expect("auto parses");
+    assert_eq!(sky.auto_model, Some(Budget { de2000: 3.5 }));
+    let default = load("\n[sky_model]\nkind = \"auto\"\n").expect("auto without budget");
+    assert_eq!(default.auto_model, Some(Budget { de2000: skytune::sky::load::DEFAULT_DE2000_BUDGET }));
+    assert_eq!(load("\n[sky_model]\nkind = \"lut\"\n").expect("lut").auto_model, None);
+    let e = load("\n[sky_model]\nkind = \"lut\"\nbudget = { de2000 = 1.0 }\n").expect_err("budget without auto");
+    assert!(e.contains("sky_model.budget") && e.contains("auto"), "{e}");
+    let e = load("\n[sky_model]\nkind = \"automatic\"\n").expect_err("unknown kind");
+    assert!(e.contains("automatic") && e.contains("expected auto"), "{e}");
+    let e = load("\n[sky_model]\nkind = \"auto\"\nbudget = { de2000 = -1 }\n").expect_err("negative budget");
+    assert!(e.contains("de2000"), "{e}");
+}
