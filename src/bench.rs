@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::anyhow;
 
 use crate::cli::{self, BenchArgs};
-use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions};
+use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions, Skips};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
 use skytune::sky::{FrameInput, Sky, Tier};
@@ -22,6 +22,8 @@ struct Config {
     /// Skydome colour source; with `sun_moves`, the sun moves every frame (the map is recomputed).
     model: SkyModelKind,
     sun_moves: bool,
+    /// The renderer's skips (all on except where a configuration measures one).
+    skips: Skips,
     wall_ms: Vec<f32>,
     scene_ms: Vec<f32>,
     sky_ms: Vec<f32>,
@@ -73,6 +75,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         tier: Tier::new(tier).expect("valid tier"),
         model: SkyModelKind::Bitmap,
         sun_moves: false,
+        skips: Skips::default(),
         wall_ms: Vec::new(),
         scene_ms: Vec::new(),
         sky_ms: Vec::new(),
@@ -94,6 +97,13 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         with_model(mk("sky fills the screen, preetham model, sun moving (map every frame)", up, true, 4), SkyModelKind::Preetham, true),
         with_model(mk("sky fills the screen, hosek model, sun moving (map every frame)", up, true, 4), SkyModelKind::Hosek, true),
         with_model(mk("sky fills the screen, linear model, sun moving (map every frame)", up, true, 4), SkyModelKind::Linear, true),
+        // Each skip switched off alone, against the same frame with every skip (configurations 2 and 8).
+        Config { skips: Skips { dark_stages: false, ..Skips::default() }, ..mk("sky fills the screen, black stages sampled (skip off)", up, true, 4) },
+        Config { skips: Skips { invisible_stars: false, ..Skips::default() }, ..mk("sky fills the screen, transparent stars drawn (skip off)", up, true, 4) },
+        Config {
+            skips: Skips { unchanged_tables: false, ..Skips::default() },
+            ..with_model(mk("sky fills the screen, lut model, sun still, tables and map rebuilt (skip off)", up, true, 4), SkyModelKind::Lut, false)
+        },
     ];
     let per_round = args.frames.div_ceil(ROUNDS).max(1);
     for round in 0..ROUNDS {
@@ -101,7 +111,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             let mut input = FrameInput::new(HOUR, WEATHER);
             input.tier = c.tier;
             input.sky_model = Some(SkyModel { kind: c.model, ..sky.model });
-            let options = RenderOptions { depth_split: c.depth_split, glare: false, ..Default::default() };
+            let options = RenderOptions { depth_split: c.depth_split, glare: false, skips: c.skips, ..Default::default() };
             // Two warm-up frames: pipelines, caches and the timestamp readback of this configuration.
             for i in 0..per_round + 2 {
                 if c.sun_moves {
@@ -191,6 +201,21 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         ratio(10, 2),
         ratio(11, 2),
         ratio(12, 2)
+    );
+    let saving = |off: usize, on: usize| median(&configs[off].wall_ms) - median(&configs[on].wall_ms);
+    let _ = writeln!(
+        md,
+        "- What each skip saves (frame wall ms with the skip off minus with it on, same run): black texture stages not sampled {:.2} ms; transparent stars not drawn {:.2} ms; \
+         unchanged lut tables and sky-view map not rebuilt {:.2} ms (the skip off rebuilds both every frame; compute phase {} ms). Objects hidden by their ref colour this frame: {} (not drawn at all; the app's stats panel counts every skip per frame and measures them live).",
+        saving(13, 2),
+        saving(14, 2),
+        saving(15, 8),
+        optional(&configs[15].compute_ms),
+        {
+            let mut input = FrameInput::new(HOUR, WEATHER);
+            input.tier = Tier::FOUR;
+            sky.evaluate(&input).objects.iter().filter(|o| matches!(o.versions, Err(skytune::sky::Hidden::RefAlphaZero(_)))).count()
+        }
     );
     skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
     print!("{md}");

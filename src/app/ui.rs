@@ -38,6 +38,8 @@ pub struct Controls {
     pub camera: Camera,
     /// Scene, depth split, glare.
     pub options: RenderOptions,
+    /// Median frame time with every skip on, taken when one was switched off.
+    pub skips_baseline_ms: Option<f32>,
     /// Objects switched off.
     pub disabled: Vec<String>,
     /// Help overlay open.
@@ -97,6 +99,7 @@ impl Default for Controls {
             particles_real_time: true,
             particle_time_s: 0.0,
             bursts: Vec::new(),
+            skips_baseline_ms: None,
         }
     }
 }
@@ -359,7 +362,7 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
             }
 
             ui.separator();
-            stats(ui, info);
+            stats(ui, c, info);
         });
     });
     if let Some(info) = &info.compare {
@@ -418,7 +421,7 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
     actions
 }
 
-fn stats(ui: &mut egui::Ui, info: &UiInfo<'_>) {
+fn stats(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     let times: Vec<[f64; 2]> = info.frame_times_ms.iter().enumerate().map(|(i, t)| [i as f64, *t as f64]).collect();
     let last = info.frame_times_ms.back().copied().unwrap_or(0.0);
     let mut sorted: Vec<f32> = info.frame_times_ms.iter().copied().collect();
@@ -446,6 +449,7 @@ fn stats(ui: &mut egui::Ui, info: &UiInfo<'_>) {
     let s = info.stats;
     ui.label(format!("draw calls {}, objects drawn {}, hidden {}, stars {}", s.draw_calls, s.objects_drawn, s.objects_hidden, s.stars));
     ui.label(format!("texture stages skipped (black this frame): {}", s.stages_skipped));
+    skips(ui, c, info);
     if let Some(g) = info.glare {
         ui.label(format!("sun visibility {:.3}, glare intensity {:.3}", g.ratio, g.intensity));
     }
@@ -499,6 +503,48 @@ fn model_chart(ui: &mut egui::Ui, current: Option<&str>) {
         Some(r) => ui.label(format!("current: {} - dE2000 {:.2} (p95 {:.2}), PSNR {:.1} dB, {:.1} ms", r.id, r.de_mean, r.de_p95, r.psnr_db, r.frame_ms())),
         None => ui.label("current model: not a benchmark point"),
     };
+}
+
+/// What the renderer skipped this frame, a switch per skip, and what switching skips off costs:
+/// the median frame time now against the median when they were last all on.
+fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
+    let s = info.stats;
+    let mut skipped = vec![format!("{} objects hidden by their ref colour", s.objects_ref_hidden), format!("{} black texture stages", s.stages_skipped)];
+    if s.stars_skipped {
+        skipped.push("the star field (transparent)".into());
+    }
+    if s.tables_skipped {
+        skipped.push("the lut tables' rebuild (unchanged)".into());
+    }
+    if s.map_skipped {
+        skipped.push("the sky-view map (unchanged)".into());
+    }
+    ui.label(format!("skipped this frame: {}", skipped.join(", ")));
+    let median = |v: &VecDeque<f32>| {
+        let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();
+        x.sort_by(f32::total_cmp);
+        x.get(x.len() / 2).copied()
+    };
+    let before = c.options.skips;
+    let k = &mut c.options.skips;
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut k.dark_stages, "skip black stages");
+        ui.checkbox(&mut k.invisible_stars, "skip transparent stars");
+        ui.checkbox(&mut k.unchanged_tables, "skip unchanged tables and map");
+    });
+    let all_on = c.options.skips == crate::render::Skips::default();
+    if before == crate::render::Skips::default() && !all_on {
+        // Switching a skip off: remember what frames cost with every skip on.
+        c.skips_baseline_ms = median(info.frame_times_ms);
+    }
+    match (all_on, c.skips_baseline_ms, median(info.frame_times_ms)) {
+        (false, Some(with), Some(now)) => {
+            ui.label(format!("these skips save {:.2} ms per frame here (median frame {now:.2} ms without them, {with:.2} ms with all skips)", now - with));
+        }
+        _ => {
+            ui.label("switch a skip off to measure what it saves in this view");
+        }
+    }
 }
 
 /// The skydome colour source: every model, switchable live, and the physical models' settings.

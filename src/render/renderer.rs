@@ -29,11 +29,31 @@ pub struct RenderOptions {
     pub glare: bool,
     /// Draw a test occluder into the scene's depth.
     pub occluder: Option<super::scene::Occluder>,
+    /// Work skipped because it would contribute nothing (all on by default; off to measure
+    /// what each saves).
+    pub skips: Skips,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { scene: true, depth_split: true, glare: true, occluder: None }
+        Self { scene: true, depth_split: true, glare: true, occluder: None, skips: Skips::default() }
+    }
+}
+
+/// The renderer's skips of work that contributes nothing to the frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Skips {
+    /// Texture stages whose term is black this frame are not sampled.
+    pub dark_stages: bool,
+    /// The star field is not drawn while its colour is transparent (daylight).
+    pub invisible_stars: bool,
+    /// The `lut` tables and the sky-view map are not recomputed while nothing they depend on moved.
+    pub unchanged_tables: bool,
+}
+
+impl Default for Skips {
+    fn default() -> Self {
+        Self { dark_stages: true, invisible_stars: true, unchanged_tables: true }
     }
 }
 
@@ -50,6 +70,14 @@ pub struct FrameStats {
     pub stars: u32,
     /// Texture stages of sky objects not sampled because their term is black this frame.
     pub stages_skipped: u32,
+    /// Sky objects not drawn because their ref colour's alpha is 0 this frame.
+    pub objects_ref_hidden: u32,
+    /// The star field was not drawn: transparent this frame.
+    pub stars_skipped: bool,
+    /// The `lut` tables were not rebuilt: nothing they depend on moved.
+    pub tables_skipped: bool,
+    /// The sky-view map was not recomputed: nothing it depends on moved.
+    pub map_skipped: bool,
     /// Particles alive (every emitter).
     pub particles: u32,
 }

@@ -18,6 +18,8 @@ pub struct SkyLutsPass {
     built: Option<(AtmosphereUniform, LutUniform)>,
     settings: LutSettings,
     dirty: bool,
+    /// The tables were current this frame: the build was skipped.
+    skipped: bool,
     /// Table builds so far (stats and tests).
     pub builds: u64,
 }
@@ -34,7 +36,7 @@ impl SkyLutsPass {
         });
         let bind_group = builder.bind_group(b.device, &atmosphere, &b.shared.luts);
         let params = b.shared.luts.params.clone();
-        Ok(Self { builder: Staged::new(builder), atmosphere, params, bind_group, built: None, settings: LutSettings::default(), dirty: false, builds: 0 })
+        Ok(Self { builder: Staged::new(builder), atmosphere, params, bind_group, built: None, settings: LutSettings::default(), dirty: false, skipped: false, builds: 0 })
     }
 }
 
@@ -63,12 +65,14 @@ impl Pass for SkyLutsPass {
 
     fn prepare(&mut self, cx: &FrameContext<'_>) {
         self.dirty = false;
+        self.skipped = false;
         let model = &cx.frame.sky_model;
         if model.kind != SkyModelKind::Lut {
             return;
         }
         let key = (AtmosphereUniform::from(&cx.frame.atmosphere), LutUniform::new(&model.lut, model.ground_albedo));
-        if self.built == Some(key) {
+        if self.built == Some(key) && cx.options.skips.unchanged_tables {
+            self.skipped = true;
             return;
         }
         cx.queue.write_buffer(&self.atmosphere, 0, bytemuck::bytes_of(&key.0));
@@ -83,6 +87,10 @@ impl Pass for SkyLutsPass {
         if self.dirty {
             out.push(DrawItem { priority: 0, key: 0 });
         }
+    }
+
+    fn stats(&self, stats: &mut crate::render::FrameStats) {
+        stats.tables_skipped = self.skipped;
     }
 
     fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, _key: usize) {

@@ -183,6 +183,8 @@ pub struct SkyObjectsPass {
     hidden: u32,
     /// Texture stages not sampled this frame (their term is black).
     stages_skipped: u32,
+    /// Objects hidden this frame by their ref colour.
+    ref_hidden: u32,
 }
 
 fn blend_index(b: BlendMode) -> usize {
@@ -222,6 +224,7 @@ impl SkyObjectsPass {
             visible: Vec::new(),
             hidden: 0,
             stages_skipped: 0,
+            ref_hidden: 0,
         })
     }
 
@@ -333,11 +336,15 @@ impl Pass for SkyObjectsPass {
         self.visible.clear();
         self.hidden = 0;
         let Some(draws) = &self.draws.current else { return };
-        self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera);
+        self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera, cx.options.skips.dark_stages);
+        self.ref_hidden = 0;
         for of in &cx.frame.objects {
             match &of.versions {
                 Ok(versions) => self.visible.push((of.index, of.priority, versions.iter().map(|v| v.version).collect())),
-                Err(_) => self.hidden += 1,
+                Err(why) => {
+                    self.hidden += 1;
+                    self.ref_hidden += u32::from(matches!(why, crate::sky::Hidden::RefAlphaZero(_)));
+                }
             }
         }
         self.build_variants(cx.device, cx.target);
@@ -365,6 +372,7 @@ impl Pass for SkyObjectsPass {
         stats.objects_drawn = self.visible.len() as u32;
         stats.objects_hidden = self.hidden;
         stats.stages_skipped = self.stages_skipped;
+        stats.objects_ref_hidden = self.ref_hidden;
     }
 }
 
@@ -469,7 +477,7 @@ impl SkyObjectDraws {
 
     /// Writes this frame's uniforms and gradients; returns the texture stages skipped because
     /// their term is black this frame.
-    pub fn prepare(&self, queue: &wgpu::Queue, frame: &FrameSky, camera: &Camera) -> u32 {
+    pub fn prepare(&self, queue: &wgpu::Queue, frame: &FrameSky, camera: &Camera, skip_dark: bool) -> u32 {
         let mut skipped = 0;
         for of in &frame.objects {
             let Ok(versions) = &of.versions else { continue };
@@ -479,7 +487,9 @@ impl SkyObjectDraws {
                 let mut u = d.base.with_frame(p, &d.shape, of.placement, camera.screen_up(), sky_view_stage);
                 // Alpha weighs the colour under alpha and additive blending: a term only counts as
                 // nothing there when it is transparent too.
-                skipped += u.skip_dark_terms(d.blend != BlendMode::Opaque);
+                if skip_dark {
+                    skipped += u.skip_dark_terms(d.blend != BlendMode::Opaque);
+                }
                 queue.write_buffer(&d.uniform, 0, bytemuck::bytes_of(&u));
                 if let (Some((tex, h)), Some(g)) = (&d.gradient, &p.gradient) {
                     let bytes: Vec<u8> = g.iter().flat_map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)).collect();

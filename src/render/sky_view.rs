@@ -224,6 +224,8 @@ pub struct SkyViewPass {
     computed: Option<Key>,
     /// Whether this frame recomputes the map.
     dirty: bool,
+    /// The map was current this frame: its recomputation was skipped.
+    skipped: bool,
     /// Maps computed so far (the stats panel and tests).
     pub maps_computed: u64,
     /// Radiance per texel from the CPU (`cells`).
@@ -345,7 +347,7 @@ impl SkyViewPass {
             map,
             bind_group,
             computed: None,
-            dirty: false,
+            dirty: false, skipped: false,
             maps_computed: 0,
             cpu_radiance,
             cells: None,
@@ -466,6 +468,10 @@ impl Pass for SkyViewPass {
         }
     }
 
+    fn stats(&self, stats: &mut super::FrameStats) {
+        stats.map_skipped = self.skipped;
+    }
+
     fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, _key: usize) {
         self.dispatch_map(cpass);
     }
@@ -497,6 +503,7 @@ impl SkyViewPass {
     fn prepare_map(&mut self, cx: &FrameContext<'_>) {
         let model = &cx.frame.sky_model;
         self.dirty = false;
+        self.skipped = false;
         if !model.kind.on_cpu() {
             // A switch away from a CPU model drops its request (a late answer is ignored).
             self.cells_pending = None;
@@ -515,8 +522,10 @@ impl SkyViewPass {
             },
             analytic: model.analytic().map_or([[0.0; 4]; 12], |m| m.coefficients(cx.frame.towards_sun.as_dvec3().to_array(), cx.frame.hour as f64).vectors),
         };
-        if self.computed == Some(key) {
+        // CPU models answer asynchronously: only GPU maps are recomputed when the skip is off.
+        if self.computed == Some(key) && (cx.options.skips.unchanged_tables || model.kind.on_cpu()) {
             self.cells_pending = None;
+            self.skipped = true;
             return;
         }
         if model.kind.on_cpu() && !self.cells_ready(cx, model, key) {

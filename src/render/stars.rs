@@ -36,6 +36,8 @@ pub struct StarsPass {
     field: Staged<Option<StarField>>,
     /// Whether the stars show this frame.
     visible: bool,
+    /// Transparent this frame (drawn anyway only when the skip is off).
+    skipped: bool,
 }
 
 impl StarsPass {
@@ -50,7 +52,7 @@ impl StarsPass {
             immediate_size: 0,
         });
         let pipeline = Pipelines::new_render(b, pipeline_layout, Self::build)?;
-        Ok(Self { bind_layout, pipeline, field: Staged::new(None), visible: false })
+        Ok(Self { bind_layout, pipeline, field: Staged::new(None), visible: false, skipped: false })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
@@ -113,9 +115,12 @@ impl Pass for StarsPass {
     }
 
     fn prepare(&mut self, cx: &FrameContext<'_>) {
-        self.visible = match (&self.field.current, cx.frame.stars) {
-            (Some(field), Some(s)) => field.prepare(cx.queue, s.color),
-            _ => false,
+        (self.visible, self.skipped) = match (&self.field.current, cx.frame.stars) {
+            (Some(field), Some(s)) => {
+                let visible = field.prepare(cx.queue, s.color);
+                (visible || (!cx.options.skips.invisible_stars && field.count > 0), !visible)
+            }
+            _ => (false, false),
         };
     }
 
@@ -136,6 +141,7 @@ impl Pass for StarsPass {
 
     fn stats(&self, stats: &mut FrameStats) {
         stats.stars = self.field.current.as_ref().map_or(0, |f| f.count);
+        stats.stars_skipped = self.skipped && !self.visible;
     }
 }
 

@@ -1,0 +1,37 @@
+//! The renderer's skips of work that contributes nothing: they change no pixel, and the frame's
+//! counters say what was skipped (the app's stats panel and `skytune bench` report them).
+
+mod common;
+
+use skytune::render::{Camera, RenderOptions, Skips};
+use skytune::sky::builtin::default_sky;
+use skytune::sky::resolved::{SkyModel, SkyModelKind};
+use skytune::sky::FrameInput;
+
+#[test]
+fn skips_change_no_pixel_and_are_counted() {
+    let sky = default_sky();
+    let mut h = common::headless(160, 90);
+    h.set_sky(&sky).expect("uploaded");
+    let camera = Camera { pitch_deg: 35.0, ..Camera::default() };
+    let mut input = FrameInput::new(13.0, 0.2);
+    input.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
+    let on = RenderOptions { glare: false, ..Default::default() };
+    let off = RenderOptions { skips: Skips { dark_stages: false, invisible_stars: false, unchanged_tables: false }, ..on };
+    // Two frames each: the second finds the tables and the map current.
+    h.render(&sky, &input, &camera, &on).expect("rendered");
+    let with = h.render(&sky, &input, &camera, &on).expect("rendered");
+    let s = h.renderer.stats.clone();
+    assert!(s.tables_skipped && s.map_skipped, "nothing moved: tables and map reused ({s:?})");
+    assert!(s.stars_skipped, "the stars are transparent at 13:00 ({s:?})");
+    assert!(s.stages_skipped > 0, "some stages are black by day ({s:?})");
+    h.render(&sky, &input, &camera, &off).expect("rendered");
+    let without = h.render(&sky, &input, &camera, &off).expect("rendered");
+    let s = h.renderer.stats.clone();
+    assert!(!s.tables_skipped && !s.map_skipped && !s.stars_skipped && s.stages_skipped == 0, "every skip off ({s:?})");
+    let (d, _) = common::diff(&with, &without, 1);
+    assert_eq!(d.differing, 0.0, "skipping changed {:.4} of the pixels (largest difference {})", d.differing, d.max);
+    // At night the stars are drawn and not counted as skipped.
+    h.render(&sky, &FrameInput::new(0.5, 0.0), &camera, &on).expect("rendered");
+    assert!(!h.renderer.stats.stars_skipped);
+}
