@@ -17,7 +17,7 @@ fn skips_change_no_pixel_and_are_counted() {
     let mut input = FrameInput::new(13.0, 0.2);
     input.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
     let on = RenderOptions { glare: false, ..Default::default() };
-    let off = RenderOptions { skips: Skips { dark_stages: false, invisible_stars: false, unchanged_tables: false }, ..on };
+    let off = RenderOptions { skips: Skips { dark_stages: false, invisible_stars: false, unchanged_tables: false, below_horizon: false }, ..on };
     // Two frames each: the second finds the tables and the map current.
     h.render(&sky, &input, &camera, &on).expect("rendered");
     let with = h.render(&sky, &input, &camera, &on).expect("rendered");
@@ -31,7 +31,15 @@ fn skips_change_no_pixel_and_are_counted() {
     assert!(!s.tables_skipped && !s.map_skipped && !s.stars_skipped && s.stages_skipped == 0, "every skip off ({s:?})");
     let (d, _) = common::diff(&with, &without, 1);
     assert_eq!(d.differing, 0.0, "skipping changed {:.4} of the pixels (largest difference {})", d.differing, d.max);
-    // At night the stars are drawn and not counted as skipped.
-    h.render(&sky, &FrameInput::new(0.5, 0.0), &camera, &on).expect("rendered");
-    assert!(!h.renderer.stats.stars_skipped);
+    // At night the stars are drawn and not counted as skipped; the sun is far below the horizon,
+    // behind the scene, and skipped without changing a pixel, even looking down at it.
+    let down = Camera { pitch_deg: -30.0, ..Camera::default() };
+    let night = FrameInput::new(0.5, 0.0);
+    let with = h.render(&sky, &night, &down, &on).expect("rendered");
+    let s = h.renderer.stats.clone();
+    assert!(!s.stars_skipped && s.objects_below_horizon > 0, "{s:?}");
+    let without = h.render(&sky, &night, &down, &off).expect("rendered");
+    assert_eq!(h.renderer.stats.objects_below_horizon, 0);
+    let (d, _) = common::diff(&with, &without, 1);
+    assert_eq!(d.differing, 0.0, "skipping objects below the horizon changed {:.4} of the pixels", d.differing);
 }

@@ -509,7 +509,11 @@ fn model_chart(ui: &mut egui::Ui, current: Option<&str>) {
 /// the median frame time now against the median when they were last all on.
 fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     let s = info.stats;
-    let mut skipped = vec![format!("{} objects hidden by their ref colour", s.objects_ref_hidden), format!("{} black texture stages", s.stages_skipped)];
+    let mut skipped = vec![
+        format!("{} objects hidden by their ref colour", s.objects_ref_hidden),
+        format!("{} below the horizon behind the scene", s.objects_below_horizon),
+        format!("{} black texture stages", s.stages_skipped),
+    ];
     if s.stars_skipped {
         skipped.push("the star field (transparent)".into());
     }
@@ -531,6 +535,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         ui.checkbox(&mut k.dark_stages, "skip black stages");
         ui.checkbox(&mut k.invisible_stars, "skip transparent stars");
         ui.checkbox(&mut k.unchanged_tables, "skip unchanged tables and map");
+        ui.checkbox(&mut k.below_horizon, "skip objects behind the scene");
     });
     let all_on = c.options.skips == crate::render::Skips::default();
     if before == crate::render::Skips::default() && !all_on {

@@ -31,7 +31,7 @@ pub use context::{AdapterChoice, GpuContext};
 pub use error::{RenderError, RenderResult};
 pub use headless::{Headless, Offscreen};
 pub use pass::{Pass, Phase, PASSES};
-pub use renderer::{release_freed_memory, FrameStats, RenderOptions, RenderTarget, SkyRenderer, Skips, UploadStats, SCENE_DEPTH, SKY_DEPTH};
+pub use renderer::{release_freed_memory, FrameStats, RenderOptions, RenderTarget, Skips, SkyRenderer, UploadStats, SCENE_DEPTH, SKY_DEPTH};
 pub use shaders::ShaderLibrary;
 
 /// Colour format of the HDR target that frames of a physical sky model draw into (exposed linear

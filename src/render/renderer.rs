@@ -49,11 +49,18 @@ pub struct Skips {
     pub invisible_stars: bool,
     /// The `lut` tables and the sky-view map are not recomputed while nothing they depend on moved.
     pub unchanged_tables: bool,
+    /// With the main scene drawn, billboards and quads entirely below the horizon (by more than
+    /// [`SCENE_COVERS_BELOW_DEG`]) are not drawn: the scene covers that part of the sky.
+    pub below_horizon: bool,
 }
+
+/// The main-scene stand-in covers every direction more than this far below the horizon, degrees
+/// (its terrain reaches 2.5 km at a viewer height of 2 m; its lowest dip is 40 m down).
+pub const SCENE_COVERS_BELOW_DEG: f32 = 2.0;
 
 impl Default for Skips {
     fn default() -> Self {
-        Self { dark_stages: true, invisible_stars: true, unchanged_tables: true }
+        Self { dark_stages: true, invisible_stars: true, unchanged_tables: true, below_horizon: true }
     }
 }
 
@@ -72,6 +79,8 @@ pub struct FrameStats {
     pub stages_skipped: u32,
     /// Sky objects not drawn because their ref colour's alpha is 0 this frame.
     pub objects_ref_hidden: u32,
+    /// Sky objects not drawn because they are below the horizon, behind the main scene.
+    pub objects_below_horizon: u32,
     /// The star field was not drawn: transparent this frame.
     pub stars_skipped: bool,
     /// The `lut` tables were not rebuilt: nothing they depend on moved.

@@ -185,6 +185,8 @@ pub struct SkyObjectsPass {
     stages_skipped: u32,
     /// Objects hidden this frame by their ref colour.
     ref_hidden: u32,
+    /// Objects below the horizon this frame, behind the main scene.
+    below_horizon: u32,
 }
 
 fn blend_index(b: BlendMode) -> usize {
@@ -225,6 +227,7 @@ impl SkyObjectsPass {
             hidden: 0,
             stages_skipped: 0,
             ref_hidden: 0,
+            below_horizon: 0,
         })
     }
 
@@ -338,8 +341,24 @@ impl Pass for SkyObjectsPass {
         let Some(draws) = &self.draws.current else { return };
         self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera, cx.options.skips.dark_stages);
         self.ref_hidden = 0;
+        self.below_horizon = 0;
+        let behind_scene = |of: &crate::sky::ObjectFrame, versions: &[crate::sky::VersionFrame]| {
+            let Some((dir, _)) = of.placement.filter(|_| cx.options.scene && cx.options.skips.below_horizon) else { return false };
+            let elevation_deg = dir.y.clamp(-1.0, 1.0).asin().to_degrees();
+            versions.iter().all(|v| match draws.objects[of.index][v.version].shape {
+                // Half the diagonal of the square: its highest corner at any roll.
+                crate::sky::resolved::Shape::Billboard { size_deg } | crate::sky::resolved::Shape::Quad { size_deg } => {
+                    elevation_deg + size_deg.get() * std::f32::consts::FRAC_1_SQRT_2 < -super::renderer::SCENE_COVERS_BELOW_DEG
+                }
+                _ => false,
+            })
+        };
         for of in &cx.frame.objects {
             match &of.versions {
+                Ok(versions) if behind_scene(of, versions) => {
+                    self.hidden += 1;
+                    self.below_horizon += 1;
+                }
                 Ok(versions) => self.visible.push((of.index, of.priority, versions.iter().map(|v| v.version).collect())),
                 Err(why) => {
                     self.hidden += 1;
@@ -373,6 +392,7 @@ impl Pass for SkyObjectsPass {
         stats.objects_hidden = self.hidden;
         stats.stages_skipped = self.stages_skipped;
         stats.objects_ref_hidden = self.ref_hidden;
+        stats.objects_below_horizon = self.below_horizon;
     }
 }
 
