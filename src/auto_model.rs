@@ -140,7 +140,7 @@ pub fn reference_for(atm: &Atmosphere, suns: &[f64]) -> anyhow::Result<Vec<Vec<R
         let committed = dome::committed_reference()?;
         return suns.iter().map(|s| committed.sun(haze, *s).map(|r| r.radiance.clone()).ok_or_else(|| anyhow::anyhow!("the committed reference lacks sun {s}"))).collect();
     }
-    let key = hash_of(&(atm, suns, CUSTOM_REFERENCE_PATHS, dome::BENCH_DOME));
+    let key = hash_of(&(atm, suns, CUSTOM_REFERENCE_PATHS, dome::ReferenceDome::header(CUSTOM_REFERENCE_PATHS, dome::BENCH_DOME)));
     let file = cache_dir().map(|d| d.join(format!("reference-{key:016x}.csv")));
     if let Some(text) = file.as_ref().and_then(|f| std::fs::read_to_string(f).ok()) {
         let rows: Vec<Vec<Rgb>> = text.lines().map(|l| l.split(';').map(|v| parse_rgb(v).unwrap_or([f64::NAN; 3])).collect()).collect();
@@ -221,7 +221,7 @@ static SCORES: Mutex<Vec<(u64, Vec<Scored>)>> = Mutex::new(Vec::new());
 
 /// Every candidate's score for `sky`: from this process's cache, the disk cache, or measured on `ctx`.
 pub fn score_cached(sky: &Sky, ctx: &crate::render::GpuContext) -> anyhow::Result<Vec<Scored>> {
-    let key = hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&modelbench::COMMITTED_CSV)));
+    let key = hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&modelbench::COMMITTED_CSV), dome::ReferenceDome::header(dome::COMMITTED_PATHS, dome::BENCH_DOME)));
     if let Some((_, s)) = SCORES.lock().unwrap_or_else(|p| p.into_inner()).iter().find(|(k, _)| *k == key) {
         return Ok(s.clone());
     }

@@ -77,7 +77,7 @@ fn report(args: &SweepArgs, adapter: &str, results: &[(SweptModel, Counters, f64
     );
     let _ = writeln!(
         md,
-        "- **single** and **lut** treated the sun as a point: each ray-march sample was lit or in the planet's shadow, so as the sun set, samples switched off one by one and the sky jumped (64% over 0.05 degrees on a small planet). Shipped: the sun is a disc of the atmosphere's `sun_angular_radius_rad`; the visible fraction of it above each sample's horizon fades smoothly, and the visible part is lit at grazing incidence at worst (`sun_visible_fraction` in shaders/sky_model/atmosphere.wgsl)."
+        "- **single** and **lut** treated the sun as a point: each ray-march sample was lit or in the planet's shadow, so as the sun set, samples switched off one by one and the sky jumped (64% over 0.05 degrees on a small planet). Shipped: a sample's sunlight fades smoothly to nothing while the sun sinks 0.1 degrees below its horizon, lit along the horizon meanwhile (`sun_visible_fraction` in shaders/sky_model/atmosphere.wgsl); the reference does the same (`Reference::sunlight`), so the models still converge to it (`single` at 128 x 128 steps: 0.09% at low sun). A fade as wide as the sun's disc (0.53 degrees) moved low-sun skies 1.7% away from a point-sun reference."
     );
     let _ = writeln!(md, "\n## Worst cases found\n");
     for (m, c, _) in results {

@@ -236,7 +236,7 @@ fn bad_sky_model_and_atmosphere_values_are_located() {
     for (extra, needle, field, message) in [
         ("[sky_model]\nkind = \"single\"\nview_steps = 0\n", "view_steps = 0", "sky_model.view_steps", "expected a sample count in 1..=1024, found 0"),
         ("[sky_model]\nview_steps = 1000000\n", "view_steps = 1000000", "sky_model.view_steps", "found 1000000"),
-        ("[sky_model]\nkind = \"hosek-wilkie\"\n", "kind = \"hosek-wilkie\"", "sky_model.kind", "unknown variant"),
+        ("[sky_model]\nkind = \"hosek-wilkie\"\n", "kind = \"hosek-wilkie\"", "sky_model.kind", "unknown model \"hosek-wilkie\"; expected auto, bitmap"),
         ("[sky_model]\nkind = \"preetham\"\nturbidity = 0.5\n", "turbidity = 0.5", "sky_model.turbidity", "expected a turbidity in [1, 10], found 0.5"),
         ("[sky_model]\nkind = \"hosek\"\nturbidity = nan\n", "turbidity = nan", "sky_model.turbidity", "expected a turbidity in [1, 10]"),
         (

@@ -42,12 +42,15 @@ fn distance_to_top(atm: Atmosphere, r: f32, mu: f32) -> f32 {
     return max(0.0, -r * mu + sqrt(max(disc, 0.0)));
 }
 
-// The sun is a disc: the fraction of it above the horizon of a point at radius r, for the sun's
-// cosine mu_s to the point's vertical (smooth while the disc's centre crosses the horizon; a
-// point sun would switch samples on and off, and the sky would jump as the sun moves).
+// How much of the sun lights a point at radius r, for the sun's cosine mu_s to the point's
+// vertical: all of it while the sun is above the point's horizon, fading smoothly to nothing as
+// it sinks SUN_SET_FADE_RAD below (the reference does the same: `Reference::sunlight`). A point
+// sun alone switches ray-march samples off one by one and the sky jumps as the sun sets
+// (`skytune sweep`). Keep in sync with SUN_SET_FADE_RAD in src/atmosphere/mod.rs.
+const SUN_SET_FADE_RAD: f32 = 0.0017453;
 fn sun_visible_fraction(atm: Atmosphere, r: f32, mu_s: f32) -> f32 {
     let above = asin(clamp(mu_s, -1.0, 1.0)) - asin(horizon_mu(atm, r));
-    return smoothstep(-atm.shape.w, atm.shape.w, above);
+    return smoothstep(-SUN_SET_FADE_RAD, 0.0, above);
 }
 
 // Cosine to the vertical of the geometric horizon seen from radius r (at most 0).

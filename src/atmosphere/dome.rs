@@ -343,7 +343,7 @@ impl ReferenceDome {
     pub fn header(paths: u32, dome: (usize, usize)) -> String {
         let atmospheres: Vec<String> = Haze::ALL.iter().map(|h| format!("{}={:?}", h.name(), h.atmosphere())).collect();
         format!(
-            "skytune reference dome v1: paths={paths} seed={REFERENCE_SEED} dome={}x{} camera_km={CAMERA_KM} albedo={ALBEDO} settings={:?} atmospheres=[{}]",
+            "skytune reference dome v2 (sun fading below each point's horizon): paths={paths} seed={REFERENCE_SEED} dome={}x{} camera_km={CAMERA_KM} albedo={ALBEDO} settings={:?} atmospheres=[{}]",
             dome.0,
             dome.1,
             ReferenceSettings { paths, seed: REFERENCE_SEED, ..Default::default() },

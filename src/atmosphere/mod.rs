@@ -221,6 +221,21 @@ impl Atmosphere {
     }
 }
 
+/// How far below a point's horizon the sun's light fades out, rad (a tenth of a degree): the
+/// sunlight a point receives goes smoothly from all to nothing while the sun sinks this far below
+/// its horizon. A point sun would switch ray-march samples off one by one and skies would jump as
+/// it sets (`skytune sweep`); a fade as wide as the sun's disc would light grazing samples enough
+/// to move low-sun skies by 1%. Keep in sync with `SUN_SET_FADE_RAD` in
+/// shaders/sky_model/atmosphere.wgsl.
+pub const SUN_SET_FADE_RAD: f64 = 0.0017453;
+
+/// The fraction of sunlight at a point whose horizon the sun is `above_horizon_rad` above
+/// (smoothstep from -[`SUN_SET_FADE_RAD`] to 0).
+pub fn sun_set_fade(above_horizon_rad: f64) -> f64 {
+    let t = ((above_horizon_rad + SUN_SET_FADE_RAD) / SUN_SET_FADE_RAD).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
 /// Rayleigh phase function, sr^-1, of the cosine of the scattering angle.
 pub fn rayleigh_phase(cos_theta: f64) -> f64 {
     3.0 / (16.0 * PI) * (1.0 + cos_theta * cos_theta)

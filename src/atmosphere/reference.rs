@@ -12,7 +12,9 @@
 //!   uniform, a Lambertian ground of albedo `a`. A fixed seed makes results repeatable, and
 //!   truncating at `max_order` only drops terms, so radiance never decreases with more orders.
 //!
-//! The sun is a point source of irradiance 1 per channel (its disc is not part of the result);
+//! The sun is a point source of irradiance 1 per channel (its disc is not part of the result)
+//! whose light fades out smoothly while it sinks 0.1 degrees below a point's horizon
+//! ([`Reference::sunlight`], as the GPU models do, so that no sky jumps as the sun sets);
 //! the ground surface seen by a view ray that hits it is not part of the result either (only
 //! the light scattered along the ray in front of it).
 
@@ -249,9 +251,34 @@ impl Reference {
         }
     }
 
+    /// The sunlight reaching `p`, per channel: the transmittance to space towards the sun while
+    /// the sun is above `p`'s horizon; below it, fading smoothly to 0 over
+    /// [`super::SUN_SET_FADE_RAD`], lit along the horizon (the GPU models do the same, so that no
+    /// model's sky jumps as the sun sets).
+    pub fn sunlight(&self, p: DVec3, towards_sun: DVec3) -> Rgb {
+        let up = p.normalize();
+        let mu_s = up.dot(towards_sun).clamp(-1.0, 1.0);
+        let sin_horizon = (self.atm.ground_radius_km / p.length().max(self.atm.ground_radius_km)).min(1.0);
+        let mu_h = -(1.0 - sin_horizon * sin_horizon).max(0.0).sqrt();
+        let above = mu_s.asin() - mu_h.asin();
+        let fraction = super::sun_set_fade(above);
+        if fraction <= 0.0 {
+            return [0.0; 3];
+        }
+        let dir = if above >= 1e-6 {
+            towards_sun
+        } else {
+            // Just above the horizon, towards the sun's azimuth.
+            let side = (towards_sun - up * mu_s).try_normalize().unwrap_or_else(|| up.any_orthogonal_vector().normalize());
+            let mu = (mu_h.asin() + 1e-6).sin();
+            up * mu + side * (1.0 - mu * mu).max(0.0).sqrt()
+        };
+        self.transmittance_to_space(p, dir).map(|t| t * fraction)
+    }
+
     /// Sunlight scattered once towards `-d` at `y`, per unit length: S(y, d·s) T_sun(y).
     fn sun_scattered(&self, y: DVec3, d: DVec3, towards_sun: DVec3) -> Rgb {
-        let t_sun = self.transmittance_to_space(y, towards_sun);
+        let t_sun = self.sunlight(y, towards_sun);
         if t_sun.iter().all(|t| *t == 0.0) {
             return [0.0; 3];
         }
@@ -387,7 +414,7 @@ impl Reference {
                     k += 1;
                     let cos_sun = n.dot(towards_sun);
                     if cos_sun > 0.0 && albedo > 0.0 {
-                        let t_sun = self.transmittance_to_space(pos, towards_sun);
+                        let t_sun = self.sunlight(pos, towards_sun);
                         path_sum = add(path_sum, std::array::from_fn(|c| thr[c] * albedo / PI * cos_sun * t_sun[c]));
                     }
                 } else {
