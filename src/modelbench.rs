@@ -204,10 +204,8 @@ impl<'a> Evaluator<'a> {
     /// from the default `lut` model.
     pub fn prepare(&self, method: &Method, atm: &Atmosphere, targets: &[FitTarget<'_>]) -> anyhow::Result<Prepared> {
         let lut = Method::Lut(LutSettings::default());
-        let mut source = |sun: f64, cases: &[Case]| -> anyhow::Result<Vec<Rgb>> {
-            let _ = sun;
-            self.gpu(&lut, atm, 0.0, cases)
-        };
+        // The cases carry the sun elevation; the source needs nothing else.
+        let mut source = |_sun_elev_deg: f64, cases: &[Case]| -> anyhow::Result<Vec<Rgb>> { self.gpu(&lut, atm, 0.0, cases) };
         Ok(match *method {
             Method::Single(_) | Method::Lut(_) => Prepared::Gpu(*method),
             Method::Preetham | Method::Hosek | Method::Linear => Prepared::Analytic(*method, self.fit(method, targets)?),

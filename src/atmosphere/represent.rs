@@ -234,6 +234,14 @@ fn from_u8(x: u8) -> f64 {
     x as f64 / 255.0
 }
 
+/// The two hour columns a time of day falls between (wrapping at midnight) and the weight of the
+/// second, as the renderer samples colour bitmaps.
+fn hour_columns(hour: f64) -> (usize, usize, f64) {
+    let h = hour.rem_euclid(BAKED_HOURS as f64);
+    let h0 = h.floor() as usize % BAKED_HOURS;
+    (h0, (h0 + 1) % BAKED_HOURS, h - h.floor())
+}
+
 /// Elevation at the centre of gradient row `r` of `rows`.
 fn row_elevation_deg(r: usize, rows: usize) -> f64 {
     90.0 - (r as f64 + 0.5) / rows as f64 * (90.0 - BAKED_BOTTOM_DEG)
@@ -316,9 +324,7 @@ impl Baked {
     /// Gradient value (sRGB-encoded display value 0..1) at `hour` and elevation, in weather step
     /// `w`: bilinear over hours (wrapping) and rows after the renderer's [1, 1, 1] / 3 blur.
     fn gradient_display(&self, w: usize, hour: f64, elev_deg: f64) -> Rgb {
-        let h = hour.rem_euclid(BAKED_HOURS as f64);
-        let (h0, th) = (h.floor() as usize % BAKED_HOURS, h - h.floor());
-        let h1 = (h0 + 1) % BAKED_HOURS;
+        let (h0, h1, th) = hour_columns(hour);
         let n = self.rows;
         let column: Vec<Rgb> = (0..n)
             .map(|r| {
@@ -345,9 +351,8 @@ impl Baked {
         } else {
             from_u8(self.halo_profile[x0]) + (from_u8(self.halo_profile[(x0 + 1).min(BAKED_HALO_BINS - 1)]) - from_u8(self.halo_profile[x0])) * t
         };
-        let hh = hour.rem_euclid(BAKED_HOURS as f64);
-        let (h0, th) = (hh.floor() as usize % BAKED_HOURS, hh - hh.floor());
-        let color = lerp3(self.halo_color[w][h0].map(from_u8), self.halo_color[w][(h0 + 1) % BAKED_HOURS].map(from_u8), th);
+        let (h0, h1, th) = hour_columns(hour);
+        let color = lerp3(self.halo_color[w][h0].map(from_u8), self.halo_color[w][h1].map(from_u8), th);
         // NeL adds the stages' display values; the sum is what the display shows.
         let display_encoded: Rgb = std::array::from_fn(|c| g[c] + color[c] * p);
         dome::radiance_from_display(display_encoded.map(dome::srgb_decode))
