@@ -60,15 +60,37 @@ fn vs_main(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> Vert
     return out;
 }
 
-// Specialisation: a pipeline per material sets SPECIALISED and these from the object's stages
-// (src/render/sky_objects.rs), so the compiler drops the UV modes and samples a material does not
-// use; the generic pipeline keeps the defaults and reads everything from the uniform.
+// Specialisation: a pipeline per material signature sets SPECIALISED and the constants below from
+// the draw's uniform (src/render/sky_objects.rs, `VariantKey`), so the compiler drops what the draw
+// does not use. This matters on SIMD rasterisers such as lavapipe, which run both sides of every
+// branch (a uniform condition included) under a lane mask and sample textures even in lanes that
+// are off: every branch left on a uniform costs as if taken. The generic pipeline keeps the
+// defaults and reads everything from the uniform.
 override SPECIALISED: bool = false;
 override STAGE_COUNT: u32 = 4u;
 override UV_MODE_0: u32 = 0u;
 override UV_MODE_1: u32 = 0u;
 override UV_MODE_2: u32 = 0u;
 override UV_MODE_3: u32 = 0u;
+// Stage op (0 add, 1 modulate), constant index (4: none), live (0: its term is black this frame).
+override OP_0: u32 = 0u;
+override OP_1: u32 = 0u;
+override OP_2: u32 = 0u;
+override OP_3: u32 = 0u;
+override CONSTANT_0: u32 = 4u;
+override CONSTANT_1: u32 = 4u;
+override CONSTANT_2: u32 = 4u;
+override CONSTANT_3: u32 = 4u;
+override LIVE_0: bool = true;
+override LIVE_1: bool = true;
+override LIVE_2: bool = true;
+override LIVE_3: bool = true;
+// The stage the sky-view map feeds (4: none), the lighting (0 flat, 1 moon, 2 cloud), and what
+// the target holds (0 display values, 1 exposed radiance for the ACES tone mapper, 2 for the
+// neutral one).
+override VIEW_STAGE: u32 = 4u;
+override LIGHTING: u32 = 0u;
+override OUTPUT: u32 = 0u;
 
 fn stage_count() -> u32 {
     if SPECIALISED {
@@ -87,6 +109,71 @@ fn uv_mode(i: u32) -> u32 {
         }
     }
     return draw.stages[i].cfg.y;
+}
+
+fn stage_op(i: u32) -> u32 {
+    if SPECIALISED {
+        switch i {
+            case 0u: { return OP_0; }
+            case 1u: { return OP_1; }
+            case 2u: { return OP_2; }
+            default: { return OP_3; }
+        }
+    }
+    return draw.stages[i].cfg.x;
+}
+
+fn stage_constant(i: u32) -> u32 {
+    if SPECIALISED {
+        switch i {
+            case 0u: { return CONSTANT_0; }
+            case 1u: { return CONSTANT_1; }
+            case 2u: { return CONSTANT_2; }
+            default: { return CONSTANT_3; }
+        }
+    }
+    return draw.stages[i].cfg.z;
+}
+
+fn stage_live(i: u32) -> bool {
+    if SPECIALISED {
+        switch i {
+            case 0u: { return LIVE_0; }
+            case 1u: { return LIVE_1; }
+            case 2u: { return LIVE_2; }
+            default: { return LIVE_3; }
+        }
+    }
+    return draw.stages[i].cfg.w != 0u;
+}
+
+fn view_stage() -> u32 {
+    if SPECIALISED {
+        return VIEW_STAGE;
+    }
+    return draw.misc.z;
+}
+
+fn lighting() -> u32 {
+    if SPECIALISED {
+        return LIGHTING;
+    }
+    return draw.misc.y;
+}
+
+// `to_target` (tone.wgsl) with the target known when specialised.
+fn target_from_display(display: vec3<f32>) -> vec3<f32> {
+    if SPECIALISED {
+        if OUTPUT == 0u {
+            return display;
+        }
+        let l = linear_from_display(display);
+        if OUTPUT == 2u {
+            return tone_map_neutral_inverse(l);
+        }
+        return tone_map_aces_inverse(l);
+    }
+    return to_target(display);
 }
 
 fn stage_uv(s: Stage, mode: u32, mesh_uv: vec2<f32>, dir_in: vec3<f32>) -> vec2<f32> {
@@ -121,9 +208,11 @@ fn stage_uv(s: Stage, mode: u32, mesh_uv: vec2<f32>, dir_in: vec3<f32>) -> vec2<
 // model's exposed radiance for the term that holds it.
 fn add_term(sum: vec4<f32>, term_display: vec4<f32>, view: vec3<f32>, has_view: bool) -> vec4<f32> {
     let t = term_display * draw.diffuse;
-    var rgb = to_target(t.rgb);
+    var rgb: vec3<f32>;
     if has_view {
         rgb = view * linear_from_display(t.rgb);
+    } else {
+        rgb = target_from_display(t.rgb);
     }
     return vec4<f32>(sum.rgb + rgb, max(sum.a, t.a));
 }
@@ -140,10 +229,10 @@ struct Terms {
 // dynamically indexed array of samples spills to memory on SIMD rasterisers (lavapipe).
 fn fold_stage(acc_in: Terms, i: u32, c_in: vec4<f32>, view: vec3<f32>) -> Terms {
     var acc = acc_in;
-    let s = draw.stages[i];
     var c = c_in;
-    if s.cfg.z < 4u { c = c * draw.constants[s.cfg.z]; }
-    if s.cfg.x == 1u {
+    let k = stage_constant(i);
+    if k < 4u { c = c * draw.constants[k]; }
+    if stage_op(i) == 1u {
         acc.term = acc.term * c;
     } else {
         if acc.has_term { acc.sum = add_term(acc.sum, acc.term, view, acc.term_has_view); }
@@ -151,15 +240,15 @@ fn fold_stage(acc_in: Terms, i: u32, c_in: vec4<f32>, view: vec3<f32>) -> Terms 
         acc.has_term = true;
         acc.term_has_view = false;
     }
-    acc.term_has_view = acc.term_has_view || i == draw.misc.z;
+    acc.term_has_view = acc.term_has_view || i == view_stage();
     return acc;
 }
 
 // Stage `i`'s sample: not placed nor sampled when its term is black this frame (reads as 0), white
 // when the sky-view map stands in for it.
 fn stage_sample(i: u32, t: texture_2d<f32>, smp: sampler, in: VertexOut) -> vec4<f32> {
-    if draw.misc.z == i { return vec4<f32>(1.0); }
-    if draw.stages[i].cfg.w == 0u { return vec4<f32>(0.0); }
+    if view_stage() == i { return vec4<f32>(1.0); }
+    if !stage_live(i) { return vec4<f32>(0.0); }
     return textureSample(t, smp, stage_uv(draw.stages[i], uv_mode(i), in.uv, in.world_dir));
 }
 
@@ -181,8 +270,8 @@ fn lit_cloud(world_dir: vec3<f32>, depth: f32) -> vec4<f32> {
     let n = normalize(-dir - slope);
     let sun_dir = globals.towards_sun.xyz;
     let sun_facing = clamp(1.0 + 2.0 * dot(n, sun_dir), 0.0, 3.0);
-    let sun = to_target(globals.cloud_sun.rgb) * 0.25 * sun_facing;
-    let ambient = to_target(globals.cloud_ambient.rgb);
+    let sun = target_from_display(globals.cloud_sun.rgb) * 0.25 * sun_facing;
+    let ambient = target_from_display(globals.cloud_ambient.rgb);
     let coverage = 1.0 - exp(-max(depth, 0.0));
     return vec4<f32>(sun + ambient, coverage);
 }
@@ -194,7 +283,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     // A physical model's radiance (already exposed, on the HDR target) in place of its stage; that
     // stage's colour then counts as white in its term.
     var view = vec3<f32>(1.0);
-    if draw.misc.z < 4u {
+    if view_stage() < 4u {
         view = textureSample(sky_view, sky_view_sampler, sky_view_uv(normalize(in.world_dir))).rgb;
     }
     var acc = Terms(vec4<f32>(0.0), vec4<f32>(0.0), false, false);
@@ -208,11 +297,11 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
 
     // Lit clouds. The lighting is per draw (uniform control flow), so the derivatives `lit_cloud`
     // takes are computed only by the draws that use them.
-    if draw.misc.y == 2u {
+    if lighting() == 2u {
         color = lit_cloud(in.world_dir, sum.a * bitcast<f32>(draw.misc.w));
     }
 
-    if draw.misc.y == 1u {
+    if lighting() == 1u {
         // Moon: a lit sphere seen from the dome centre; the sun side is bright, so phases show.
         let p = in.uv * 2.0 - vec2<f32>(1.0);
         let r2 = dot(p, p);

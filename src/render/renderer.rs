@@ -365,7 +365,10 @@ impl SkyRenderer {
                     };
                     rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
                     if draws_here {
+                        let exp = std::env::var("SKYTUNE_EXP_SKIP").unwrap_or_default();
+                        let names = self.pass_names();
                         for (i, it) in list {
+                            if exp.split(',').any(|n| n == names[*i].0) { continue; }
                             stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key, kind);
                         }
                     }

@@ -156,13 +156,68 @@ pub struct SkyObjectPipelines {
     module: wgpu::ShaderModule,
 }
 
-/// What a specialised pipeline is built for: stage count, UV mode per stage, blend, target.
+/// What a specialised pipeline is built for: the material's signature in this frame (stage
+/// count, and per stage its UV mode, op, constant index and whether its term is live), the stage
+/// the sky-view map feeds, the lighting, the blend and what the target holds. Everything the
+/// shader would otherwise branch on per draw: lavapipe pays for both sides of such branches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct VariantKey {
     count: u32,
     modes: [u32; 4],
+    ops: [u32; 4],
+    constants: [u32; 4],
+    live: [bool; 4],
+    view_stage: u32,
+    lighting: u32,
     blend: usize,
     target: Target,
+    /// 0 display values, 1 exposed radiance for the ACES tone mapper, 2 for the neutral one.
+    output: u32,
+}
+
+impl VariantKey {
+    /// The signature of a draw with this frame's uniform `u`.
+    fn of(u: &DrawUniform, blend: BlendMode, target: Target, neutral_tone: bool) -> Self {
+        let output = match (target, neutral_tone) {
+            (Target::Display, _) => 0,
+            (Target::Hdr, false) => 1,
+            (Target::Hdr, true) => 2,
+        };
+        Self {
+            count: u.misc[0],
+            modes: u.stages.map(|s| s.cfg[1]),
+            ops: u.stages.map(|s| s.cfg[0]),
+            constants: u.stages.map(|s| s.cfg[2]),
+            live: u.stages.map(|s| s.cfg[3] != 0),
+            view_stage: u.misc[2],
+            lighting: u.misc[1],
+            blend: blend_index(blend),
+            target,
+            output,
+        }
+    }
+
+    /// The override constants that specialise `shaders/sky_objects.wgsl` for this signature.
+    fn constants(&self) -> Vec<(&'static str, f64)> {
+        const MODES: [&str; 4] = ["UV_MODE_0", "UV_MODE_1", "UV_MODE_2", "UV_MODE_3"];
+        const OPS: [&str; 4] = ["OP_0", "OP_1", "OP_2", "OP_3"];
+        const CONSTANTS: [&str; 4] = ["CONSTANT_0", "CONSTANT_1", "CONSTANT_2", "CONSTANT_3"];
+        const LIVE: [&str; 4] = ["LIVE_0", "LIVE_1", "LIVE_2", "LIVE_3"];
+        let mut c = vec![
+            ("SPECIALISED", 1.0),
+            ("STAGE_COUNT", f64::from(self.count)),
+            ("VIEW_STAGE", f64::from(self.view_stage)),
+            ("LIGHTING", f64::from(self.lighting)),
+            ("OUTPUT", f64::from(self.output)),
+        ];
+        for k in 0..4 {
+            c.push((MODES[k], f64::from(self.modes[k])));
+            c.push((OPS[k], f64::from(self.ops[k])));
+            c.push((CONSTANTS[k], f64::from(self.constants[k])));
+            c.push((LIVE[k], f64::from(u8::from(self.live[k]))));
+        }
+        c
+    }
 }
 
 /// The sky objects pass: pipelines (one per blend mode, built once and rebuilt on shader edits,
@@ -187,6 +242,8 @@ pub struct SkyObjectsPass {
     ref_hidden: u32,
     /// Objects below the horizon this frame, behind the main scene.
     below_horizon: u32,
+    /// This frame's pipeline signature of every drawn version, by (object index, version).
+    keys: HashMap<(usize, usize), VariantKey>,
 }
 
 fn blend_index(b: BlendMode) -> usize {
@@ -228,6 +285,7 @@ impl SkyObjectsPass {
             stages_skipped: 0,
             ref_hidden: 0,
             below_horizon: 0,
+            keys: HashMap::new(),
         })
     }
 
@@ -245,25 +303,16 @@ impl SkyObjectsPass {
     }
 
     /// Builds the specialised pipelines this frame's visible versions need and do not have yet.
-    fn build_variants(&mut self, device: &wgpu::Device, target: Target) {
-        let Some(draws) = &self.draws.current else { return };
+    fn build_variants(&mut self, device: &wgpu::Device) {
         for (index, _, versions) in &self.visible {
             for &v in versions {
-                let key = draws.objects[*index][v].variant(target);
+                let Some(&key) = self.keys.get(&(*index, v)) else { continue };
                 if self.variants.contains_key(&key) {
                     continue;
                 }
-                let modes = key.modes.map(f64::from);
-                let constants = [
-                    ("SPECIALISED", 1.0),
-                    ("STAGE_COUNT", f64::from(key.count)),
-                    ("UV_MODE_0", modes[0]),
-                    ("UV_MODE_1", modes[1]),
-                    ("UV_MODE_2", modes[2]),
-                    ("UV_MODE_3", modes[3]),
-                ];
-                let format = if target == Target::Hdr { super::HDR_FORMAT } else { self.display_format };
-                let label = format!("SkyObjects::pipeline {} stages {:?} blend {} {:?}", key.count, key.modes, key.blend, target);
+                let constants = key.constants();
+                let format = if key.target == Target::Hdr { super::HDR_FORMAT } else { self.display_format };
+                let label = format!("SkyObjects::pipeline {key:?}");
                 let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, BLENDS[key.blend], format, &constants);
                 if let Err(e) = &built {
                     log::error!("{label}: {e}; the generic pipeline draws this material");
@@ -339,7 +388,9 @@ impl Pass for SkyObjectsPass {
         self.visible.clear();
         self.hidden = 0;
         let Some(draws) = &self.draws.current else { return };
-        self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera, cx.options.skips.dark_stages);
+        let neutral = super::tone_map::ToneMapUniform::from(cx.frame.sky_model.tone_mapper).settings[0] != 0;
+        self.keys.clear();
+        self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera, cx.options.skips.dark_stages, (cx.target, neutral), &mut self.keys);
         self.ref_hidden = 0;
         self.below_horizon = 0;
         let behind_scene = |of: &crate::sky::ObjectFrame, versions: &[crate::sky::VersionFrame]| {
@@ -366,7 +417,7 @@ impl Pass for SkyObjectsPass {
                 }
             }
         }
-        self.build_variants(cx.device, cx.target);
+        self.build_variants(cx.device);
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
@@ -377,7 +428,7 @@ impl Pass for SkyObjectsPass {
         let (Some(draws), Some((index, _, versions))) = (&self.draws.current, self.visible.get(key)) else { return 0 };
         for &v in versions {
             let d = &draws.objects[*index][v];
-            let specialised = self.variants.get(&d.variant(target)).and_then(Option::as_ref);
+            let specialised = self.keys.get(&(*index, v)).filter(|k| k.target == target).and_then(|k| self.variants.get(k)).and_then(Option::as_ref);
             rpass.set_pipeline(specialised.unwrap_or(&self.pipelines.for_target(target).generic[blend_index(d.blend)]));
             rpass.set_bind_group(1, &d.bind_group, &[]);
             rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
@@ -407,13 +458,6 @@ struct VersionDraw {
     blend: BlendMode,
     shape: Shape,
     base: DrawUniform,
-}
-
-impl VersionDraw {
-    /// The specialised pipeline this version draws with on `target`.
-    fn variant(&self, target: Target) -> VariantKey {
-        VariantKey { count: self.base.misc[0], modes: self.base.stages.map(|s| s.cfg[1]), blend: blend_index(self.blend), target }
-    }
 }
 
 /// Per-sky GPU resources: one [`VersionDraw`] per version of every object.
@@ -495,9 +539,10 @@ impl SkyObjectDraws {
         Self { objects, meshes }
     }
 
-    /// Writes this frame's uniforms and gradients; returns the texture stages skipped because
-    /// their term is black this frame.
-    pub fn prepare(&self, queue: &wgpu::Queue, frame: &FrameSky, camera: &Camera, skip_dark: bool) -> u32 {
+    /// Writes this frame's uniforms and gradients and records each drawn version's pipeline
+    /// signature in `keys` (by object index and version) for `(target, neutral tone mapper)`;
+    /// returns the texture stages skipped because their term is black this frame.
+    fn prepare(&self, queue: &wgpu::Queue, frame: &FrameSky, camera: &Camera, skip_dark: bool, (target, neutral): (Target, bool), keys: &mut HashMap<(usize, usize), VariantKey>) -> u32 {
         let mut skipped = 0;
         for of in &frame.objects {
             let Ok(versions) = &of.versions else { continue };
@@ -511,6 +556,7 @@ impl SkyObjectDraws {
                     skipped += u.skip_dark_terms(d.blend != BlendMode::Opaque);
                 }
                 queue.write_buffer(&d.uniform, 0, bytemuck::bytes_of(&u));
+                keys.insert((of.index, p.version), VariantKey::of(&u, d.blend, target, neutral));
                 if let (Some((tex, h)), Some(g)) = (&d.gradient, &p.gradient) {
                     let bytes: Vec<u8> = g.iter().flat_map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)).collect();
                     textures::write(queue, tex, 1, *h, &bytes);
