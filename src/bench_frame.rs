@@ -74,7 +74,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     let skies = skies(&args.skies)?;
     let views: [(&str, Camera); 2] =
         [("horizon", Camera { yaw_deg: 180.0, pitch_deg: 10.0, ..Camera::default() }), ("zenith", Camera::preset("zenith").ok_or_else(|| anyhow!("no zenith view"))?)];
-    let options = RenderOptions::default();
+    let options = RenderOptions { dome_resolution: args.dome_resolution, ..Default::default() };
 
     let mut cases = Vec::new();
     for (name, sky) in &skies {

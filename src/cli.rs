@@ -482,6 +482,14 @@ pub struct FrameBenchArgs {
     /// Force the software adapter (lavapipe).
     #[arg(long)]
     pub cpu: bool,
+    /// Resolution of the dome layers: full, half or quarter.
+    #[arg(long, default_value = "full", value_parser = parse_dome_resolution)]
+    pub dome_resolution: skytune::render::DomeResolution,
+}
+
+/// Parses a dome resolution name (full, half, quarter).
+pub fn parse_dome_resolution(s: &str) -> Result<skytune::render::DomeResolution, String> {
+    skytune::render::DomeResolution::parse(s).ok_or_else(|| format!("unknown dome resolution {s:?}: full, half or quarter"))
 }
 
 /// `bench` arguments.

@@ -14,6 +14,7 @@ pub mod particles;
 pub mod pass;
 pub mod precipitation;
 pub mod radiance_probe;
+pub mod reduced_layers;
 pub mod renderer;
 pub mod scene;
 pub mod shaders;
@@ -31,6 +32,7 @@ pub use context::{AdapterChoice, GpuContext};
 pub use error::{RenderError, RenderResult};
 pub use headless::{Headless, Offscreen};
 pub use pass::{Pass, Phase, PASSES};
+pub use reduced_layers::DomeResolution;
 pub use renderer::{release_freed_memory, FrameStats, RenderOptions, RenderTarget, Skips, SkyRenderer, UploadStats, SCENE_DEPTH, SKY_DEPTH};
 pub use shaders::ShaderLibrary;
 

@@ -259,11 +259,11 @@ impl Pass for ParticlesPass {
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         if let Some(set) = &self.set.current {
             for (key, g) in set.emitters.iter().enumerate().filter(|(_, g)| !g.camera && g.count > 0) {
-                out.push(DrawItem { priority: g.priority, key });
+                out.push(DrawItem { priority: g.priority, key, reduced: false });
             }
         }
         if self.flash.count > 0 {
-            out.push(DrawItem { priority: 63, key: FLASH_KEY });
+            out.push(DrawItem { priority: 63, key: FLASH_KEY, reduced: false });
         }
     }
 

@@ -179,6 +179,8 @@ pub struct DrawItem {
     pub priority: u8,
     /// The pass's own index of what to draw.
     pub key: usize,
+    /// A dome layer the sky phase may draw at reduced resolution ([`Pass::draw_reduced`]).
+    pub reduced: bool,
 }
 
 /// A GPU pass: its pipelines (built once, rebuilt on shader reload), its per-sky resources and
@@ -214,6 +216,13 @@ pub trait Pass: Any {
     /// Records one item into the phase's render pass, with the pipelines built for `target`;
     /// returns draw calls.
     fn draw(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target) -> u32 {
+        0
+    }
+
+    /// Records an item marked `reduced` into a reduced-resolution buffer of the sky phase
+    /// ([`super::reduced_layers`]: premultiplied colour and transmittance, blended with
+    /// [`super::reduced_layers::REDUCED_BLENDS`]); returns draw calls.
+    fn draw_reduced(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target) -> u32 {
         0
     }
 
@@ -279,6 +288,7 @@ pub const PASSES: &[(&str, PassConstructor)] = &[
     ("precipitation", |b| boxed(super::precipitation::PrecipitationPass::new, b)),
     ("glare", |b| boxed(super::glare::GlarePass::new, b)),
     ("tone_map", |b| boxed(super::tone_map::ToneMapPass::new, b)),
+    ("reduced_layers", |b| boxed(super::reduced_layers::ReducedLayersPass::new, b)),
 ];
 
 /// A value in use and a replacement waiting for every other pass to succeed too.

@@ -97,7 +97,7 @@ impl Pass for PrecipitationPass {
     fn compute_items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         for (key, sim) in self.sims.current.iter().enumerate() {
             if sim.as_ref().is_some_and(|(s, _)| s.slots > 0) {
-                out.push(DrawItem { priority: 0, key });
+                out.push(DrawItem { priority: 0, key, reduced: false });
             }
         }
     }
@@ -113,7 +113,7 @@ impl Pass for PrecipitationPass {
             for (key, g) in set.emitters.iter().enumerate().filter(|(_, g)| g.camera) {
                 let gpu = self.sims.current.get(key).and_then(|s| s.as_ref()).is_some_and(|(s, _)| s.slots > 0);
                 if g.count > 0 || gpu {
-                    out.push(DrawItem { priority: 0, key });
+                    out.push(DrawItem { priority: 0, key, reduced: false });
                 }
             }
         }

@@ -6,6 +6,8 @@ use super::camera::Camera;
 use super::error::RenderResult;
 use super::globals::{Globals, GlobalsBinding};
 use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SharedResources, SkyUpload, Target, PASSES};
+use super::reduced_layers::DomeResolution;
+use super::reduced_layers::ReducedLayersPass;
 use super::shaders::{self, ShaderLibrary};
 use super::textures::TextureCache;
 use super::timing::GpuTimer;
@@ -32,11 +34,14 @@ pub struct RenderOptions {
     /// Work skipped because it would contribute nothing (all on by default; off to measure
     /// what each saves).
     pub skips: Skips,
+    /// Resolution of the dome layers (skydome, galaxy, clouds, fog): below full, each run of
+    /// consecutive dome layers is drawn into a smaller buffer and composited in its place.
+    pub dome_resolution: DomeResolution,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { scene: true, depth_split: true, glare: true, occluder: None, skips: Skips::default() }
+        Self { scene: true, depth_split: true, glare: true, occluder: None, skips: Skips::default(), dome_resolution: DomeResolution::default() }
     }
 }
 
@@ -81,6 +86,8 @@ pub struct FrameStats {
     pub objects_ref_hidden: u32,
     /// Sky objects not drawn because they are below the horizon, behind the main scene.
     pub objects_below_horizon: u32,
+    /// Sky objects drawn into a reduced-resolution buffer ([`RenderOptions::dome_resolution`]).
+    pub objects_reduced: u32,
     /// The star field was not drawn: transparent this frame.
     pub stars_skipped: bool,
     /// The `lut` tables were not rebuilt: nothing they depend on moved.
@@ -349,13 +356,44 @@ impl SkyRenderer {
                     // phase, painted over an already shaded sky.
                     let draws_here = phase != Phase::Scene || split;
                     let load = if phase == Phase::Scene { (wgpu::LoadOp::Clear(wgpu::Color::BLACK), wgpu::LoadOp::Clear(1.0)) } else { (wgpu::LoadOp::Load, wgpu::LoadOp::Load) };
+                    // Runs of consecutive dome layers drawn at reduced resolution first, each into
+                    // its own buffer; the sky pass composites each in its run's place.
+                    let divisor = options.dome_resolution.divisor();
+                    let runs = if phase == Phase::Sky && draws_here && divisor > 1 { reduced_runs(list) } else { Vec::new() };
+                    let reduced_pass = self.passes.iter().position(|p| p.name() == "reduced_layers");
+                    if let (false, Some(rp)) = (runs.is_empty(), reduced_pass) {
+                        if let Some(layers) = (self.passes[rp].as_mut() as &mut dyn std::any::Any).downcast_mut::<ReducedLayersPass>() {
+                            layers.ensure(&ctx.device, &ctx.queue, (w, h), divisor, runs.len());
+                        }
+                    }
                     let queries = list.iter().find_map(|(i, _)| self.passes[*i].occlusion_query_set());
                     let label = format!("SkyRenderer::{}", phase.name());
-                    let writes = self.timer.as_mut().and_then(|t| t.render_writes(phase));
+                    let mut writes = self.timer.as_mut().and_then(|t| t.render_writes(phase));
                     let color = match &self.hdr {
                         Some(t) if kind == Target::Hdr => &t.view,
                         _ => target.color,
                     };
+                    if let (false, Some(rp)) = (runs.is_empty(), reduced_pass) {
+                        let layers = (self.passes[rp].as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>();
+                        for (r, &(start, end)) in runs.iter().enumerate() {
+                            // The phase's timing starts with the first run.
+                            let run_writes = if r == 0 {
+                                writes.as_ref().map(|t| wgpu::RenderPassTimestampWrites {
+                                    query_set: t.query_set,
+                                    beginning_of_pass_write_index: t.beginning_of_pass_write_index,
+                                    end_of_pass_write_index: None,
+                                })
+                            } else {
+                                None
+                            };
+                            let Some(mut rpass) = layers.and_then(|l| l.begin(encoder, r, run_writes)) else { continue };
+                            rpass.set_bind_group(0, &self.globals.bind_group, &[]);
+                            for (i, it) in &list[start..end] {
+                                stats.draw_calls += self.passes[*i].draw_reduced(&mut rpass, it.key, kind);
+                            }
+                        }
+                        writes = writes.map(|t| wgpu::RenderPassTimestampWrites { beginning_of_pass_write_index: None, ..t });
+                    }
                     let mut rpass = begin_pass(encoder, &label, (color, target.depth), load, writes, queries);
                     rpass.set_bind_group(0, &self.globals.bind_group, &[]);
                     let range = match phase {
@@ -365,11 +403,16 @@ impl SkyRenderer {
                     };
                     rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
                     if draws_here {
-                        let exp = std::env::var("SKYTUNE_EXP_SKIP").unwrap_or_default();
-                        let names = self.pass_names();
-                        for (i, it) in list {
-                            if exp.split(',').any(|n| n == names[*i].0) { continue; }
+                        let mut k = 0;
+                        while k < list.len() {
+                            if let (Some(r), Some(rp)) = (runs.iter().position(|&(start, _)| start == k), reduced_pass) {
+                                stats.draw_calls += self.passes[rp].draw(&mut rpass, r, kind);
+                                k = runs[r].1;
+                                continue;
+                            }
+                            let (i, it) = &list[k];
                             stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key, kind);
+                            k += 1;
                         }
                     }
                     if phase == Phase::Sky && !split {
@@ -450,6 +493,24 @@ pub fn release_freed_memory() {
             malloc_trim(0);
         }
     }
+}
+
+/// The runs of consecutive items marked `reduced` in a sorted phase list: (start, end) indices.
+fn reduced_runs(list: &[(usize, DrawItem)]) -> Vec<(usize, usize)> {
+    let mut runs = Vec::new();
+    let mut k = 0;
+    while k < list.len() {
+        if list[k].1.reduced {
+            let start = k;
+            while k < list.len() && list[k].1.reduced {
+                k += 1;
+            }
+            runs.push((start, k));
+        } else {
+            k += 1;
+        }
+    }
+    runs
 }
 
 /// Begins one phase's render pass on the shared colour and depth targets.

@@ -173,6 +173,8 @@ struct VariantKey {
     target: Target,
     /// 0 display values, 1 exposed radiance for the ACES tone mapper, 2 for the neutral one.
     output: u32,
+    /// Drawn into a reduced-resolution buffer ([`super::reduced_layers`]).
+    reduced: bool,
 }
 
 impl VariantKey {
@@ -194,6 +196,7 @@ impl VariantKey {
             blend: blend_index(blend),
             target,
             output,
+            reduced: false,
         }
     }
 
@@ -233,8 +236,9 @@ pub struct SkyObjectsPass {
     draws: Staged<Option<SkyObjectDraws>>,
     /// The shared sky-view map and its sampler, bound to every draw.
     sky_view: (wgpu::TextureView, wgpu::Sampler),
-    /// This frame's visible objects: (object index, versions to draw), in draw order.
-    visible: Vec<(usize, u8, Vec<usize>)>,
+    /// This frame's visible objects: (object index, priority, versions to draw, drawn at reduced
+    /// resolution), in draw order.
+    visible: Vec<(usize, u8, Vec<usize>, bool)>,
     hidden: u32,
     /// Texture stages not sampled this frame (their term is black).
     stages_skipped: u32,
@@ -292,7 +296,7 @@ impl SkyObjectsPass {
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<SkyObjectPipelines> {
         let module = shaders::module(b.device, b.library, "sky_objects")?;
         let names = ["SkyObjects::pipeline_opaque", "SkyObjects::pipeline_alpha", "SkyObjects::pipeline_additive"];
-        let one = |i: usize| create_pipeline(b.device, layout, &module, names[i], BLENDS[i], b.color_format, &[]);
+        let one = |i: usize| create_pipeline(b.device, layout, &module, names[i], (BLENDS[i], b.color_format, true), &[]);
         Ok(SkyObjectPipelines { generic: [one(0)?, one(1)?, one(2)?], module })
     }
 
@@ -302,18 +306,48 @@ impl SkyObjectsPass {
         (ok, self.variants.len() - ok)
     }
 
+    /// Records visible object `key` (each of its versions) into the frame's target or, `reduced`,
+    /// into a reduced-resolution buffer; returns draw calls.
+    fn record(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, reduced: bool) -> u32 {
+        let (Some(draws), Some((index, _, versions, _))) = (&self.draws.current, self.visible.get(key)) else { return 0 };
+        let mut calls = 0;
+        for &v in versions {
+            let d = &draws.objects[*index][v];
+            let variant = self.keys.get(&(*index, v)).filter(|k| k.target == target).map(|k| VariantKey { reduced, ..*k });
+            let specialised = variant.and_then(|k| self.variants.get(&k)).and_then(Option::as_ref);
+            let pipeline = match (specialised, reduced) {
+                (Some(p), _) => p,
+                (None, false) => &self.pipelines.for_target(target).generic[blend_index(d.blend)],
+                // No generic pipeline for reduced buffers: its failure was logged when building.
+                (None, true) => continue,
+            };
+            rpass.set_pipeline(pipeline);
+            rpass.set_bind_group(1, &d.bind_group, &[]);
+            rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
+            rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+            rpass.draw_indexed(0..d.mesh.index_count, 0, 0..1);
+            calls += 1;
+        }
+        calls
+    }
+
     /// Builds the specialised pipelines this frame's visible versions need and do not have yet.
     fn build_variants(&mut self, device: &wgpu::Device) {
-        for (index, _, versions) in &self.visible {
+        for (index, _, versions, reduced) in &self.visible {
             for &v in versions {
-                let Some(&key) = self.keys.get(&(*index, v)) else { continue };
+                let Some(&frame_key) = self.keys.get(&(*index, v)) else { continue };
+                let key = VariantKey { reduced: *reduced, ..frame_key };
                 if self.variants.contains_key(&key) {
                     continue;
                 }
                 let constants = key.constants();
-                let format = if key.target == Target::Hdr { super::HDR_FORMAT } else { self.display_format };
+                let (format, blend) = match (key.reduced, key.target) {
+                    (true, _) => (super::reduced_layers::REDUCED_FORMAT, Some(super::reduced_layers::REDUCED_BLENDS[key.blend])),
+                    (false, Target::Hdr) => (super::HDR_FORMAT, BLENDS[key.blend]),
+                    (false, Target::Display) => (self.display_format, BLENDS[key.blend]),
+                };
                 let label = format!("SkyObjects::pipeline {key:?}");
-                let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, BLENDS[key.blend], format, &constants);
+                let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, (blend, format, !key.reduced), &constants);
                 if let Err(e) = &built {
                     log::error!("{label}: {e}; the generic pipeline draws this material");
                 }
@@ -329,8 +363,7 @@ fn create_pipeline(
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     label: &str,
-    blend: Option<wgpu::BlendState>,
-    format: wgpu::TextureFormat,
+    (blend, format, depth): (Option<wgpu::BlendState>, wgpu::TextureFormat, bool),
     constants: &[(&str, f64)],
 ) -> RenderResult<wgpu::RenderPipeline> {
     let options = wgpu::PipelineCompilationOptions { constants, zero_initialize_workgroup_memory: true };
@@ -340,7 +373,8 @@ fn create_pipeline(
             layout: Some(layout),
             vertex: wgpu::VertexState { module, entry_point: Some("vs_main"), buffers: &[Some(SkyVertex::LAYOUT)], compilation_options: options.clone() },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: super::depth_state(false, wgpu::CompareFunction::Less),
+            // Reduced buffers have no depth: the composite is depth-tested instead.
+            depth_stencil: if depth { super::depth_state(false, wgpu::CompareFunction::Less) } else { None },
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module,
@@ -404,13 +438,29 @@ impl Pass for SkyObjectsPass {
                 _ => false,
             })
         };
+        let divisor = cx.options.dome_resolution.divisor();
+        let reduce_domes = divisor > 1;
+        // The reduced buffer's pixels per degree of view at the centre of the frame.
+        let reduced_px_per_deg = cx.size.1 as f32 / cx.camera.fov_y_deg.max(1.0) / divisor as f32;
         for of in &cx.frame.objects {
             match &of.versions {
                 Ok(versions) if behind_scene(of, versions) => {
                     self.hidden += 1;
                     self.below_horizon += 1;
                 }
-                Ok(versions) => self.visible.push((of.index, of.priority, versions.iter().map(|v| v.version).collect())),
+                Ok(versions) => {
+                    // Dome layers go to a reduced buffer unless a texture they sample this frame
+                    // has finer detail than the buffer's pixels (a starry skydome at night);
+                    // billboards and quads stay sharp.
+                    let reduced = reduce_domes
+                        && versions.iter().all(|v| {
+                            let d = &draws.objects[of.index][v.version];
+                            let live = self.keys.get(&(of.index, v.version)).map_or([true; 4], |k| k.live);
+                            let finest = (0..MAX_STAGES).filter(|&k| live[k]).map(|k| d.texels_per_deg[k]).fold(0.0, f32::max);
+                            matches!(d.shape, Shape::Dome { .. } | Shape::DomeBand { .. }) && finest <= reduced_px_per_deg
+                        });
+                    self.visible.push((of.index, of.priority, versions.iter().map(|v| v.version).collect(), reduced));
+                }
                 Err(why) => {
                     self.hidden += 1;
                     self.ref_hidden += u32::from(matches!(why, crate::sky::Hidden::RefAlphaZero(_)));
@@ -421,21 +471,15 @@ impl Pass for SkyObjectsPass {
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
-        out.extend(self.visible.iter().enumerate().map(|(key, (_, priority, _))| DrawItem { priority: *priority, key }));
+        out.extend(self.visible.iter().enumerate().map(|(key, (_, priority, _, reduced))| DrawItem { priority: *priority, key, reduced: *reduced }));
     }
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        let (Some(draws), Some((index, _, versions))) = (&self.draws.current, self.visible.get(key)) else { return 0 };
-        for &v in versions {
-            let d = &draws.objects[*index][v];
-            let specialised = self.keys.get(&(*index, v)).filter(|k| k.target == target).and_then(|k| self.variants.get(k)).and_then(Option::as_ref);
-            rpass.set_pipeline(specialised.unwrap_or(&self.pipelines.for_target(target).generic[blend_index(d.blend)]));
-            rpass.set_bind_group(1, &d.bind_group, &[]);
-            rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
-            rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-            rpass.draw_indexed(0..d.mesh.index_count, 0, 0..1);
-        }
-        versions.len() as u32
+        self.record(rpass, key, target, false)
+    }
+
+    fn draw_reduced(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
+        self.record(rpass, key, target, true)
     }
 
     fn stats(&self, stats: &mut FrameStats) {
@@ -444,6 +488,7 @@ impl Pass for SkyObjectsPass {
         stats.stages_skipped = self.stages_skipped;
         stats.objects_ref_hidden = self.ref_hidden;
         stats.objects_below_horizon = self.below_horizon;
+        stats.objects_reduced = self.visible.iter().filter(|v| v.3).count() as u32;
     }
 }
 
@@ -458,6 +503,30 @@ struct VersionDraw {
     blend: BlendMode,
     shape: Shape,
     base: DrawUniform,
+    /// Finest detail of each stage's texture on the sky, texels per degree (0: no stage).
+    texels_per_deg: [f32; 4],
+}
+
+/// The finest detail a stage's texture puts on the sky, texels per degree of view direction:
+/// what a buffer needs at least to show it. Infinite where the mapping has no bound (the Quake
+/// sky's squeezes its texture towards the horizon). The gradient stage (no texture) varies only
+/// slowly, by elevation.
+fn stage_texels_per_deg(stage: &crate::sky::resolved::Stage, shape: &Shape) -> f32 {
+    let Some(t) = &stage.texture else { return 0.0 };
+    let (w, h) = (t.width as f32 * stage.uv_scale[0].abs(), t.height as f32 * stage.uv_scale[1].abs());
+    let span_deg = match *shape {
+        Shape::Dome { bottom_deg } => 90.0 - bottom_deg.get(),
+        Shape::DomeBand { bottom_deg, top_deg } => top_deg.get() - bottom_deg.get(),
+        Shape::Billboard { size_deg } | Shape::Quad { size_deg } => size_deg.get(),
+    }
+    .abs()
+    .max(1e-3);
+    match stage.uv {
+        UvSource::Mesh => (w / 360.0).max(h / span_deg),
+        UvSource::Sun { size_deg } => w.max(h) / size_deg.get().abs().max(1e-3),
+        UvSource::Celestial => (w / 360.0).max(h / 180.0),
+        UvSource::Quake { .. } => f32::INFINITY,
+    }
 }
 
 /// Per-sky GPU resources: one [`VersionDraw`] per version of every object.
@@ -531,7 +600,11 @@ impl SkyObjectDraws {
                         entries.push(wgpu::BindGroupEntry { binding: 10, resource: wgpu::BindingResource::Sampler(&sky_view.1) });
                         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&format!("{label}::bind_group")), layout, entries: &entries });
                         let gradient_stage = v.gradients.as_ref().map(|g| g.stage);
-                        VersionDraw { uniform, bind_group, mesh, gradient, gradient_stage, blend: v.blend, shape: v.shape, base: DrawUniform::from(v) }
+                        let mut texels_per_deg = [0.0; 4];
+                        for (k, s) in v.stages.iter().enumerate() {
+                            texels_per_deg[k] = stage_texels_per_deg(s, &v.shape);
+                        }
+                        VersionDraw { uniform, bind_group, mesh, gradient, gradient_stage, blend: v.blend, shape: v.shape, base: DrawUniform::from(v), texels_per_deg }
                     })
                     .collect()
             })
@@ -542,7 +615,15 @@ impl SkyObjectDraws {
     /// Writes this frame's uniforms and gradients and records each drawn version's pipeline
     /// signature in `keys` (by object index and version) for `(target, neutral tone mapper)`;
     /// returns the texture stages skipped because their term is black this frame.
-    fn prepare(&self, queue: &wgpu::Queue, frame: &FrameSky, camera: &Camera, skip_dark: bool, (target, neutral): (Target, bool), keys: &mut HashMap<(usize, usize), VariantKey>) -> u32 {
+    fn prepare(
+        &self,
+        queue: &wgpu::Queue,
+        frame: &FrameSky,
+        camera: &Camera,
+        skip_dark: bool,
+        (target, neutral): (Target, bool),
+        keys: &mut HashMap<(usize, usize), VariantKey>,
+    ) -> u32 {
         let mut skipped = 0;
         for of in &frame.objects {
             let Ok(versions) = &of.versions else { continue };

@@ -1,0 +1,261 @@
+//! Dome layers at reduced resolution (trueSKY's mixed-resolution rendering, see
+//! ../shared/references/truesky-rendering-techniques.txt): a run of consecutive dome draws of the
+//! sky phase is drawn into a buffer `divisor` times smaller on each side, holding premultiplied
+//! colour and the run's transmittance, and composited over the frame in the run's place with one
+//! full-screen triangle (`shaders/reduced_layers.wgsl`). Billboards, stars and particles stay at
+//! full resolution. Dome layers are smooth gradients and soft clouds: on a software rasteriser
+//! their fill is most of a frame's cost, and a quarter of the pixels costs about a quarter.
+
+use bytemuck::{Pod, Zeroable};
+
+use super::error::RenderResult;
+use super::pass::{FrameContext, Pass, PassBuild, Phase, Pipelines, Target};
+use super::shaders;
+
+/// Format of the reduced buffers: premultiplied colour of either target (display values or
+/// exposed radiance above 1) and transmittance.
+pub const REDUCED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// How finely dome layers are drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DomeResolution {
+    /// At the frame's resolution, straight into it (the default: after specialisation the
+    /// dome layers' fill is no longer most of a frame on lavapipe; see docs/performance.md).
+    #[default]
+    Full,
+    /// Half the width and height (a quarter of the pixels), composited.
+    Half,
+    /// A quarter of the width and height, composited.
+    Quarter,
+}
+
+impl DomeResolution {
+    /// Every choice, finest first.
+    pub const ALL: [DomeResolution; 3] = [DomeResolution::Full, DomeResolution::Half, DomeResolution::Quarter];
+
+    /// Frame pixels per buffer pixel along each side.
+    pub fn divisor(self) -> u32 {
+        match self {
+            DomeResolution::Full => 1,
+            DomeResolution::Half => 2,
+            DomeResolution::Quarter => 4,
+        }
+    }
+
+    /// Name in the CLI, the app and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            DomeResolution::Full => "full",
+            DomeResolution::Half => "half",
+            DomeResolution::Quarter => "quarter",
+        }
+    }
+
+    /// Parses [`DomeResolution::name`].
+    pub fn parse(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|r| r.name() == s)
+    }
+}
+
+/// How each blend mode of a dome layer accumulates into a reduced buffer (cleared to colour 0,
+/// transmittance 1): colour as on the frame, transmittance multiplied by what the layer lets
+/// through. Indexed like the sky objects' blend modes (opaque, alpha, additive).
+pub const REDUCED_BLENDS: [wgpu::BlendState; 3] = [
+    wgpu::BlendState {
+        color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::Zero, operation: wgpu::BlendOperation::Add },
+        alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::Zero, operation: wgpu::BlendOperation::Add },
+    },
+    wgpu::BlendState {
+        color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::SrcAlpha, dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha, operation: wgpu::BlendOperation::Add },
+        alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha, operation: wgpu::BlendOperation::Add },
+    },
+    wgpu::BlendState {
+        color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::SrcAlpha, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
+        alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
+    },
+];
+
+/// The composite's blend: target = colour + transmittance x target; the target's alpha is kept.
+const COMPOSITE_BLEND: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::SrcAlpha, operation: wgpu::BlendOperation::Add },
+    alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
+};
+
+/// The composite's uniform. Keep in sync with `Composite` in shaders/reduced_layers.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct CompositeUniform {
+    /// Full-resolution pixel to buffer texture coordinates (xy); zw unused.
+    uv_from_pixel: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<CompositeUniform>() == 16);
+
+/// One run's buffer and the bind group that reads it.
+struct RunBuffer {
+    view: wgpu::TextureView,
+    bind_group: wgpu::BindGroup,
+}
+
+/// The reduced buffers of a frame size and the composite pipelines.
+pub struct ReducedLayersPass {
+    layout: wgpu::BindGroupLayout,
+    pipelines: Pipelines<wgpu::RenderPipeline>,
+    uniform: wgpu::Buffer,
+    sampler: wgpu::Sampler,
+    /// Frame size and divisor the buffers are made for.
+    made_for: ((u32, u32), u32),
+    buffers: Vec<RunBuffer>,
+}
+
+impl ReducedLayersPass {
+    /// Builds the layouts and pipelines; buffers come with the first frame that needs them.
+    pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
+        let device = b.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("ReducedLayers::layout"),
+            entries: &[super::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), super::texture_entry(1), super::sampler_entry(2)],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("ReducedLayers::pipeline_layout"),
+            bind_group_layouts: &[Some(b.globals_layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipelines = Pipelines::new_render(b, pipeline_layout, Self::build)?;
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ReducedLayers::uniform"),
+            size: std::mem::size_of::<CompositeUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("ReducedLayers::sampler"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        Ok(Self { layout, pipelines, uniform, sampler, made_for: ((0, 0), 0), buffers: Vec::new() })
+    }
+
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
+        let module = shaders::module(b.device, b.library, "reduced_layers")?;
+        shaders::validated(b.device, "ReducedLayers::pipeline", || {
+            b.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("ReducedLayers::pipeline"),
+                layout: Some(layout),
+                vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: super::depth_state(false, wgpu::CompareFunction::Less),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    targets: &[Some(wgpu::ColorTargetState { format: b.color_format, blend: Some(COMPOSITE_BLEND), write_mask: wgpu::ColorWrites::ALL })],
+                    compilation_options: Default::default(),
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
+    }
+
+    /// Size of the reduced buffers for a frame size and divisor, pixels.
+    pub fn buffer_size((width, height): (u32, u32), divisor: u32) -> (u32, u32) {
+        (width.div_ceil(divisor).max(1), height.div_ceil(divisor).max(1))
+    }
+
+    /// Makes sure `runs` buffers exist for the frame size and divisor.
+    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), divisor: u32, runs: usize) {
+        if self.made_for != (size, divisor) {
+            self.buffers.clear();
+            self.made_for = (size, divisor);
+            let (bw, bh) = Self::buffer_size(size, divisor);
+            let d = divisor as f32;
+            let u = CompositeUniform { uv_from_pixel: [1.0 / (d * bw as f32), 1.0 / (d * bh as f32), 0.0, 0.0] };
+            queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&u));
+        }
+        while self.buffers.len() < runs {
+            let (width, height) = Self::buffer_size(size, divisor);
+            let texture = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(&format!("ReducedLayers::buffer {}", self.buffers.len())),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: REDUCED_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            });
+            let view = texture.create_view(&Default::default());
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("ReducedLayers::bind_group"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: self.uniform.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
+                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                ],
+            });
+            self.buffers.push(RunBuffer { view, bind_group });
+        }
+    }
+
+    /// Begins the render pass that draws run `run` into its buffer (cleared to nothing in front:
+    /// colour 0, transmittance 1), its viewport the frame scaled down by the divisor.
+    pub fn begin<'e>(&self, encoder: &'e mut wgpu::CommandEncoder, run: usize, timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>) -> Option<wgpu::RenderPass<'e>> {
+        let buffer = self.buffers.get(run)?;
+        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("ReducedLayers::run"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &buffer.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 }), store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let ((w, h), d) = self.made_for;
+        rpass.set_viewport(0.0, 0.0, w as f32 / d as f32, h as f32 / d as f32, 0.0, 1.0);
+        Some(rpass)
+    }
+}
+
+impl Pass for ReducedLayersPass {
+    fn name(&self) -> &'static str {
+        "reduced_layers"
+    }
+
+    fn phase(&self) -> Phase {
+        Phase::Sky
+    }
+
+    fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
+        self.pipelines.stage(b)
+    }
+
+    fn commit_pipelines(&mut self, accept: bool) {
+        self.pipelines.commit(accept);
+    }
+
+    fn prepare(&mut self, cx: &FrameContext<'_>) {
+        // Buffers of another size are of no further use.
+        if self.made_for.0 != cx.size {
+            self.buffers.clear();
+            self.made_for = ((0, 0), 0);
+        }
+    }
+
+    /// None of its own: the renderer places a composite where each run's first layer would draw.
+    fn items(&self, _cx: &FrameContext<'_>, _out: &mut Vec<super::pass::DrawItem>) {}
+
+    /// Composites run `key` (the renderer places it where the run's first layer would draw).
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
+        let Some(buffer) = self.buffers.get(key) else { return 0 };
+        rpass.set_pipeline(self.pipelines.for_target(target));
+        rpass.set_bind_group(1, &buffer.bind_group, &[]);
+        rpass.draw(0..3, 0..1);
+        1
+    }
+}
