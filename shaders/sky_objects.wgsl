@@ -244,11 +244,11 @@ fn fold_stage(acc_in: Terms, i: u32, c_in: vec4<f32>, view: vec3<f32>) -> Terms 
     return acc;
 }
 
-// Stage `i`'s sample: not placed nor sampled when its term is black this frame (reads as 0), white
-// when the sky-view map stands in for it.
+// Stage `i`'s sample: not placed nor sampled when its term is black this frame or left to another
+// draw of the layer (reads as 0), white when the sky-view map stands in for it.
 fn stage_sample(i: u32, t: texture_2d<f32>, smp: sampler, in: VertexOut) -> vec4<f32> {
-    if view_stage() == i { return vec4<f32>(1.0); }
     if !stage_live(i) { return vec4<f32>(0.0); }
+    if view_stage() == i { return vec4<f32>(1.0); }
     return textureSample(t, smp, stage_uv(draw.stages[i], uv_mode(i), in.uv, in.world_dir));
 }
 

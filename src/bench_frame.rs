@@ -157,9 +157,10 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     let _ = writeln!(md, "- adapter: {adapter}");
     let _ = writeln!(
         md,
-        "- machine: {} logical CPUs; release build; {w}x{h}; {} measured frames per case after 2 warm-up frames",
+        "- machine: {} logical CPUs; release build; {w}x{h}; {} measured frames per case after 2 warm-up frames; dome layers at {} resolution (`--dome-resolution`)",
         std::thread::available_parallelism().map_or(1, |n| n.get()),
-        frames
+        frames,
+        args.dome_resolution.name()
     );
     let _ = writeln!(
         md,

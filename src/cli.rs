@@ -260,6 +260,10 @@ pub struct FrameArgs {
     /// Hide the main-scene stand-in (sky only).
     #[arg(long)]
     pub no_scene: bool,
+    /// Resolution of the dome layers: full, half or quarter (layers with finer texture detail
+    /// than a reduced buffer stay at full resolution).
+    #[arg(long, default_value = "half", value_parser = parse_dome_resolution)]
+    pub dome_resolution: skytune::render::DomeResolution,
     /// Render what the environment map sees (objects with visible_in_env_map).
     #[arg(long)]
     pub env_map: bool,
@@ -483,7 +487,7 @@ pub struct FrameBenchArgs {
     #[arg(long)]
     pub cpu: bool,
     /// Resolution of the dome layers: full, half or quarter.
-    #[arg(long, default_value = "full", value_parser = parse_dome_resolution)]
+    #[arg(long, default_value = "half", value_parser = parse_dome_resolution)]
     pub dome_resolution: skytune::render::DomeResolution,
 }
 

@@ -3,7 +3,7 @@
 
 mod common;
 
-use skytune::render::{Camera, RenderOptions, Skips};
+use skytune::render::{Camera, DomeResolution, RenderOptions, Skips};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
 use skytune::sky::FrameInput;
@@ -16,7 +16,9 @@ fn skips_change_no_pixel_and_are_counted() {
     let camera = Camera { pitch_deg: 35.0, ..Camera::default() };
     let mut input = FrameInput::new(13.0, 0.2);
     input.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
-    let on = RenderOptions { glare: false, ..Default::default() };
+    // At full resolution: a skipped stage can let a dome layer go to a reduced buffer, which
+    // moves pixels by a level or two (tests/reduced_layers.rs bounds that).
+    let on = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
     let off = RenderOptions { skips: Skips { dark_stages: false, invisible_stars: false, unchanged_tables: false, below_horizon: false }, ..on };
     // Two frames each: the second finds the tables and the map current.
     h.render(&sky, &input, &camera, &on).expect("rendered");

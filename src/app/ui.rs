@@ -524,6 +524,13 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         skipped.push("the sky-view map (unchanged)".into());
     }
     ui.label(format!("skipped this frame: {}", skipped.join(", ")));
+    ui.horizontal(|ui| {
+        ui.label("dome layers at");
+        for r in crate::render::DomeResolution::ALL {
+            ui.radio_value(&mut c.options.dome_resolution, r, r.name());
+        }
+        ui.label(format!("resolution ({} of {} objects in a reduced buffer)", s.objects_reduced, s.objects_drawn));
+    });
     let median = |v: &VecDeque<f32>| {
         let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();
         x.sort_by(f32::total_cmp);

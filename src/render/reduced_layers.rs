@@ -19,11 +19,11 @@ pub const REDUCED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float
 /// How finely dome layers are drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum DomeResolution {
-    /// At the frame's resolution, straight into it (the default: after specialisation the
-    /// dome layers' fill is no longer most of a frame on lavapipe; see docs/performance.md).
-    #[default]
+    /// At the frame's resolution, straight into it.
     Full,
-    /// Half the width and height (a quarter of the pixels), composited.
+    /// Half the width and height (a quarter of the pixels), composited: the default, as layers
+    /// only go there when the buffer still resolves their textures.
+    #[default]
     Half,
     /// A quarter of the width and height, composited.
     Quarter,

@@ -236,9 +236,8 @@ pub struct SkyObjectsPass {
     draws: Staged<Option<SkyObjectDraws>>,
     /// The shared sky-view map and its sampler, bound to every draw.
     sky_view: (wgpu::TextureView, wgpu::Sampler),
-    /// This frame's visible objects: (object index, priority, versions to draw, drawn at reduced
-    /// resolution), in draw order.
-    visible: Vec<(usize, u8, Vec<usize>, bool)>,
+    /// This frame's draws, in order: one per visible version, or two where a version is split.
+    visible: Vec<Visible>,
     hidden: u32,
     /// Texture stages not sampled this frame (their term is black).
     stages_skipped: u32,
@@ -250,6 +249,38 @@ pub struct SkyObjectsPass {
     keys: HashMap<(usize, usize), VariantKey>,
 }
 
+/// One draw of this frame: a version of an object, whole or the part of its terms that goes to
+/// one resolution.
+#[derive(Debug, Clone, Copy)]
+struct Visible {
+    /// Object index.
+    index: usize,
+    priority: u8,
+    version: usize,
+    /// Drawn into a reduced-resolution buffer.
+    reduced: bool,
+    /// The stages this draw samples (the other terms are left out): every stage when whole.
+    part: [bool; 4],
+    /// The fine terms of a split opaque layer: added on top of its reduced part.
+    on_top: bool,
+}
+
+/// Blend index of [`BLENDS`] that adds colour as it is (the fine terms of a split opaque layer).
+const BLEND_ADD: usize = 3;
+
+/// Term of each stage: an `add` stage starts one, `modulate` stages join the current one.
+fn stage_terms(ops: [u32; 4]) -> [usize; 4] {
+    let mut terms = [0; 4];
+    let mut term = 0;
+    for k in 0..4 {
+        if k > 0 && ops[k] == 0 {
+            term += 1;
+        }
+        terms[k] = term;
+    }
+    terms
+}
+
 fn blend_index(b: BlendMode) -> usize {
     match b {
         BlendMode::Opaque => 0,
@@ -258,7 +289,15 @@ fn blend_index(b: BlendMode) -> usize {
     }
 }
 
-const BLENDS: [Option<wgpu::BlendState>; 3] = [None, Some(wgpu::BlendState::ALPHA_BLENDING), Some(super::ADDITIVE_ALPHA)];
+const BLENDS: [Option<wgpu::BlendState>; 4] = [
+    None,
+    Some(wgpu::BlendState::ALPHA_BLENDING),
+    Some(super::ADDITIVE_ALPHA),
+    Some(wgpu::BlendState {
+        color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
+        alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
+    }),
+];
 
 impl SkyObjectsPass {
     /// Builds the layouts and pipelines.
@@ -306,53 +345,55 @@ impl SkyObjectsPass {
         (ok, self.variants.len() - ok)
     }
 
-    /// Records visible object `key` (each of its versions) into the frame's target or, `reduced`,
-    /// into a reduced-resolution buffer; returns draw calls.
-    fn record(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, reduced: bool) -> u32 {
-        let (Some(draws), Some((index, _, versions, _))) = (&self.draws.current, self.visible.get(key)) else { return 0 };
-        let mut calls = 0;
-        for &v in versions {
-            let d = &draws.objects[*index][v];
-            let variant = self.keys.get(&(*index, v)).filter(|k| k.target == target).map(|k| VariantKey { reduced, ..*k });
-            let specialised = variant.and_then(|k| self.variants.get(&k)).and_then(Option::as_ref);
-            let pipeline = match (specialised, reduced) {
-                (Some(p), _) => p,
-                (None, false) => &self.pipelines.for_target(target).generic[blend_index(d.blend)],
-                // No generic pipeline for reduced buffers: its failure was logged when building.
-                (None, true) => continue,
-            };
-            rpass.set_pipeline(pipeline);
-            rpass.set_bind_group(1, &d.bind_group, &[]);
-            rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
-            rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-            rpass.draw_indexed(0..d.mesh.index_count, 0, 0..1);
-            calls += 1;
-        }
-        calls
+    /// The pipeline signature of draw `e` this frame, if its version was prepared for `target`.
+    fn entry_key(&self, e: &Visible, target: Target) -> Option<VariantKey> {
+        let k = self.keys.get(&(e.index, e.version)).filter(|k| k.target == target)?;
+        let live = std::array::from_fn(|s| k.live[s] && e.part[s]);
+        let view_stage = if (k.view_stage as usize) < 4 && !e.part[k.view_stage as usize] { NO_STAGE } else { k.view_stage };
+        let blend = if e.on_top { BLEND_ADD } else { k.blend };
+        Some(VariantKey { live, view_stage, blend, reduced: e.reduced, ..*k })
     }
 
-    /// Builds the specialised pipelines this frame's visible versions need and do not have yet.
-    fn build_variants(&mut self, device: &wgpu::Device) {
-        for (index, _, versions, reduced) in &self.visible {
-            for &v in versions {
-                let Some(&frame_key) = self.keys.get(&(*index, v)) else { continue };
-                let key = VariantKey { reduced: *reduced, ..frame_key };
-                if self.variants.contains_key(&key) {
-                    continue;
-                }
-                let constants = key.constants();
-                let (format, blend) = match (key.reduced, key.target) {
-                    (true, _) => (super::reduced_layers::REDUCED_FORMAT, Some(super::reduced_layers::REDUCED_BLENDS[key.blend])),
-                    (false, Target::Hdr) => (super::HDR_FORMAT, BLENDS[key.blend]),
-                    (false, Target::Display) => (self.display_format, BLENDS[key.blend]),
-                };
-                let label = format!("SkyObjects::pipeline {key:?}");
-                let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, (blend, format, !key.reduced), &constants);
-                if let Err(e) = &built {
-                    log::error!("{label}: {e}; the generic pipeline draws this material");
-                }
-                self.variants.insert(key, built.ok());
+    /// Records draw `key` into the frame's target or, `reduced`, into a reduced-resolution
+    /// buffer; returns draw calls.
+    fn record(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, reduced: bool) -> u32 {
+        let (Some(draws), Some(e)) = (&self.draws.current, self.visible.get(key)) else { return 0 };
+        let d = &draws.objects[e.index][e.version];
+        let specialised = self.entry_key(e, target).and_then(|k| self.variants.get(&k)).and_then(Option::as_ref);
+        let pipeline = match specialised {
+            Some(p) => p,
+            // The generic pipeline draws every term: only right for whole draws on the frame.
+            None if !reduced && e.part == [true; 4] && !e.on_top => &self.pipelines.for_target(target).generic[blend_index(d.blend)],
+            // Building it failed and was logged.
+            None => return 0,
+        };
+        rpass.set_pipeline(pipeline);
+        rpass.set_bind_group(1, &d.bind_group, &[]);
+        rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
+        rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+        rpass.draw_indexed(0..d.mesh.index_count, 0, 0..1);
+        1
+    }
+
+    /// Builds the specialised pipelines this frame's draws need and do not have yet.
+    fn build_variants(&mut self, device: &wgpu::Device, target: Target) {
+        for e in &self.visible {
+            let Some(key) = self.entry_key(e, target) else { continue };
+            if self.variants.contains_key(&key) {
+                continue;
             }
+            let constants = key.constants();
+            let (format, blend) = match (key.reduced, key.target) {
+                (true, _) => (super::reduced_layers::REDUCED_FORMAT, Some(super::reduced_layers::REDUCED_BLENDS[key.blend])),
+                (false, Target::Hdr) => (super::HDR_FORMAT, BLENDS[key.blend]),
+                (false, Target::Display) => (self.display_format, BLENDS[key.blend]),
+            };
+            let label = format!("SkyObjects::pipeline {key:?}");
+            let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, (blend, format, !key.reduced), &constants);
+            if let Err(e) = &built {
+                log::error!("{label}: {e}; the generic pipeline draws this material");
+            }
+            self.variants.insert(key, built.ok());
         }
     }
 }
@@ -449,17 +490,35 @@ impl Pass for SkyObjectsPass {
                     self.below_horizon += 1;
                 }
                 Ok(versions) => {
-                    // Dome layers go to a reduced buffer unless a texture they sample this frame
-                    // has finer detail than the buffer's pixels (a starry skydome at night);
-                    // billboards and quads stay sharp.
-                    let reduced = reduce_domes
-                        && versions.iter().all(|v| {
-                            let d = &draws.objects[of.index][v.version];
-                            let live = self.keys.get(&(of.index, v.version)).map_or([true; 4], |k| k.live);
-                            let finest = (0..MAX_STAGES).filter(|&k| live[k]).map(|k| d.texels_per_deg[k]).fold(0.0, f32::max);
-                            matches!(d.shape, Shape::Dome { .. } | Shape::DomeBand { .. }) && finest <= reduced_px_per_deg
-                        });
-                    self.visible.push((of.index, of.priority, versions.iter().map(|v| v.version).collect(), reduced));
+                    for v in versions {
+                        let d = &draws.objects[of.index][v.version];
+                        let entry = Visible { index: of.index, priority: of.priority, version: v.version, reduced: false, part: [true; 4], on_top: false };
+                        let dome = matches!(d.shape, Shape::Dome { .. } | Shape::DomeBand { .. });
+                        let Some(key) = self.keys.get(&(of.index, v.version)).filter(|_| reduce_domes && dome) else {
+                            self.visible.push(entry);
+                            continue;
+                        };
+                        // A term is fine when a texture it samples this frame has finer detail
+                        // than the reduced buffer's pixels (the skydome's stars at night).
+                        let count = (key.count as usize).min(MAX_STAGES);
+                        let terms = stage_terms(key.ops);
+                        let fine_stage = |k: usize| key.live[k] && d.texels_per_deg[k] > reduced_px_per_deg;
+                        let fine: [bool; 4] = std::array::from_fn(|k| k < count && (0..count).any(|j| terms[j] == terms[k] && fine_stage(j)));
+                        let coarse: [bool; 4] = std::array::from_fn(|k| k < count && !fine[k]);
+                        let any_fine = (0..count).any(|k| fine[k] && key.live[k]);
+                        let any_coarse = (0..count).any(|k| coarse[k] && key.live[k]);
+                        match (any_fine, any_coarse, d.blend) {
+                            (false, _, _) => self.visible.push(Visible { reduced: true, ..entry }),
+                            // Terms add up: the coarse ones at reduced resolution, then the fine
+                            // ones added on top at full resolution (opaque layers only: under
+                            // alpha blending the terms' alphas do not add).
+                            (true, true, BlendMode::Opaque) => {
+                                self.visible.push(Visible { reduced: true, part: coarse, ..entry });
+                                self.visible.push(Visible { part: fine, on_top: true, ..entry });
+                            }
+                            _ => self.visible.push(entry),
+                        }
+                    }
                 }
                 Err(why) => {
                     self.hidden += 1;
@@ -467,11 +526,11 @@ impl Pass for SkyObjectsPass {
                 }
             }
         }
-        self.build_variants(cx.device);
+        self.build_variants(cx.device, cx.target);
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
-        out.extend(self.visible.iter().enumerate().map(|(key, (_, priority, _, reduced))| DrawItem { priority: *priority, key, reduced: *reduced }));
+        out.extend(self.visible.iter().enumerate().map(|(key, e)| DrawItem { priority: e.priority, key, reduced: e.reduced }));
     }
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
@@ -483,12 +542,16 @@ impl Pass for SkyObjectsPass {
     }
 
     fn stats(&self, stats: &mut FrameStats) {
-        stats.objects_drawn = self.visible.len() as u32;
+        let mut objects: Vec<usize> = self.visible.iter().map(|e| e.index).collect();
+        objects.dedup();
+        stats.objects_drawn = objects.len() as u32;
         stats.objects_hidden = self.hidden;
         stats.stages_skipped = self.stages_skipped;
         stats.objects_ref_hidden = self.ref_hidden;
         stats.objects_below_horizon = self.below_horizon;
-        stats.objects_reduced = self.visible.iter().filter(|v| v.3).count() as u32;
+        let mut reduced: Vec<usize> = self.visible.iter().filter(|e| e.reduced).map(|e| e.index).collect();
+        reduced.dedup();
+        stats.objects_reduced = reduced.len() as u32;
     }
 }
 
@@ -529,6 +592,35 @@ fn stage_texels_per_deg(stage: &crate::sky::resolved::Stage, shape: &Shape) -> f
     }
 }
 
+/// How much finer a texture's texels are than the detail it carries: 2^k for the largest k (at
+/// most 4) such that halving it k times and scaling it back up (box down, bilinear up, as a
+/// reduced buffer would show it) changes 99% of its channel values by at most
+/// [`DETAIL_TOLERANCE`] levels of 255. Soft cloud noise drops levels; a star field does not.
+pub fn texture_oversampling(img: &crate::sky::resolved::TextureImage) -> f32 {
+    use image::imageops::{resize, FilterType};
+    let Some(full) = image::RgbaImage::from_raw(img.width, img.height, img.rgba8.clone()) else { return 1.0 };
+    let mut factor = 1.0;
+    for k in 1..=4u32 {
+        let (w, h) = (img.width >> k, img.height >> k);
+        if w < 2 || h < 2 {
+            break;
+        }
+        let back = resize(&resize(&full, w, h, FilterType::Triangle), img.width, img.height, FilterType::Triangle);
+        let mut diffs: Vec<u8> = full.as_raw().iter().zip(back.as_raw()).map(|(a, b)| a.abs_diff(*b)).collect();
+        let at = diffs.len() * 99 / 100;
+        let (_, p99, _) = diffs.select_nth_unstable(at);
+        if *p99 > DETAIL_TOLERANCE {
+            break;
+        }
+        factor = (1u32 << k) as f32;
+    }
+    factor
+}
+
+/// Levels of 255 a texture may lose in 99% of its values and still count as carried by a
+/// coarser sampling ([`texture_oversampling`]).
+pub const DETAIL_TOLERANCE: u8 = 4;
+
 /// Per-sky GPU resources: one [`VersionDraw`] per version of every object.
 pub struct SkyObjectDraws {
     /// objects[i][v]: object i (in draw order), version v (0 standard, 1.. fallback).
@@ -549,6 +641,7 @@ impl SkyObjectDraws {
     ) -> Self {
         let old_meshes = previous.map(|p| &p.meshes);
         let mut meshes: HashMap<String, Arc<GpuMesh>> = HashMap::new();
+        let mut oversampling: HashMap<String, f32> = HashMap::new();
         let objects = sky
             .objects
             .iter()
@@ -602,7 +695,8 @@ impl SkyObjectDraws {
                         let gradient_stage = v.gradients.as_ref().map(|g| g.stage);
                         let mut texels_per_deg = [0.0; 4];
                         for (k, s) in v.stages.iter().enumerate() {
-                            texels_per_deg[k] = stage_texels_per_deg(s, &v.shape);
+                            let oversampling = s.texture.as_ref().map_or(1.0, |t| *oversampling.entry(t.key.clone()).or_insert_with(|| texture_oversampling(t)));
+                            texels_per_deg[k] = stage_texels_per_deg(s, &v.shape) / oversampling;
                         }
                         VersionDraw { uniform, bind_group, mesh, gradient, gradient_stage, blend: v.blend, shape: v.shape, base: DrawUniform::from(v), texels_per_deg }
                     })
