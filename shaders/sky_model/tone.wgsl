@@ -92,8 +92,16 @@ fn linear_from_display(display: vec3<f32>) -> vec3<f32> {
 // the frame's tone mapper takes back to that display value, so NeL layers look as authored when
 // alone and blend with the physical sky in linear light (and a white sun over a bright sky still
 // saturates).
+// The target a render pipeline was built for: 1 the display target, 2 the HDR target, 0 not
+// known (read globals.output). Lavapipe runs both sides of every branch, uniform ones included,
+// so render pipelines set it (`PassBuild::target_constants`) and the other side compiles away.
+override TARGET_KIND: u32 = 0u;
+
 fn to_target(display: vec3<f32>) -> vec3<f32> {
-    if globals.output.x < 0.5 {
+    if TARGET_KIND == 1u {
+        return display;
+    }
+    if TARGET_KIND == 0u && globals.output.x < 0.5 {
         return display;
     }
     let l = linear_from_display(display);

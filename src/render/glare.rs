@@ -216,6 +216,8 @@ impl GlarePass {
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<GlarePipelines> {
         let (device, format) = (b.device, b.color_format);
         let module = shaders::module(device, b.library, "glare")?;
+        let constants = b.target_constants();
+        let options = wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: true };
         let disc = |label: &'static str, compare: wgpu::CompareFunction| {
             shaders::validated(device, label, || {
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -229,7 +231,7 @@ impl GlarePass {
                             step_mode: wgpu::VertexStepMode::Vertex,
                             attributes: &wgpu::vertex_attr_array![0 => Float32x2],
                         })],
-                        compilation_options: Default::default(),
+                        compilation_options: options.clone(),
                     },
                     primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
                     depth_stencil: super::depth_state(false, compare),
@@ -238,7 +240,7 @@ impl GlarePass {
                         module: &module,
                         entry_point: Some("fs_disc"),
                         targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::empty() })],
-                        compilation_options: Default::default(),
+                        compilation_options: options.clone(),
                     }),
                     multiview_mask: None,
                     cache: None,
@@ -259,7 +261,7 @@ impl GlarePass {
                         step_mode: wgpu::VertexStepMode::Instance,
                         attributes: &wgpu::vertex_attr_array![0 => Float32x2, 1 => Float32x2, 2 => Float32, 3 => Float32x4],
                     })],
-                    compilation_options: Default::default(),
+                    compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
                 depth_stencil: super::depth_state(false, wgpu::CompareFunction::Always),
@@ -275,7 +277,7 @@ impl GlarePass {
                         }),
                         write_mask: wgpu::ColorWrites::ALL,
                     })],
-                    compilation_options: Default::default(),
+                    compilation_options: options.clone(),
                 }),
                 multiview_mask: None,
                 cache: None,

@@ -121,6 +121,8 @@ pub fn sampler(device: &wgpu::Device, label: &str) -> wgpu::Sampler {
 pub fn build_pipelines(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, name: &str, label: &str) -> RenderResult<[wgpu::RenderPipeline; 2]> {
     let (device, format) = (b.device, b.color_format);
     let module = shaders::module(device, b.library, name)?;
+    let constants = b.target_constants();
+    let options = wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: true };
     let make = |entry: &str, blend: wgpu::BlendState, suffix: &str| {
         let label = format!("{label}::{suffix}");
         shaders::validated(device, &label, || {
@@ -135,7 +137,7 @@ pub fn build_pipelines(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, name: &
                         step_mode: wgpu::VertexStepMode::Instance,
                         attributes: &wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4, 3 => Uint32x4],
                     })],
-                    compilation_options: Default::default(),
+                    compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
                 depth_stencil: super::depth_state(false, wgpu::CompareFunction::Less),
@@ -144,7 +146,7 @@ pub fn build_pipelines(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, name: &
                     module: &module,
                     entry_point: Some(entry),
                     targets: &[Some(wgpu::ColorTargetState { format, blend: Some(blend), write_mask: wgpu::ColorWrites::ALL })],
-                    compilation_options: Default::default(),
+                    compilation_options: options.clone(),
                 }),
                 multiview_mask: None,
                 cache: None,

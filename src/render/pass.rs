@@ -84,6 +84,17 @@ pub struct PassBuild<'a> {
     pub color_format: wgpu::TextureFormat,
     /// Textures one pass writes and others read.
     pub shared: &'a SharedResources,
+    /// The target the render pipelines being built draw into ([`Pipelines::new_render`] builds
+    /// a set for each).
+    pub target: Target,
+}
+
+impl PassBuild<'_> {
+    /// Override constants of shaders that include `sky_model/tone.wgsl`: the target these
+    /// pipelines draw into, so `to_target` compiles to one side.
+    pub fn target_constants(&self) -> [(&'static str, f64); 1] {
+        [("TARGET_KIND", if self.target == Target::Hdr { 2.0 } else { 1.0 })]
+    }
 }
 
 /// Textures and buffers shared between passes, made once by the renderer.
@@ -356,7 +367,7 @@ impl<T> Pipelines<T> {
 
     fn build_all(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, build: PipelineBuilder<T>, per_target: bool) -> RenderResult<(T, Option<T>)> {
         let display = build(b, layout)?;
-        let hdr = if per_target { Some(build(&PassBuild { color_format: super::HDR_FORMAT, ..*b }, layout)?) } else { None };
+        let hdr = if per_target { Some(build(&PassBuild { color_format: super::HDR_FORMAT, target: Target::Hdr, ..*b }, layout)?) } else { None };
         Ok((display, hdr))
     }
 

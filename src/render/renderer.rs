@@ -155,7 +155,8 @@ impl SkyRenderer {
         let device = &ctx.device;
         let globals = GlobalsBinding::new(device);
         let shared = SharedResources::new(device);
-        let build = PassBuild { device, globals_layout: &globals.layout, globals_buffer: &globals.buffer, library: &library, color_format, shared: &shared };
+        let build =
+            PassBuild { device, globals_layout: &globals.layout, globals_buffer: &globals.buffer, library: &library, color_format, shared: &shared, target: Target::Display };
         let passes = PASSES.iter().chain(extra).map(|(_, new)| new(&build)).collect::<RenderResult<Vec<_>>>()?;
         Ok(Self {
             textures: TextureCache::new(device, &ctx.queue),
@@ -203,6 +204,7 @@ impl SkyRenderer {
             library: &self.library,
             color_format: self.color_format,
             shared: &self.shared,
+            target: Target::Display,
         };
         let result = self.passes.iter_mut().try_for_each(|p| p.stage_pipelines(&build));
         for pass in &mut self.passes {

@@ -129,13 +129,15 @@ impl ScenePass {
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<ScenePipelines> {
         let (device, format) = (b.device, b.color_format);
         let module = shaders::module(device, b.library, "scene")?;
+        let constants = b.target_constants();
+        let options = wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: true };
         let depth = super::depth_state(true, wgpu::CompareFunction::Less);
         let make = |label: &'static str, vs: &'static str, fs: &'static str, buffer: wgpu::VertexBufferLayout<'_>| {
             shaders::validated(device, label, || {
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some(label),
                     layout: Some(layout),
-                    vertex: wgpu::VertexState { module: &module, entry_point: Some(vs), buffers: &[Some(buffer)], compilation_options: Default::default() },
+                    vertex: wgpu::VertexState { module: &module, entry_point: Some(vs), buffers: &[Some(buffer)], compilation_options: options.clone() },
                     primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
                     depth_stencil: depth.clone(),
                     multisample: Default::default(),
@@ -143,7 +145,7 @@ impl ScenePass {
                         module: &module,
                         entry_point: Some(fs),
                         targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
-                        compilation_options: Default::default(),
+                        compilation_options: options.clone(),
                     }),
                     multiview_mask: None,
                     cache: None,

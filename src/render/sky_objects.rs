@@ -212,6 +212,7 @@ impl VariantKey {
             ("VIEW_STAGE", f64::from(self.view_stage)),
             ("LIGHTING", f64::from(self.lighting)),
             ("OUTPUT", f64::from(self.output)),
+            ("TARGET_KIND", if self.target == Target::Hdr { 2.0 } else { 1.0 }),
         ];
         for k in 0..4 {
             c.push((MODES[k], f64::from(self.modes[k])));
@@ -335,7 +336,7 @@ impl SkyObjectsPass {
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<SkyObjectPipelines> {
         let module = shaders::module(b.device, b.library, "sky_objects")?;
         let names = ["SkyObjects::pipeline_opaque", "SkyObjects::pipeline_alpha", "SkyObjects::pipeline_additive"];
-        let one = |i: usize| create_pipeline(b.device, layout, &module, names[i], (BLENDS[i], b.color_format, true), &[]);
+        let one = |i: usize| create_pipeline(b.device, layout, &module, names[i], (BLENDS[i], b.color_format, true), &b.target_constants());
         Ok(SkyObjectPipelines { generic: [one(0)?, one(1)?, one(2)?], module })
     }
 

@@ -58,6 +58,8 @@ impl StarsPass {
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
         let (device, format) = (b.device, b.color_format);
         let module = shaders::module(device, b.library, "stars")?;
+        let constants = b.target_constants();
+        let options = wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: true };
         shaders::validated(device, "Stars::pipeline", || {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("Stars::pipeline"),
@@ -70,7 +72,7 @@ impl StarsPass {
                         step_mode: wgpu::VertexStepMode::Instance,
                         attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32],
                     })],
-                    compilation_options: Default::default(),
+                    compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
                 depth_stencil: super::depth_state(false, wgpu::CompareFunction::Less),
@@ -79,7 +81,7 @@ impl StarsPass {
                     module: &module,
                     entry_point: Some("fs_main"),
                     targets: &[Some(wgpu::ColorTargetState { format, blend: Some(super::ADDITIVE_ALPHA), write_mask: wgpu::ColorWrites::ALL })],
-                    compilation_options: Default::default(),
+                    compilation_options: options.clone(),
                 }),
                 multiview_mask: None,
                 cache: None,
