@@ -85,12 +85,10 @@ override LIVE_0: bool = true;
 override LIVE_1: bool = true;
 override LIVE_2: bool = true;
 override LIVE_3: bool = true;
-// The stage the sky-view map feeds (4: none), the lighting (0 flat, 1 moon, 2 cloud), and what
-// the target holds (0 display values, 1 exposed radiance for the ACES tone mapper, 2 for the
-// neutral one).
+// The stage the sky-view map feeds (4: none) and the lighting (0 flat, 1 moon, 2 cloud). What
+// the target holds comes with TARGET_KIND and TONE_KIND (tone.wgsl).
 override VIEW_STAGE: u32 = 4u;
 override LIGHTING: u32 = 0u;
-override OUTPUT: u32 = 0u;
 
 fn stage_count() -> u32 {
     if SPECIALISED {
@@ -161,21 +159,6 @@ fn lighting() -> u32 {
     return draw.misc.y;
 }
 
-// `to_target` (tone.wgsl) with the target known when specialised.
-fn target_from_display(display: vec3<f32>) -> vec3<f32> {
-    if SPECIALISED {
-        if OUTPUT == 0u {
-            return display;
-        }
-        let l = linear_from_display(display);
-        if OUTPUT == 2u {
-            return tone_map_neutral_inverse(l);
-        }
-        return tone_map_aces_inverse(l);
-    }
-    return to_target(display);
-}
-
 fn stage_uv(s: Stage, mode: u32, mesh_uv: vec2<f32>, dir_in: vec3<f32>) -> vec2<f32> {
     let dir = normalize(dir_in);
     var uv = mesh_uv;
@@ -212,7 +195,7 @@ fn add_term(sum: vec4<f32>, term_display: vec4<f32>, view: vec3<f32>, has_view: 
     if has_view {
         rgb = view * linear_from_display(t.rgb);
     } else {
-        rgb = target_from_display(t.rgb);
+        rgb = to_target(t.rgb);
     }
     return vec4<f32>(sum.rgb + rgb, max(sum.a, t.a));
 }
@@ -270,8 +253,8 @@ fn lit_cloud(world_dir: vec3<f32>, depth: f32) -> vec4<f32> {
     let n = normalize(-dir - slope);
     let sun_dir = globals.towards_sun.xyz;
     let sun_facing = clamp(1.0 + 2.0 * dot(n, sun_dir), 0.0, 3.0);
-    let sun = target_from_display(globals.cloud_sun.rgb) * 0.25 * sun_facing;
-    let ambient = target_from_display(globals.cloud_ambient.rgb);
+    let sun = to_target(globals.cloud_sun.rgb) * 0.25 * sun_facing;
+    let ambient = to_target(globals.cloud_ambient.rgb);
     let coverage = 1.0 - exp(-max(depth, 0.0));
     return vec4<f32>(sun + ambient, coverage);
 }

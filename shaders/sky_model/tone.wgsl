@@ -96,6 +96,9 @@ fn linear_from_display(display: vec3<f32>) -> vec3<f32> {
 // known (read globals.output). Lavapipe runs both sides of every branch, uniform ones included,
 // so render pipelines set it (`PassBuild::target_constants`) and the other side compiles away.
 override TARGET_KIND: u32 = 0u;
+// The HDR target's tone mapper, where the pipeline knows it (sky objects' specialised pipelines):
+// 1 ACES, 2 neutral, 0 not known (read globals.output).
+override TONE_KIND: u32 = 0u;
 
 fn to_target(display: vec3<f32>) -> vec3<f32> {
     if TARGET_KIND == 1u {
@@ -105,7 +108,7 @@ fn to_target(display: vec3<f32>) -> vec3<f32> {
         return display;
     }
     let l = linear_from_display(display);
-    if globals.output.y > 0.5 {
+    if TONE_KIND == 2u || (TONE_KIND == 0u && globals.output.y > 0.5) {
         return tone_map_neutral_inverse(l);
     }
     return tone_map_aces_inverse(l);

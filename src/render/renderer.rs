@@ -362,11 +362,9 @@ impl SkyRenderer {
                     // its own buffer; the sky pass composites each in its run's place.
                     let divisor = options.dome_resolution.divisor();
                     let runs = if phase == Phase::Sky && draws_here && divisor > 1 { reduced_runs(list) } else { Vec::new() };
-                    let reduced_pass = self.passes.iter().position(|p| p.name() == "reduced_layers");
-                    if let (false, Some(rp)) = (runs.is_empty(), reduced_pass) {
-                        if let Some(layers) = (self.passes[rp].as_mut() as &mut dyn std::any::Any).downcast_mut::<ReducedLayersPass>() {
-                            layers.ensure(&ctx.device, &ctx.queue, (w, h), divisor, runs.len());
-                        }
+                    let reduced_pass = self.passes.iter().position(|p| (p.as_ref() as &dyn std::any::Any).is::<ReducedLayersPass>());
+                    if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
+                        layers.ensure(&ctx.device, &ctx.queue, (w, h), divisor, runs.len());
                     }
                     let queries = list.iter().find_map(|(i, _)| self.passes[*i].occlusion_query_set());
                     let label = format!("SkyRenderer::{}", phase.name());

@@ -171,8 +171,9 @@ struct VariantKey {
     lighting: u32,
     blend: usize,
     target: Target,
-    /// 0 display values, 1 exposed radiance for the ACES tone mapper, 2 for the neutral one.
-    output: u32,
+    /// The HDR target's tone mapper (`TONE_KIND` of tone.wgsl): 1 ACES, 2 neutral; 0 on the
+    /// display target.
+    tone: u32,
     /// Drawn into a reduced-resolution buffer ([`super::reduced_layers`]).
     reduced: bool,
 }
@@ -180,7 +181,7 @@ struct VariantKey {
 impl VariantKey {
     /// The signature of a draw with this frame's uniform `u`.
     fn of(u: &DrawUniform, blend: BlendMode, target: Target, neutral_tone: bool) -> Self {
-        let output = match (target, neutral_tone) {
+        let tone = match (target, neutral_tone) {
             (Target::Display, _) => 0,
             (Target::Hdr, false) => 1,
             (Target::Hdr, true) => 2,
@@ -195,7 +196,7 @@ impl VariantKey {
             lighting: u.misc[1],
             blend: blend_index(blend),
             target,
-            output,
+            tone,
             reduced: false,
         }
     }
@@ -211,8 +212,8 @@ impl VariantKey {
             ("STAGE_COUNT", f64::from(self.count)),
             ("VIEW_STAGE", f64::from(self.view_stage)),
             ("LIGHTING", f64::from(self.lighting)),
-            ("OUTPUT", f64::from(self.output)),
             ("TARGET_KIND", if self.target == Target::Hdr { 2.0 } else { 1.0 }),
+            ("TONE_KIND", f64::from(self.tone)),
         ];
         for k in 0..4 {
             c.push((MODES[k], f64::from(self.modes[k])));
@@ -392,7 +393,7 @@ impl SkyObjectsPass {
             let label = format!("SkyObjects::pipeline {key:?}");
             let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, (blend, format, !key.reduced), &constants);
             if let Err(e) = &built {
-                log::error!("{label}: {e}; the generic pipeline draws this material");
+                log::error!("{label}: {e}; the generic pipeline draws this material whole on the frame, reduced or split parts are not drawn");
             }
             self.variants.insert(key, built.ok());
         }
