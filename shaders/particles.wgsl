@@ -20,4 +20,11 @@ fn vs_main(@builtin(vertex_index) vi: u32, p: Particle) -> ParticleOut {
     return out;
 }
 
-// The fragment stage is particle/shape.wgsl's.
+// The fragment stages of the sprites are particle/shape.wgsl's.
+
+// The flash: the instance's colour over the whole sky, additive. Its own pipeline, so that no
+// sprite shape is evaluated over the screen (a SIMD rasteriser runs every branch of fs_main).
+@fragment
+fn fs_flash(in: ParticleOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(to_target(in.color.rgb * in.color.a), 1.0);
+}

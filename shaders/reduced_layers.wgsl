@@ -6,7 +6,7 @@
 
 // Keep in sync with `CompositeUniform` in src/render/reduced_layers.rs.
 struct Composite {
-    // Full-resolution pixel to the buffer's texture coordinates: 1 / (divisor * buffer size).
+    // Frame pixel to texture coordinates (1 / frame size): every buffer holds the whole frame.
     uv_from_pixel: vec4<f32>,
 };
 

@@ -260,9 +260,10 @@ pub struct FrameArgs {
     /// Hide the main-scene stand-in (sky only).
     #[arg(long)]
     pub no_scene: bool,
-    /// Resolution of the dome layers: full, half or quarter (layers with finer texture detail
-    /// than a reduced buffer stay at full resolution).
-    #[arg(long, default_value = "half", value_parser = parse_dome_resolution)]
+    /// Resolution of the dome layers: full, half, quarter, or auto (each run of layers at quarter
+    /// where its textures allow, else half). Layers with finer texture detail than a
+    /// half-resolution buffer stay at full resolution.
+    #[arg(long, default_value = "auto", value_parser = parse_dome_resolution)]
     pub dome_resolution: skytune::render::DomeResolution,
     /// Render what the environment map sees (objects with visible_in_env_map).
     #[arg(long)]
@@ -486,14 +487,14 @@ pub struct FrameBenchArgs {
     /// Force the software adapter (lavapipe).
     #[arg(long)]
     pub cpu: bool,
-    /// Resolution of the dome layers: full, half or quarter.
-    #[arg(long, default_value = "half", value_parser = parse_dome_resolution)]
+    /// Resolution of the dome layers: full, half, quarter or auto.
+    #[arg(long, default_value = "auto", value_parser = parse_dome_resolution)]
     pub dome_resolution: skytune::render::DomeResolution,
 }
 
-/// Parses a dome resolution name (full, half, quarter).
+/// Parses a dome resolution name (full, half, quarter, auto).
 pub fn parse_dome_resolution(s: &str) -> Result<skytune::render::DomeResolution, String> {
-    skytune::render::DomeResolution::parse(s).ok_or_else(|| format!("unknown dome resolution {s:?}: full, half or quarter"))
+    skytune::render::DomeResolution::parse(s).ok_or_else(|| format!("unknown dome resolution {s:?}: full, half, quarter or auto"))
 }
 
 /// `bench` arguments.

@@ -93,7 +93,7 @@ impl Pass for HourProbe {
         self.pipeline.commit(accept);
     }
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
-        out.push(DrawItem { priority: 0, key: 0, reduced: false });
+        out.push(DrawItem::new(0, 0));
     }
     fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, _key: usize) {
         cpass.set_pipeline(self.pipeline.get());
@@ -163,7 +163,7 @@ impl Pass for Tint {
         self.pipeline.commit(accept);
     }
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
-        out.push(DrawItem { priority: 0, key: 0, reduced: false });
+        out.push(DrawItem::new(0, 0));
     }
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target) -> u32 {
         rpass.set_pipeline(self.pipeline.for_target(target));

@@ -18,6 +18,7 @@ fn reduced_dome_layers_stay_close_to_full_resolution() {
     let camera = Camera { pitch_deg: 30.0, ..Camera::default() };
     let full = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
     let half = RenderOptions { dome_resolution: DomeResolution::Half, ..full };
+    let auto = RenderOptions { dome_resolution: DomeResolution::Auto, ..full };
     let mut lut = FrameInput::new(10.0, 0.3);
     lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
     for (what, input) in [
@@ -28,17 +29,18 @@ fn reduced_dome_layers_stay_close_to_full_resolution() {
     ] {
         let sharp = h.render(&sky, &input, &camera, &full).expect("rendered");
         assert_eq!(h.renderer.stats.objects_reduced, 0, "{what}: full resolution reduces nothing");
-        let soft = h.render(&sky, &input, &camera, &half).expect("rendered");
-        let s = h.renderer.stats.clone();
-        assert!(s.objects_reduced >= 2, "{what}: the skydome and a cloud layer go to the reduced buffer ({s:?})");
-        // Soft cloud edges move by a few levels; a wrong blend or composite moves whole areas.
-        let (d, _) = common::diff(&sharp, &soft, 24);
-        eprintln!("{what}: >24 {:.5}", d.differing);
-        let (d6, _) = common::diff(&sharp, &soft, 6);
-        eprintln!("{what}: >6 {:.5}", d6.differing);
-        assert!(d.differing < 0.02, "{what}: {:.4} of the pixels differ by more than 24 levels (largest {})", d.differing, d.max);
-        let (d, _) = common::diff(&sharp, &soft, 6);
-        assert!(d.differing < 0.01, "{what}: {:.4} of the pixels differ by more than 6 levels", d.differing);
+        for options in [half, auto] {
+            let what = format!("{what}, {}", options.dome_resolution.name());
+            let soft = h.render(&sky, &input, &camera, &options).expect("rendered");
+            let s = h.renderer.stats.clone();
+            assert!(s.objects_reduced >= 2, "{what}: the skydome and a cloud layer go to the reduced buffer ({s:?})");
+            // Soft cloud edges move by a few levels; a wrong blend or composite moves whole areas.
+            let (d, _) = common::diff(&sharp, &soft, 24);
+            let (d6, _) = common::diff(&sharp, &soft, 6);
+            eprintln!("{what}: >24 {:.5}, >6 {:.5}, runs {:?}", d.differing, d6.differing, s.reduced_runs);
+            assert!(d.differing < 0.02, "{what}: {:.4} of the pixels differ by more than 24 levels (largest {})", d.differing, d.max);
+            assert!(d6.differing < 0.01, "{what}: {:.4} of the pixels differ by more than 6 levels", d6.differing);
+        }
     }
 }
 
@@ -61,4 +63,52 @@ fn fine_layers_and_billboards_stay_at_full_resolution() {
     // A coarser buffer takes fewer layers.
     h.render(&sky, &FrameInput::new(12.0, 0.0), &camera, &quarter).expect("rendered");
     assert!(h.renderer.stats.objects_reduced <= day);
+}
+
+#[test]
+fn runs_join_across_additive_draws_and_coarse_runs_go_to_quarter() {
+    let sky = default_sky();
+    let mut h = common::headless(640, 360);
+    h.set_sky(&sky).expect("uploaded");
+    let camera = Camera { pitch_deg: 30.0, ..Camera::default() };
+    let night = FrameInput::new(23.0, 0.0);
+    let half = RenderOptions { glare: false, dome_resolution: DomeResolution::Half, ..Default::default() };
+    h.render(&sky, &night, &camera, &half).expect("rendered");
+    // Reduced: the skydome's coarse terms, the galaxy and the fog dome. The skydome's fine stars
+    // (added at full resolution) sit between the skydome and the galaxy, both additive on top of
+    // it: the galaxy joins the skydome's run, and the fog (alpha blended, after the billboards)
+    // makes the second run. Without the join there would be three.
+    let s = h.renderer.stats.clone();
+    assert_eq!((s.objects_reduced, s.reduced_runs.as_slice()), (3, &[2, 2][..]), "{s:?}");
+    // Gradient, halo, galaxy and fog band are coarse enough for a quarter-resolution buffer.
+    let auto = RenderOptions { dome_resolution: DomeResolution::Auto, ..half };
+    h.render(&sky, &night, &camera, &auto).expect("rendered");
+    assert_eq!(h.renderer.stats.reduced_runs, [4, 4], "{:?}", h.renderer.stats);
+    // A physical sky model's stage keeps its layer's run at half resolution (the sun's aureole).
+    let mut lut = FrameInput::new(10.0, 0.3);
+    lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
+    h.render(&sky, &lut, &camera, &auto).expect("rendered");
+    assert_eq!(h.renderer.stats.reduced_runs.first(), Some(&2), "{:?}", h.renderer.stats);
+}
+
+#[test]
+fn frame_edges_are_covered_when_the_size_is_no_multiple_of_the_divisor() {
+    // 322 x 181 is a multiple of neither 2 nor 4: the buffers' last row and column hold part of
+    // a frame pixel. They must still be drawn (a buffer left clear there shows a dark edge).
+    let sky = default_sky();
+    let mut h = common::headless(322, 181);
+    h.set_sky(&sky).expect("uploaded");
+    let camera = Camera { pitch_deg: 40.0, ..Camera::default() };
+    let input = FrameInput::new(11.0, 0.0);
+    let full = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
+    let sharp = h.render(&sky, &input, &camera, &full).expect("rendered");
+    for resolution in [DomeResolution::Half, DomeResolution::Quarter] {
+        let soft = h.render(&sky, &input, &camera, &RenderOptions { dome_resolution: resolution, ..full }).expect("rendered");
+        assert!(h.renderer.stats.objects_reduced > 0, "{resolution:?}: something is reduced");
+        let (w, h_px) = sharp.dimensions();
+        let edge = |x: u32, y: u32| (0..3).map(|c| (sharp.get_pixel(x, y)[c] as i32 - soft.get_pixel(x, y)[c] as i32).abs()).max().unwrap_or(0);
+        let worst_row = (0..w).map(|x| edge(x, 0).max(edge(x, h_px - 1))).max().unwrap_or(0);
+        let worst_column = (0..h_px).map(|y| edge(0, y).max(edge(w - 1, y))).max().unwrap_or(0);
+        assert!(worst_row <= 12 && worst_column <= 12, "{resolution:?}: the frame's edges differ by up to {worst_row} (rows) and {worst_column} (columns) levels");
+    }
 }

@@ -529,7 +529,13 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         for r in crate::render::DomeResolution::ALL {
             ui.radio_value(&mut c.options.dome_resolution, r, r.name());
         }
-        ui.label(format!("resolution ({} of {} objects in a reduced buffer)", s.objects_reduced, s.objects_drawn));
+        let runs: Vec<String> = s.reduced_runs.iter().map(|d| format!("1/{d}")).collect();
+        ui.label(format!(
+            "resolution ({} of {} objects in reduced buffers: {})",
+            s.objects_reduced,
+            s.objects_drawn,
+            if runs.is_empty() { "none".into() } else { runs.join(", ") }
+        ));
     });
     let median = |v: &VecDeque<f32>| {
         let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();

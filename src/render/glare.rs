@@ -350,7 +350,7 @@ impl Pass for GlarePass {
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         if self.active {
-            out.push(DrawItem { priority: 0, key: 0, reduced: false });
+            out.push(DrawItem::new(0, 0));
         }
     }
 

@@ -116,9 +116,20 @@ pub fn sampler(device: &wgpu::Device, label: &str) -> wgpu::Sampler {
     })
 }
 
-/// Alpha and additive pipelines of a particle shader (`name`), depth-tested with `depth_compare`,
-/// never writing depth.
+/// Alpha and additive pipelines of a particle shader (`name`), depth-tested, never writing depth.
 pub fn build_pipelines(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, name: &str, label: &str) -> RenderResult<[wgpu::RenderPipeline; 2]> {
+    let [alpha, additive] = build_entries(b, layout, name, label, [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", super::ADDITIVE_ALPHA, "additive")])?;
+    Ok([alpha, additive])
+}
+
+/// One pipeline per (fragment entry point, blend, label suffix) of a particle shader (`name`).
+fn build_entries<const N: usize>(
+    b: &PassBuild<'_>,
+    layout: &wgpu::PipelineLayout,
+    name: &str,
+    label: &str,
+    entries: [(&str, wgpu::BlendState, &str); N],
+) -> RenderResult<[wgpu::RenderPipeline; N]> {
     let (device, format) = (b.device, b.color_format);
     let module = shaders::module(device, b.library, name)?;
     let constants = b.target_constants();
@@ -153,13 +164,14 @@ pub fn build_pipelines(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, name: &
             })
         })
     };
-    Ok([make("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha")?, make("fs_main", super::ADDITIVE_ALPHA, "additive")?])
+    let built = entries.iter().map(|(entry, blend, suffix)| make(entry, *blend, suffix)).collect::<RenderResult<Vec<_>>>()?;
+    Ok(built.try_into().unwrap_or_else(|_: Vec<_>| unreachable!("one pipeline per entry")))
 }
 
 /// Records one emitter's draw.
-pub fn draw_emitter(rpass: &mut wgpu::RenderPass<'_>, pipelines: &[wgpu::RenderPipeline; 2], g: &EmitterGpu) -> u32 {
+pub fn draw_emitter(rpass: &mut wgpu::RenderPass<'_>, pipelines: [&wgpu::RenderPipeline; 2], g: &EmitterGpu) -> u32 {
     let Some(buffer) = g.buffer.as_ref().filter(|_| g.count > 0) else { return 0 };
-    rpass.set_pipeline(&pipelines[g.additive as usize]);
+    rpass.set_pipeline(pipelines[g.additive as usize]);
     rpass.set_bind_group(1, &g.bind_group, &[]);
     rpass.set_vertex_buffer(0, buffer.slice(..));
     rpass.draw(0..4, 0..g.count);
@@ -173,7 +185,8 @@ const FLASH_KEY: usize = usize::MAX;
 pub struct ParticlesPass {
     bind_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
-    pipeline: Pipelines<[wgpu::RenderPipeline; 2]>,
+    /// Alpha, additive, and the flash's (additive, `fs_flash`).
+    pipeline: Pipelines<[wgpu::RenderPipeline; 3]>,
     set: Staged<Option<EmitterSet>>,
     /// The flash's one instance.
     flash: EmitterGpu,
@@ -190,7 +203,17 @@ impl ParticlesPass {
             bind_group_layouts: &[Some(b.globals_layout), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipeline = Pipelines::new_render(b, pipeline_layout, |b, l| build_pipelines(b, l, "particles", "Particles::pipeline"))?;
+        // The flash covers the screen: its own entry point keeps the shapes' branches, which a
+        // SIMD rasteriser would run for every pixel, out of it.
+        let pipeline = Pipelines::new_render(b, pipeline_layout, |b, l| {
+            build_entries(
+                b,
+                l,
+                "particles",
+                "Particles::pipeline",
+                [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", super::ADDITIVE_ALPHA, "additive"), ("fs_flash", super::ADDITIVE_ALPHA, "flash")],
+            )
+        })?;
         let sampler = sampler(b.device, "Particles::sampler");
         // The flash's bind group: its texture is never sampled (shape 5), wgpu zero-fills it.
         let texture = b.device.create_texture(&wgpu::TextureDescriptor {
@@ -261,20 +284,20 @@ impl Pass for ParticlesPass {
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         if let Some(set) = &self.set.current {
             for (key, g) in set.emitters.iter().enumerate().filter(|(_, g)| !g.camera && g.count > 0) {
-                out.push(DrawItem { priority: g.priority, key, reduced: false });
+                out.push(DrawItem { additive: g.additive, ..DrawItem::new(g.priority, key) });
             }
         }
         if self.flash.count > 0 {
-            out.push(DrawItem { priority: 63, key: FLASH_KEY, reduced: false });
+            out.push(DrawItem { additive: true, ..DrawItem::new(63, FLASH_KEY) });
         }
     }
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        let pipelines = self.pipeline.for_target(target);
+        let [alpha, additive, flash] = self.pipeline.for_target(target);
         if key == FLASH_KEY {
-            return draw_emitter(rpass, pipelines, &self.flash);
+            return draw_emitter(rpass, [flash, flash], &self.flash);
         }
-        self.set.current.as_ref().and_then(|s| s.emitters.get(key)).map_or(0, |g| draw_emitter(rpass, pipelines, g))
+        self.set.current.as_ref().and_then(|s| s.emitters.get(key)).map_or(0, |g| draw_emitter(rpass, [alpha, additive], g))
     }
 
     fn stats(&self, stats: &mut FrameStats) {

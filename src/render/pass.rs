@@ -192,6 +192,19 @@ pub struct DrawItem {
     pub key: usize,
     /// A dome layer the sky phase may draw at reduced resolution ([`Pass::draw_reduced`]).
     pub reduced: bool,
+    /// The draw only adds to what lies behind it (target + something, clamped): it commutes with
+    /// every other such draw, so the sky phase may reorder them (to join reduced runs).
+    pub additive: bool,
+    /// Frame pixels per buffer pixel along each side where `reduced` (the coarsest buffer that
+    /// still resolves the layer); 1 otherwise.
+    pub divisor: u8,
+}
+
+impl DrawItem {
+    /// A plain full-resolution draw: not reduced, not known to commute.
+    pub fn new(priority: u8, key: usize) -> Self {
+        Self { priority, key, reduced: false, additive: false, divisor: 1 }
+    }
 }
 
 /// A GPU pass: its pipelines (built once, rebuilt on shader reload), its per-sky resources and

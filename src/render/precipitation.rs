@@ -97,7 +97,7 @@ impl Pass for PrecipitationPass {
     fn compute_items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         for (key, sim) in self.sims.current.iter().enumerate() {
             if sim.as_ref().is_some_and(|(s, _)| s.slots > 0) {
-                out.push(DrawItem { priority: 0, key, reduced: false });
+                out.push(DrawItem::new(0, key));
             }
         }
     }
@@ -113,7 +113,7 @@ impl Pass for PrecipitationPass {
             for (key, g) in set.emitters.iter().enumerate().filter(|(_, g)| g.camera) {
                 let gpu = self.sims.current.get(key).and_then(|s| s.as_ref()).is_some_and(|(s, _)| s.slots > 0);
                 if g.count > 0 || gpu {
-                    out.push(DrawItem { priority: 0, key, reduced: false });
+                    out.push(DrawItem::new(0, key));
                 }
             }
         }
@@ -122,7 +122,7 @@ impl Pass for PrecipitationPass {
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
         let Some(g) = self.set.current.as_ref().and_then(|s| s.emitters.get(key)) else { return 0 };
         let pipelines = self.pipeline.for_target(target);
-        let mut calls = draw_emitter(rpass, pipelines, g);
+        let mut calls = draw_emitter(rpass, [&pipelines[0], &pipelines[1]], g);
         if let Some(Some((sim, _))) = self.sims.current.get(key).filter(|s| s.as_ref().is_some_and(|(s, _)| s.slots > 0)) {
             rpass.set_pipeline(&pipelines[g.additive as usize]);
             rpass.set_bind_group(1, &g.bind_group, &[]);

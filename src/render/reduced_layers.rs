@@ -12,33 +12,45 @@ use super::error::RenderResult;
 use super::pass::{FrameContext, Pass, PassBuild, Phase, Pipelines, Target};
 use super::shaders;
 
-/// Format of the reduced buffers: premultiplied colour of either target (display values or
-/// exposed radiance above 1) and transmittance.
-pub const REDUCED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Format of the reduced buffers for a target: premultiplied colour and transmittance. Display
+/// values fit in 8 bits like the display target itself (which clamps every blend the same way);
+/// exposed radiance goes above 1 and needs half floats. On lavapipe an 8-bit buffer is cheaper to
+/// blend into and to sample: a run's composite costs about a millisecond less at 1280x720.
+pub fn reduced_format(target: Target) -> wgpu::TextureFormat {
+    match target {
+        Target::Display => wgpu::TextureFormat::Rgba8Unorm,
+        Target::Hdr => wgpu::TextureFormat::Rgba16Float,
+    }
+}
 
 /// How finely dome layers are drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum DomeResolution {
     /// At the frame's resolution, straight into it.
     Full,
-    /// Half the width and height (a quarter of the pixels), composited: the default, as layers
-    /// only go there when the buffer still resolves their textures.
-    #[default]
+    /// Half the width and height (a quarter of the pixels), composited.
     Half,
     /// A quarter of the width and height, composited.
     Quarter,
+    /// Each run of layers at a quarter of the width and height when the buffer still resolves
+    /// the textures of all its layers, else at half: the default. Layers go to a buffer only
+    /// when a half-resolution one resolves them.
+    #[default]
+    Auto,
 }
 
 impl DomeResolution {
     /// Every choice, finest first.
-    pub const ALL: [DomeResolution; 3] = [DomeResolution::Full, DomeResolution::Half, DomeResolution::Quarter];
+    pub const ALL: [DomeResolution; 4] = [DomeResolution::Full, DomeResolution::Half, DomeResolution::Quarter, DomeResolution::Auto];
 
-    /// Frame pixels per buffer pixel along each side.
-    pub fn divisor(self) -> u32 {
+    /// Frame pixels per buffer pixel along each side: the finest buffer a layer may go to, and
+    /// the coarsest (1: layers stay on the frame).
+    pub fn divisors(self) -> (u32, u32) {
         match self {
-            DomeResolution::Full => 1,
-            DomeResolution::Half => 2,
-            DomeResolution::Quarter => 4,
+            DomeResolution::Full => (1, 1),
+            DomeResolution::Half => (2, 2),
+            DomeResolution::Quarter => (4, 4),
+            DomeResolution::Auto => (2, 4),
         }
     }
 
@@ -48,6 +60,7 @@ impl DomeResolution {
             DomeResolution::Full => "full",
             DomeResolution::Half => "half",
             DomeResolution::Quarter => "quarter",
+            DomeResolution::Auto => "auto",
         }
     }
 
@@ -85,25 +98,28 @@ const COMPOSITE_BLEND: wgpu::BlendState = wgpu::BlendState {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 struct CompositeUniform {
-    /// Full-resolution pixel to buffer texture coordinates (xy); zw unused.
+    /// Frame pixel to texture coordinates (xy: 1 / frame size; every buffer holds the whole frame); zw unused.
     uv_from_pixel: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<CompositeUniform>() == 16);
 
-/// One run's buffer and the bind group that reads it.
+/// One run's buffer, its divisor and the bind group that reads it.
 struct RunBuffer {
     view: wgpu::TextureView,
     bind_group: wgpu::BindGroup,
+    divisor: u32,
 }
 
 /// The reduced buffers of a frame size and the composite pipelines.
 pub struct ReducedLayersPass {
     layout: wgpu::BindGroupLayout,
     pipelines: Pipelines<wgpu::RenderPipeline>,
+    /// The composite's uniform (frame pixel to texture coordinates, any divisor).
     uniform: wgpu::Buffer,
     sampler: wgpu::Sampler,
-    /// Frame size and divisor the buffers are made for.
-    made_for: ((u32, u32), u32),
+    /// Frame size and target the buffers are made for.
+    made_for: ((u32, u32), Target),
+    /// Per run of a frame; reused while the size, target and run's divisor stay.
     buffers: Vec<RunBuffer>,
 }
 
@@ -133,7 +149,7 @@ impl ReducedLayersPass {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        Ok(Self { layout, pipelines, uniform, sampler, made_for: ((0, 0), 0), buffers: Vec::new() })
+        Ok(Self { layout, pipelines, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new() })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
@@ -163,25 +179,29 @@ impl ReducedLayersPass {
         (width.div_ceil(divisor).max(1), height.div_ceil(divisor).max(1))
     }
 
-    /// Makes sure `runs` buffers exist for the frame size and divisor.
-    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), divisor: u32, runs: usize) {
-        if self.made_for != (size, divisor) {
+    /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, for the frame size and
+    /// target.
+    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), target: Target, divisors: &[u32]) {
+        if self.made_for != (size, target) {
             self.buffers.clear();
-            self.made_for = (size, divisor);
-            let (bw, bh) = Self::buffer_size(size, divisor);
-            let d = divisor as f32;
-            let u = CompositeUniform { uv_from_pixel: [1.0 / (d * bw as f32), 1.0 / (d * bh as f32), 0.0, 0.0] };
+            self.made_for = (size, target);
+            // Each buffer holds the whole frame (its viewport is the whole buffer, even where the
+            // frame's size is not a multiple of the divisor): texture coordinates are the frame's.
+            let u = CompositeUniform { uv_from_pixel: [1.0 / size.0.max(1) as f32, 1.0 / size.1.max(1) as f32, 0.0, 0.0] };
             queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&u));
         }
-        while self.buffers.len() < runs {
+        for (run, &divisor) in divisors.iter().enumerate() {
+            if self.buffers.get(run).is_some_and(|b| b.divisor == divisor) {
+                continue;
+            }
             let (width, height) = Self::buffer_size(size, divisor);
             let texture = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(&format!("ReducedLayers::buffer {}", self.buffers.len())),
+                label: Some(&format!("ReducedLayers::buffer {run}")),
                 size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: REDUCED_FORMAT,
+                format: reduced_format(target),
                 usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             });
@@ -195,12 +215,17 @@ impl ReducedLayersPass {
                     wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
                 ],
             });
-            self.buffers.push(RunBuffer { view, bind_group });
+            let buffer = RunBuffer { view, bind_group, divisor };
+            if run < self.buffers.len() {
+                self.buffers[run] = buffer;
+            } else {
+                self.buffers.push(buffer);
+            }
         }
     }
 
     /// Begins the render pass that draws run `run` into its buffer (cleared to nothing in front:
-    /// colour 0, transmittance 1), its viewport the frame scaled down by the divisor.
+    /// colour 0, transmittance 1), its viewport the whole buffer.
     pub fn begin<'e>(&self, encoder: &'e mut wgpu::CommandEncoder, run: usize, timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>) -> Option<wgpu::RenderPass<'e>> {
         let buffer = self.buffers.get(run)?;
         let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -216,8 +241,8 @@ impl ReducedLayersPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        let ((w, h), d) = self.made_for;
-        rpass.set_viewport(0.0, 0.0, w as f32 / d as f32, h as f32 / d as f32, 0.0, 1.0);
+        let (w, h) = Self::buffer_size(self.made_for.0, buffer.divisor);
+        rpass.set_viewport(0.0, 0.0, w as f32, h as f32, 0.0, 1.0);
         Some(rpass)
     }
 }
@@ -243,7 +268,7 @@ impl Pass for ReducedLayersPass {
         // Buffers of another size are of no further use.
         if self.made_for.0 != cx.size {
             self.buffers.clear();
-            self.made_for = ((0, 0), 0);
+            self.made_for = ((0, 0), Target::Display);
         }
     }
 

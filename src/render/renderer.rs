@@ -88,6 +88,9 @@ pub struct FrameStats {
     pub objects_below_horizon: u32,
     /// Sky objects drawn into a reduced-resolution buffer ([`RenderOptions::dome_resolution`]).
     pub objects_reduced: u32,
+    /// Each run of reduced layers this frame, in draw order: its buffer's divisor (2: half the
+    /// frame's width and height, 4: a quarter). One composite each.
+    pub reduced_runs: Vec<u32>,
     /// The star field was not drawn: transparent this frame.
     pub stars_skipped: bool,
     /// The `lut` tables were not rebuilt: nothing they depend on moved.
@@ -360,11 +363,23 @@ impl SkyRenderer {
                     let load = if phase == Phase::Scene { (wgpu::LoadOp::Clear(wgpu::Color::BLACK), wgpu::LoadOp::Clear(1.0)) } else { (wgpu::LoadOp::Load, wgpu::LoadOp::Load) };
                     // Runs of consecutive dome layers drawn at reduced resolution first, each into
                     // its own buffer; the sky pass composites each in its run's place.
-                    let divisor = options.dome_resolution.divisor();
-                    let runs = if phase == Phase::Sky && draws_here && divisor > 1 { reduced_runs(list) } else { Vec::new() };
+                    let reduce = options.dome_resolution.divisors().0 > 1;
+                    let reordered;
+                    let list = if phase == Phase::Sky && draws_here && reduce {
+                        reordered = join_additive_runs(list);
+                        &reordered
+                    } else {
+                        list
+                    };
+                    let runs = if phase == Phase::Sky && draws_here && reduce { reduced_runs(list) } else { Vec::new() };
+                    // A run's buffer is as fine as its finest layer needs.
+                    let divisors: Vec<u32> = runs.iter().map(|&(start, end)| list[start..end].iter().map(|(_, it)| it.divisor.max(1) as u32).min().unwrap_or(1)).collect();
                     let reduced_pass = self.passes.iter().position(|p| (p.as_ref() as &dyn std::any::Any).is::<ReducedLayersPass>());
+                    if phase == Phase::Sky {
+                        stats.reduced_runs.clone_from(&divisors);
+                    }
                     if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
-                        layers.ensure(&ctx.device, &ctx.queue, (w, h), divisor, runs.len());
+                        layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors);
                     }
                     let queries = list.iter().find_map(|(i, _)| self.passes[*i].occlusion_query_set());
                     let label = format!("SkyRenderer::{}", phase.name());
@@ -495,6 +510,26 @@ pub fn release_freed_memory() {
     }
 }
 
+/// The sky phase's draws with every full-resolution additive draw moved past the reduced
+/// additive layers that follow it. Additive draws commute (target + a + b, clamped, in either
+/// order), so the picture is the same; reduced layers that only such draws kept apart (the
+/// skydome's fine stars between it and the galaxy) then share a run and one composite.
+fn join_additive_runs(list: &[(usize, DrawItem)]) -> Vec<(usize, DrawItem)> {
+    let mut out = list.to_vec();
+    let mut moved = true;
+    while moved {
+        moved = false;
+        for k in 0..out.len().saturating_sub(1) {
+            let (a, b) = (out[k].1, out[k + 1].1);
+            if !a.reduced && a.additive && b.reduced && b.additive {
+                out.swap(k, k + 1);
+                moved = true;
+            }
+        }
+    }
+    out
+}
+
 /// The runs of consecutive items marked `reduced` in a sorted phase list: (start, end) indices.
 fn reduced_runs(list: &[(usize, DrawItem)]) -> Vec<(usize, usize)> {
     let mut runs = Vec::new();
@@ -539,4 +574,29 @@ fn begin_pass<'e>(
         occlusion_query_set,
         multiview_mask: None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn item(key: usize, reduced: bool, additive: bool) -> (usize, DrawItem) {
+        (0, DrawItem { reduced, additive, divisor: if reduced { 2 } else { 1 }, ..DrawItem::new(0, key) })
+    }
+
+    #[test]
+    fn additive_draws_move_past_reduced_additive_layers_only() {
+        // Skydome (reduced, opaque), its fine stars (full, additive), galaxy (reduced, additive),
+        // sun (full, additive), clouds (reduced, alpha), fog (reduced, alpha).
+        let list = [item(0, true, false), item(1, false, true), item(2, true, true), item(3, false, true), item(4, true, false), item(5, true, false)];
+        let joined = join_additive_runs(&list);
+        let keys: Vec<usize> = joined.iter().map(|(_, it)| it.key).collect();
+        // The stars go past the galaxy; the sun stays before the alpha-blended clouds.
+        assert_eq!(keys, [0, 2, 1, 3, 4, 5]);
+        assert_eq!(reduced_runs(&list), [(0, 1), (2, 3), (4, 6)]);
+        assert_eq!(reduced_runs(&joined), [(0, 2), (4, 6)]);
+        // Nothing to join: unchanged.
+        let plain = [item(0, true, false), item(1, false, false), item(2, true, true)];
+        assert_eq!(join_additive_runs(&plain), plain.to_vec());
+    }
 }

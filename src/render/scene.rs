@@ -199,10 +199,10 @@ impl Pass for ScenePass {
 
     fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         if cx.options.scene {
-            out.push(DrawItem { priority: 0, key: TERRAIN, reduced: false });
+            out.push(DrawItem::new(0, TERRAIN));
         }
         if cx.options.occluder.is_some() {
-            out.push(DrawItem { priority: 0, key: OCCLUDER, reduced: false });
+            out.push(DrawItem::new(0, OCCLUDER));
         }
     }
 

@@ -261,6 +261,9 @@ struct Visible {
     version: usize,
     /// Drawn into a reduced-resolution buffer.
     reduced: bool,
+    /// Where reduced: frame pixels per buffer pixel along each side, the coarsest buffer the
+    /// options allow that still resolves its textures.
+    divisor: u8,
     /// The stages this draw samples (the other terms are left out): every stage when whole.
     part: [bool; 4],
     /// The fine terms of a split opaque layer: added on top of its reduced part.
@@ -386,7 +389,7 @@ impl SkyObjectsPass {
             }
             let constants = key.constants();
             let (format, blend) = match (key.reduced, key.target) {
-                (true, _) => (super::reduced_layers::REDUCED_FORMAT, Some(super::reduced_layers::REDUCED_BLENDS[key.blend])),
+                (true, target) => (super::reduced_layers::reduced_format(target), Some(super::reduced_layers::REDUCED_BLENDS[key.blend])),
                 (false, Target::Hdr) => (super::HDR_FORMAT, BLENDS[key.blend]),
                 (false, Target::Display) => (self.display_format, BLENDS[key.blend]),
             };
@@ -481,10 +484,11 @@ impl Pass for SkyObjectsPass {
                 _ => false,
             })
         };
-        let divisor = cx.options.dome_resolution.divisor();
-        let reduce_domes = divisor > 1;
-        // The reduced buffer's pixels per degree of view at the centre of the frame.
-        let reduced_px_per_deg = cx.size.1 as f32 / cx.camera.fov_y_deg.max(1.0) / divisor as f32;
+        let (finest, coarsest) = cx.options.dome_resolution.divisors();
+        let reduce_domes = finest > 1;
+        // A reduced buffer's pixels per degree of view at the centre of the frame.
+        let px_per_deg = |divisor: u32| cx.size.1 as f32 / cx.camera.fov_y_deg.max(1.0) / divisor as f32;
+        let reduced_px_per_deg = px_per_deg(finest);
         for of in &cx.frame.objects {
             match &of.versions {
                 Ok(versions) if behind_scene(of, versions) => {
@@ -494,7 +498,7 @@ impl Pass for SkyObjectsPass {
                 Ok(versions) => {
                     for v in versions {
                         let d = &draws.objects[of.index][v.version];
-                        let entry = Visible { index: of.index, priority: of.priority, version: v.version, reduced: false, part: [true; 4], on_top: false };
+                        let entry = Visible { index: of.index, priority: of.priority, version: v.version, reduced: false, divisor: 1, part: [true; 4], on_top: false };
                         let dome = matches!(d.shape, Shape::Dome { .. } | Shape::DomeBand { .. });
                         let Some(key) = self.keys.get(&(of.index, v.version)).filter(|_| reduce_domes && dome) else {
                             self.visible.push(entry);
@@ -509,13 +513,19 @@ impl Pass for SkyObjectsPass {
                         let coarse: [bool; 4] = std::array::from_fn(|k| k < count && !fine[k]);
                         let any_fine = (0..count).any(|k| fine[k] && key.live[k]);
                         let any_coarse = (0..count).any(|k| coarse[k] && key.live[k]);
+                        // The coarsest buffer allowed that resolves every coarse stage sampled. A
+                        // physical sky model's stage stays at the finest: its map has no texel
+                        // size here, and the sun's aureole is sharp.
+                        let coarse_enough = (0..count).all(|k| !(coarse[k] && key.live[k]) || d.texels_per_deg[k] <= px_per_deg(coarsest));
+                        let divisor = if coarse_enough && (key.view_stage as usize) >= MAX_STAGES { coarsest } else { finest } as u8;
+                        let reduced = Visible { reduced: true, divisor, ..entry };
                         match (any_fine, any_coarse, d.blend) {
-                            (false, _, _) => self.visible.push(Visible { reduced: true, ..entry }),
+                            (false, _, _) => self.visible.push(reduced),
                             // Terms add up: the coarse ones at reduced resolution, then the fine
                             // ones added on top at full resolution (opaque layers only: under
                             // alpha blending the terms' alphas do not add).
                             (true, true, BlendMode::Opaque) => {
-                                self.visible.push(Visible { reduced: true, part: coarse, ..entry });
+                                self.visible.push(Visible { part: coarse, ..reduced });
                                 self.visible.push(Visible { part: fine, on_top: true, ..entry });
                             }
                             _ => self.visible.push(entry),
@@ -532,7 +542,8 @@ impl Pass for SkyObjectsPass {
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
-        out.extend(self.visible.iter().enumerate().map(|(key, e)| DrawItem { priority: e.priority, key, reduced: e.reduced }));
+        let additive = |e: &Visible| e.on_top || self.draws.current.as_ref().is_some_and(|d| d.objects[e.index][e.version].blend == BlendMode::Additive);
+        out.extend(self.visible.iter().enumerate().map(|(key, e)| DrawItem { priority: e.priority, key, reduced: e.reduced, additive: additive(e), divisor: e.divisor }));
     }
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
@@ -573,25 +584,49 @@ struct VersionDraw {
 }
 
 /// The finest detail a stage's texture puts on the sky, texels per degree of view direction:
-/// what a buffer needs at least to show it. Infinite where the mapping has no bound (the Quake
-/// sky's squeezes its texture towards the horizon). The gradient stage (no texture) varies only
-/// slowly, by elevation.
+/// what a buffer needs at least to show it. The gradient stage (no texture) varies only slowly,
+/// by elevation.
 fn stage_texels_per_deg(stage: &crate::sky::resolved::Stage, shape: &Shape) -> f32 {
     let Some(t) = &stage.texture else { return 0.0 };
     let (w, h) = (t.width as f32 * stage.uv_scale[0].abs(), t.height as f32 * stage.uv_scale[1].abs());
-    let span_deg = match *shape {
-        Shape::Dome { bottom_deg } => 90.0 - bottom_deg.get(),
-        Shape::DomeBand { bottom_deg, top_deg } => top_deg.get() - bottom_deg.get(),
-        Shape::Billboard { size_deg } | Shape::Quad { size_deg } => size_deg.get(),
-    }
-    .abs()
-    .max(1e-3);
+    let (bottom_deg, top_deg) = match *shape {
+        Shape::Dome { bottom_deg } => (bottom_deg.get(), 90.0),
+        Shape::DomeBand { bottom_deg, top_deg } => (bottom_deg.get(), top_deg.get()),
+        Shape::Billboard { size_deg } | Shape::Quad { size_deg } => (0.0, size_deg.get()),
+    };
+    let span_deg = (top_deg - bottom_deg).abs().max(1e-3);
     match stage.uv {
         UvSource::Mesh => (w / 360.0).max(h / span_deg),
         UvSource::Sun { size_deg } => w.max(h) / size_deg.get().abs().max(1e-3),
         UvSource::Celestial => (w / 360.0).max(h / 180.0),
-        UvSource::Quake { .. } => f32::INFINITY,
+        UvSource::Quake { z_scale, z_offset, t_scale, .. } => {
+            w.max(h) * quake_uv_per_rad(z_scale.get(), z_offset.get(), t_scale.get(), bottom_deg.min(top_deg), bottom_deg.max(top_deg)).to_radians()
+        }
     }
+}
+
+/// The Quake sky's mapping (`stage_uv` in shaders/sky_objects.wgsl: the direction's y scaled by
+/// `z_scale` and moved by `z_offset`, then uv = t_scale x xz / length) at its steepest over the
+/// elevations `bottom_deg..top_deg`: texture-coordinate units per radian of view direction. At
+/// elevation e the ring of directions lands on a circle of radius t cos(e) / L(e), with
+/// L(e) = sqrt(cos^2 e + (z sin e + o)^2): along the ring that is t / L(e) per radian, across it
+/// t |d/de (cos e / L(e))|. Sampled densely (the derivative by central differences); the shader's
+/// floor on L bounds it where L vanishes.
+fn quake_uv_per_rad(z_scale: f32, z_offset: f32, t_scale: f32, bottom_deg: f32, top_deg: f32) -> f32 {
+    let (z, o, t) = (z_scale as f64, z_offset as f64, t_scale.abs() as f64);
+    let radius = |e: f64| e.cos() / (e.cos().powi(2) + (z * e.sin() + o).powi(2)).sqrt().max(1e-4);
+    const SAMPLES: u32 = 512;
+    let (lo, hi) = ((bottom_deg as f64).to_radians(), (top_deg as f64).to_radians());
+    let step = (hi - lo) / SAMPLES as f64;
+    let h = 1e-4;
+    let mut steepest: f64 = 0.0;
+    for i in 0..=SAMPLES {
+        let e = lo + step * i as f64;
+        let l = (e.cos().powi(2) + (z * e.sin() + o).powi(2)).sqrt().max(1e-4);
+        let across = ((radius(e + h) - radius(e - h)) / (2.0 * h)).abs();
+        steepest = steepest.max(1.0 / l).max(across);
+    }
+    (t * steepest) as f32
 }
 
 /// How much finer a texture's texels are than the detail it carries: 2^k for the largest k (at
@@ -776,5 +811,39 @@ mod tests {
         w.constants[0] = [0.0; 4];
         w.misc[2] = 0;
         assert_eq!(w.skip_dark_terms(false), 0);
+    }
+
+    /// The Quake mapping as the shader evaluates it (without the scroll), in f64.
+    fn quake_uv(dir: [f64; 3], z: f64, o: f64, t: f64) -> [f64; 2] {
+        let y = dir[1] * z + o;
+        let l = (dir[0] * dir[0] + y * y + dir[2] * dir[2]).sqrt().max(1e-4);
+        [dir[0] * t / l, dir[2] * t / l]
+    }
+
+    #[test]
+    fn quake_density_bounds_the_mapping_and_is_reached() {
+        // Random pairs of nearby directions over the dome: the texture-coordinate distance per
+        // radian between them never exceeds the bound, and comes close to it somewhere.
+        let mut rng = fastrand::Rng::with_seed(11);
+        for &(z, o, t, bottom) in &[(3.0, 0.0, 0.7, -5.0), (3.0, 0.0, 1.3, -5.0), (1.0, 0.0, 1.0, -20.0), (2.0, 0.4, 0.5, 0.0), (5.0, -0.3, 2.0, -10.0)] {
+            let bound = quake_uv_per_rad(z as f32, o as f32, t as f32, bottom as f32, 90.0) as f64;
+            let mut seen: f64 = 0.0;
+            for _ in 0..20_000 {
+                let e = (bottom + (90.0 - bottom) * rng.f64()).to_radians();
+                let a = rng.f64() * std::f64::consts::TAU;
+                let dir = |e: f64, a: f64| [e.cos() * a.sin(), e.sin(), e.cos() * a.cos()];
+                let (de, da) = ((rng.f64() - 0.5) * 1e-4, (rng.f64() - 0.5) * 1e-4);
+                let (p, q) = (dir(e, a), dir((e + de).min(std::f64::consts::FRAC_PI_2), a + da));
+                let angle = (p[0] * q[0] + p[1] * q[1] + p[2] * q[2]).clamp(-1.0, 1.0).acos();
+                if angle < 1e-7 {
+                    continue;
+                }
+                let (u, v) = (quake_uv(p, z, o, t), quake_uv(q, z, o, t));
+                let rate = ((u[0] - v[0]).powi(2) + (u[1] - v[1]).powi(2)).sqrt() / angle;
+                assert!(rate <= bound * 1.01, "z {z} o {o} t {t}: {rate} per rad above the bound {bound}");
+                seen = seen.max(rate);
+            }
+            assert!(seen > bound * 0.8, "z {z} o {o} t {t}: bound {bound} per rad far above the steepest seen, {seen}");
+        }
     }
 }

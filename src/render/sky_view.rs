@@ -465,7 +465,7 @@ impl Pass for SkyViewPass {
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         if self.dirty {
-            out.push(DrawItem { priority: 0, key: 0, reduced: false });
+            out.push(DrawItem::new(0, 0));
         }
     }
 

@@ -128,7 +128,7 @@ impl Pass for StarsPass {
 
     fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         if let (true, Some(s)) = (self.visible, cx.frame.stars) {
-            out.push(DrawItem { priority: s.priority, key: 0, reduced: false });
+            out.push(DrawItem { additive: true, ..DrawItem::new(s.priority, 0) });
         }
     }
 
