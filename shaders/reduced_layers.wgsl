@@ -25,3 +25,10 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> @builtin(position) vec4<f32> {
 fn fs_main(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
     return textureSample(layers, layers_sampler, pixel.xy * composite.uv_from_pixel.xy);
 }
+
+// The first run of a frame as its background (drawn before the scene, over the clear colour,
+// black): colour + transmittance x black, the target's alpha (1) kept.
+@fragment
+fn fs_background(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
+    return vec4<f32>(textureSample(layers, layers_sampler, pixel.xy * composite.uv_from_pixel.xy).rgb, 1.0);
+}

@@ -58,8 +58,8 @@ fn sphere_band(top_deg: f32, bottom_deg: f32, rings: u32, segments: u32) -> Mesh
 /// Geometry of a shape.
 pub fn shape_mesh(shape: &Shape) -> MeshData {
     match *shape {
-        Shape::Dome { bottom_deg } => sphere_band(90.0, bottom_deg.get(), 32, 64),
-        Shape::DomeBand { bottom_deg, top_deg } => sphere_band(top_deg.get(), bottom_deg.get(), 12, 96),
+        Shape::Dome { bottom_deg } => sphere_band(90.0, bottom_deg.get(), 16, 32),
+        Shape::DomeBand { bottom_deg, top_deg } => sphere_band(top_deg.get(), bottom_deg.get(), 6, 48),
         Shape::Billboard { .. } | Shape::Quad { .. } => MeshData {
             vertices: [[-1.0, 1.0, 0.0, 0.0], [1.0, 1.0, 1.0, 0.0], [-1.0, -1.0, 0.0, 1.0], [1.0, -1.0, 1.0, 1.0]]
                 .iter()

@@ -113,7 +113,9 @@ struct RunBuffer {
 /// The reduced buffers of a frame size and the composite pipelines.
 pub struct ReducedLayersPass {
     layout: wgpu::BindGroupLayout,
-    pipelines: Pipelines<wgpu::RenderPipeline>,
+    /// The composite (blended over the frame, depth-tested), and the background (the first run
+    /// of a frame, drawn before the scene: replacing the clear, neither blended nor tested).
+    pipelines: Pipelines<[wgpu::RenderPipeline; 2]>,
     /// The composite's uniform (frame pixel to texture coordinates, any divisor).
     uniform: wgpu::Buffer,
     sampler: wgpu::Sampler,
@@ -152,26 +154,32 @@ impl ReducedLayersPass {
         Ok(Self { layout, pipelines, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new() })
     }
 
-    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 2]> {
         let module = shaders::module(b.device, b.library, "reduced_layers")?;
-        shaders::validated(b.device, "ReducedLayers::pipeline", || {
-            b.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("ReducedLayers::pipeline"),
-                layout: Some(layout),
-                vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: super::depth_state(false, wgpu::CompareFunction::Less),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    targets: &[Some(wgpu::ColorTargetState { format: b.color_format, blend: Some(COMPOSITE_BLEND), write_mask: wgpu::ColorWrites::ALL })],
-                    compilation_options: Default::default(),
-                }),
-                multiview_mask: None,
-                cache: None,
+        let make = |label: &str, entry: &str, blend: Option<wgpu::BlendState>, compare: wgpu::CompareFunction| {
+            shaders::validated(b.device, label, || {
+                b.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(layout),
+                    vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
+                    primitive: wgpu::PrimitiveState::default(),
+                    depth_stencil: super::depth_state(false, compare),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(entry),
+                        targets: &[Some(wgpu::ColorTargetState { format: b.color_format, blend, write_mask: wgpu::ColorWrites::ALL })],
+                        compilation_options: Default::default(),
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
             })
-        })
+        };
+        Ok([
+            make("ReducedLayers::pipeline", "fs_main", Some(COMPOSITE_BLEND), wgpu::CompareFunction::Less)?,
+            make("ReducedLayers::background_pipeline", "fs_background", None, wgpu::CompareFunction::Always)?,
+        ])
     }
 
     /// Size of the reduced buffers for a frame size and divisor, pixels.
@@ -278,7 +286,21 @@ impl Pass for ReducedLayersPass {
     /// Composites run `key` (the renderer places it where the run's first layer would draw).
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
         let Some(buffer) = self.buffers.get(key) else { return 0 };
-        rpass.set_pipeline(self.pipelines.for_target(target));
+        rpass.set_pipeline(&self.pipelines.for_target(target)[0]);
+        rpass.set_bind_group(1, &buffer.bind_group, &[]);
+        rpass.draw(0..3, 0..1);
+        1
+    }
+}
+
+impl ReducedLayersPass {
+    /// Draws run `run` as the frame's background, into the scene's pass before the scene: the
+    /// target holds only its clear colour (black) then, so compositing over it is writing the
+    /// run's colour, and the scene drawn next covers what it hides. A full-screen pass without
+    /// blending or depth test costs a software rasteriser about half a blended, tested one.
+    pub fn draw_background(&self, rpass: &mut wgpu::RenderPass<'_>, run: usize, target: Target) -> u32 {
+        let Some(buffer) = self.buffers.get(run) else { return 0 };
+        rpass.set_pipeline(&self.pipelines.for_target(target)[1]);
         rpass.set_bind_group(1, &buffer.bind_group, &[]);
         rpass.draw(0..3, 0..1);
         1

@@ -312,7 +312,25 @@ impl SkyRenderer {
             items[Phase::Compute.index()].extend(scratch.iter().map(|it| (i, *it)));
         }
         // Sky objects and stars interleave by priority; list order among equals.
-        items[Phase::Sky.index()].sort_by_key(|(_, it)| it.priority);
+        let sky_items = &mut items[Phase::Sky.index()];
+        sky_items.sort_by_key(|(_, it)| it.priority);
+        // Runs of consecutive dome layers drawn at reduced resolution, each into its own buffer
+        // before the scene; the sky pass composites each in its run's place.
+        let reduce = options.dome_resolution.divisors().0 > 1;
+        if reduce {
+            *sky_items = join_additive_runs(sky_items);
+        }
+        let runs = if reduce { reduced_runs(sky_items) } else { Vec::new() };
+        // A run's buffer is as fine as its finest layer needs.
+        let divisors: Vec<u32> = runs.iter().map(|&(start, end)| sky_items[start..end].iter().map(|(_, it)| it.divisor.max(1) as u32).min().unwrap_or(1)).collect();
+        stats.reduced_runs.clone_from(&divisors);
+        if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
+            layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors);
+        }
+        let reduced_pass = self.passes.iter().position(|p| (p.as_ref() as &dyn std::any::Any).is::<ReducedLayersPass>()).filter(|_| !runs.is_empty());
+        // The first run, when the sky phase draws nothing before it, is the frame's background:
+        // drawn first in the scene's pass, over the clear colour.
+        let background = reduced_pass.is_some() && runs.first().is_some_and(|&(start, _)| start == 0);
 
         if let Some(t) = self.timer.as_mut() {
             t.begin_frame();
@@ -361,54 +379,26 @@ impl SkyRenderer {
                     // phase, painted over an already shaded sky.
                     let draws_here = phase != Phase::Scene || split;
                     let load = if phase == Phase::Scene { (wgpu::LoadOp::Clear(wgpu::Color::BLACK), wgpu::LoadOp::Clear(1.0)) } else { (wgpu::LoadOp::Load, wgpu::LoadOp::Load) };
-                    // Runs of consecutive dome layers drawn at reduced resolution first, each into
-                    // its own buffer; the sky pass composites each in its run's place.
-                    let reduce = options.dome_resolution.divisors().0 > 1;
-                    let reordered;
-                    let list = if phase == Phase::Sky && draws_here && reduce {
-                        reordered = join_additive_runs(list);
-                        &reordered
-                    } else {
-                        list
-                    };
-                    let runs = if phase == Phase::Sky && draws_here && reduce { reduced_runs(list) } else { Vec::new() };
-                    // A run's buffer is as fine as its finest layer needs.
-                    let divisors: Vec<u32> = runs.iter().map(|&(start, end)| list[start..end].iter().map(|(_, it)| it.divisor.max(1) as u32).min().unwrap_or(1)).collect();
-                    let reduced_pass = self.passes.iter().position(|p| (p.as_ref() as &dyn std::any::Any).is::<ReducedLayersPass>());
-                    if phase == Phase::Sky {
-                        stats.reduced_runs.clone_from(&divisors);
-                    }
-                    if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
-                        layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors);
+                    if let (Phase::Scene, Some(rp)) = (phase, reduced_pass) {
+                        // The reduced buffers first: the first may be the background.
+                        let sky_list = &items[Phase::Sky.index()];
+                        for (r, &(start, end)) in runs.iter().enumerate() {
+                            let layers = (self.passes[rp].as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>();
+                            let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(r == 0, r + 1 == runs.len()));
+                            let Some(mut rpass) = layers.and_then(|l| l.begin(encoder, r, run_writes)) else { continue };
+                            rpass.set_bind_group(0, &self.globals.bind_group, &[]);
+                            for (i, it) in &sky_list[start..end] {
+                                stats.draw_calls += self.passes[*i].draw_reduced(&mut rpass, it.key, kind);
+                            }
+                        }
                     }
                     let queries = list.iter().find_map(|(i, _)| self.passes[*i].occlusion_query_set());
                     let label = format!("SkyRenderer::{}", phase.name());
-                    let mut writes = self.timer.as_mut().and_then(|t| t.render_writes(phase));
+                    let writes = self.timer.as_mut().and_then(|t| t.render_writes(phase));
                     let color = match &self.hdr {
                         Some(t) if kind == Target::Hdr => &t.view,
                         _ => target.color,
                     };
-                    if let (false, Some(rp)) = (runs.is_empty(), reduced_pass) {
-                        let layers = (self.passes[rp].as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>();
-                        for (r, &(start, end)) in runs.iter().enumerate() {
-                            // The phase's timing starts with the first run.
-                            let run_writes = if r == 0 {
-                                writes.as_ref().map(|t| wgpu::RenderPassTimestampWrites {
-                                    query_set: t.query_set,
-                                    beginning_of_pass_write_index: t.beginning_of_pass_write_index,
-                                    end_of_pass_write_index: None,
-                                })
-                            } else {
-                                None
-                            };
-                            let Some(mut rpass) = layers.and_then(|l| l.begin(encoder, r, run_writes)) else { continue };
-                            rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-                            for (i, it) in &list[start..end] {
-                                stats.draw_calls += self.passes[*i].draw_reduced(&mut rpass, it.key, kind);
-                            }
-                        }
-                        writes = writes.map(|t| wgpu::RenderPassTimestampWrites { beginning_of_pass_write_index: None, ..t });
-                    }
                     let mut rpass = begin_pass(encoder, &label, (color, target.depth), load, writes, queries);
                     rpass.set_bind_group(0, &self.globals.bind_group, &[]);
                     let range = match phase {
@@ -417,11 +407,17 @@ impl SkyRenderer {
                         _ => (0.0, 1.0),
                     };
                     rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
+                    if let (Phase::Scene, true, Some(layers)) = (phase, background, self.pass::<ReducedLayersPass>()) {
+                        stats.draw_calls += layers.draw_background(&mut rpass, 0, kind);
+                    }
                     if draws_here {
                         let mut k = 0;
                         while k < list.len() {
-                            if let (Some(r), Some(rp)) = (runs.iter().position(|&(start, _)| start == k), reduced_pass) {
-                                stats.draw_calls += self.passes[rp].draw(&mut rpass, r, kind);
+                            if let (Phase::Sky, Some(r), Some(rp)) = (phase, runs.iter().position(|&(start, _)| start == k), reduced_pass) {
+                                // The background run is already in the frame.
+                                if !(background && r == 0) {
+                                    stats.draw_calls += self.passes[rp].draw(&mut rpass, r, kind);
+                                }
                                 k = runs[r].1;
                                 continue;
                             }

@@ -5,8 +5,16 @@ use std::sync::Arc;
 
 use super::pass::Phase;
 
-/// Phases timed, in order; each uses two timestamps (begin, end).
-const TIMED: usize = Phase::ALL.len();
+/// Timed spans, in frame order: the phases, and the sky's dome layers drawn into reduced
+/// buffers (before the scene). Each uses two timestamps (begin, end).
+const TIMED: usize = Phase::ALL.len() + 1;
+/// Slot of the reduced buffers' passes.
+const REDUCED: usize = Phase::ALL.len();
+
+/// Name of timed span `i`.
+fn span_name(i: usize) -> &'static str {
+    Phase::ALL.get(i).map_or("reduced", |p| p.name())
+}
 const QUERIES: u32 = TIMED as u32 * 2;
 
 const IDLE: u8 = 0;
@@ -63,12 +71,10 @@ impl GpuTimer {
             DONE => {
                 if let Ok(view) = self.readback.get_mapped_range(..) {
                     let ticks: Vec<u64> = view.chunks_exact(8).map(|c| u64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
-                    self.last_ms = Phase::ALL
-                        .iter()
-                        .enumerate()
-                        .filter(|(i, _)| self.pending_written[*i])
-                        .map(|(i, phase)| (phase.name(), ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f32 * self.period_ns / 1e6))
-                        .collect();
+                    // The reduced buffers are drawn before the scene: listed first.
+                    let order = std::iter::once(REDUCED).chain(0..Phase::ALL.len());
+                    self.last_ms =
+                        order.filter(|i| self.pending_written[*i]).map(|i| (span_name(i), ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f32 * self.period_ns / 1e6)).collect();
                 }
                 self.readback.unmap();
                 self.state.store(IDLE, Ordering::Release);
@@ -80,25 +86,34 @@ impl GpuTimer {
         self.written = [false; TIMED];
     }
 
-    /// Marks `phase` as timed this frame; its (begin, end) query indices, if this frame records.
-    fn claim(&mut self, phase: Phase) -> Option<(u32, u32)> {
+    /// Marks span `i` as timed this frame; its (begin, end) query indices, if this frame records.
+    fn claim(&mut self, i: usize) -> Option<(u32, u32)> {
         if !self.recording {
             return None;
         }
-        let i = phase.index();
         self.written[i] = true;
         Some((2 * i as u32, 2 * i as u32 + 1))
     }
 
+    /// Timestamp writes for the passes of the reduced buffers, if this frame records: the first
+    /// pass writes the beginning (`first`), the last the end (`last`).
+    pub fn reduced_writes(&mut self, first: bool, last: bool) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        if !(first || last) {
+            return None;
+        }
+        let (begin, end) = self.claim(REDUCED)?;
+        Some(wgpu::RenderPassTimestampWrites { query_set: &self.set, beginning_of_pass_write_index: first.then_some(begin), end_of_pass_write_index: last.then_some(end) })
+    }
+
     /// Timestamp writes for a render phase, if this frame records.
     pub fn render_writes(&mut self, phase: Phase) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
-        let (begin, end) = self.claim(phase)?;
+        let (begin, end) = self.claim(phase.index())?;
         Some(wgpu::RenderPassTimestampWrites { query_set: &self.set, beginning_of_pass_write_index: Some(begin), end_of_pass_write_index: Some(end) })
     }
 
     /// Timestamp writes for a compute phase, if this frame records.
     pub fn compute_writes(&mut self, phase: Phase) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        let (begin, end) = self.claim(phase)?;
+        let (begin, end) = self.claim(phase.index())?;
         Some(wgpu::ComputePassTimestampWrites { query_set: &self.set, beginning_of_pass_write_index: Some(begin), end_of_pass_write_index: Some(end) })
     }
 
