@@ -19,7 +19,7 @@ fn skips_change_no_pixel_and_are_counted() {
     // At full resolution: a skipped stage can let a dome layer go to a reduced buffer, which
     // moves pixels by a level or two (tests/reduced_layers.rs bounds that).
     let on = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
-    let off = RenderOptions { skips: Skips { dark_stages: false, invisible_stars: false, unchanged_tables: false, below_horizon: false }, ..on };
+    let off = RenderOptions { skips: Skips { dark_stages: false, invisible_stars: false, unchanged_tables: false, below_horizon: false, off_screen: false }, ..on };
     // Two frames each: the second finds the tables and the map current.
     h.render(&sky, &input, &camera, &on).expect("rendered");
     let with = h.render(&sky, &input, &camera, &on).expect("rendered");
@@ -44,4 +44,18 @@ fn skips_change_no_pixel_and_are_counted() {
     assert_eq!(h.renderer.stats.objects_below_horizon, 0);
     let (d, _) = common::diff(&with, &without, 1);
     assert_eq!(d.differing, 0.0, "skipping objects below the horizon changed {:.4} of the pixels", d.differing);
+    // Looking at the zenith the fog band (20 degrees up at most) is out of view: not drawn, and
+    // not a pixel moves, at full resolution or with dome layers in reduced buffers (where other
+    // skips change which layers go to a buffer, so only this one is switched).
+    let zenith = Camera::preset("zenith").expect("zenith view");
+    for resolution in [DomeResolution::Full, DomeResolution::Auto] {
+        let on = RenderOptions { dome_resolution: resolution, ..on };
+        let with = h.render(&sky, &night, &zenith, &on).expect("rendered");
+        let s = h.renderer.stats.clone();
+        assert!(s.objects_off_screen > 0, "{resolution:?}: {s:?}");
+        let without = h.render(&sky, &night, &zenith, &RenderOptions { skips: Skips { off_screen: false, ..on.skips }, ..on }).expect("rendered");
+        assert_eq!(h.renderer.stats.objects_off_screen, 0);
+        let (d, _) = common::diff(&with, &without, 1);
+        assert_eq!(d.differing, 0.0, "{resolution:?}: skipping dome layers out of view changed {:.4} of the pixels (largest {})", d.differing, d.max);
+    }
 }

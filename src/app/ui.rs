@@ -512,6 +512,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     let mut skipped = vec![
         format!("{} objects hidden by their ref colour", s.objects_ref_hidden),
         format!("{} below the horizon behind the scene", s.objects_below_horizon),
+        format!("{} dome layers out of view", s.objects_off_screen),
         format!("{} black texture stages", s.stages_skipped),
     ];
     if s.stars_skipped {
@@ -549,6 +550,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         ui.checkbox(&mut k.invisible_stars, "skip transparent stars");
         ui.checkbox(&mut k.unchanged_tables, "skip unchanged tables and map");
         ui.checkbox(&mut k.below_horizon, "skip objects behind the scene");
+        ui.checkbox(&mut k.off_screen, "skip dome layers out of view");
     });
     let all_on = c.options.skips == crate::render::Skips::default();
     if before == crate::render::Skips::default() && !all_on {

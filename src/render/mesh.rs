@@ -141,10 +141,9 @@ mod tests {
         // Lavapipe pays per triangle (about 0.7 us each at 1280x720), so domes are coarse; the
         // price is this bend of mesh-mapped textures, largest near the zenith (4 pixels at
         // 1280x720 with a 70 degree field of view).
-        for (shape, top, bottom) in [
-            (Shape::Dome { bottom_deg: Elevation(-20.0) }, 90.0, -20.0),
-            (Shape::DomeBand { bottom_deg: Elevation(-20.0), top_deg: Elevation(20.0) }, 20.0, -20.0),
-        ] {
+        for (shape, top, bottom) in
+            [(Shape::Dome { bottom_deg: Elevation(-20.0) }, 90.0, -20.0), (Shape::DomeBand { bottom_deg: Elevation(-20.0), top_deg: Elevation(20.0) }, 20.0, -20.0)]
+        {
             let (du, dv) = uv_arc_error_deg(&shape_mesh(&shape), top, bottom);
             assert!(du < 0.35 && dv < 0.35, "{shape:?}: textures bend by {du:.3} deg along u, {dv:.3} deg along v");
         }

@@ -57,6 +57,9 @@ pub struct Skips {
     /// With the main scene drawn, billboards and quads entirely below the horizon (by more than
     /// [`SCENE_COVERS_BELOW_DEG`]) are not drawn: the scene covers that part of the sky.
     pub below_horizon: bool,
+    /// Dome layers whose band of elevations the frame does not show (a fog band under a view
+    /// of the zenith) are not drawn, nor composited.
+    pub off_screen: bool,
 }
 
 /// The main-scene stand-in covers every direction more than this far below the horizon, degrees
@@ -65,7 +68,7 @@ pub const SCENE_COVERS_BELOW_DEG: f32 = 2.0;
 
 impl Default for Skips {
     fn default() -> Self {
-        Self { dark_stages: true, invisible_stars: true, unchanged_tables: true, below_horizon: true }
+        Self { dark_stages: true, invisible_stars: true, unchanged_tables: true, below_horizon: true, off_screen: true }
     }
 }
 
@@ -86,6 +89,8 @@ pub struct FrameStats {
     pub objects_ref_hidden: u32,
     /// Sky objects not drawn because they are below the horizon, behind the main scene.
     pub objects_below_horizon: u32,
+    /// Dome layers not drawn because the frame does not show their elevations.
+    pub objects_off_screen: u32,
     /// Sky objects drawn into a reduced-resolution buffer ([`RenderOptions::dome_resolution`]).
     pub objects_reduced: u32,
     /// Each run of reduced layers this frame, in draw order: its buffer's divisor (2: half the

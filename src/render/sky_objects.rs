@@ -247,6 +247,8 @@ pub struct SkyObjectsPass {
     ref_hidden: u32,
     /// Objects below the horizon this frame, behind the main scene.
     below_horizon: u32,
+    /// Dome layers outside the frame's elevations this frame.
+    off_screen: u32,
     /// This frame's pipeline signature of every drawn version, by (object index, version).
     keys: HashMap<(usize, usize), VariantKey>,
 }
@@ -333,6 +335,7 @@ impl SkyObjectsPass {
             stages_skipped: 0,
             ref_hidden: 0,
             below_horizon: 0,
+            off_screen: 0,
             keys: HashMap::new(),
         })
     }
@@ -473,6 +476,18 @@ impl Pass for SkyObjectsPass {
         self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera, cx.options.skips.dark_stages, (cx.target, neutral), &mut self.keys);
         self.ref_hidden = 0;
         self.below_horizon = 0;
+        self.off_screen = 0;
+        // The frame's elevations, with a margin for the dome's chords (tests in mesh.rs).
+        let (lowest_deg, highest_deg) = cx.camera.elevation_range_deg(cx.size.0 as f32 / cx.size.1.max(1) as f32);
+        let in_view = |shape: &Shape| match *shape {
+            Shape::Dome { bottom_deg } => bottom_deg.get() - 0.5 <= highest_deg,
+            Shape::DomeBand { bottom_deg, top_deg } => {
+                let (lo, hi) = (bottom_deg.get().min(top_deg.get()), bottom_deg.get().max(top_deg.get()));
+                lo - 0.5 <= highest_deg && hi + 0.5 >= lowest_deg
+            }
+            Shape::Billboard { .. } | Shape::Quad { .. } => true,
+        };
+        let cull = cx.options.skips.off_screen;
         let behind_scene = |of: &crate::sky::ObjectFrame, versions: &[crate::sky::VersionFrame]| {
             let Some((dir, _)) = of.placement.filter(|_| cx.options.scene && cx.options.skips.below_horizon) else { return false };
             let elevation_deg = dir.y.clamp(-1.0, 1.0).asin().to_degrees();
@@ -494,6 +509,10 @@ impl Pass for SkyObjectsPass {
                 Ok(versions) if behind_scene(of, versions) => {
                     self.hidden += 1;
                     self.below_horizon += 1;
+                }
+                Ok(versions) if cull && versions.iter().all(|v| !in_view(&draws.objects[of.index][v.version].shape)) => {
+                    self.hidden += 1;
+                    self.off_screen += 1;
                 }
                 Ok(versions) => {
                     for v in versions {
@@ -562,6 +581,7 @@ impl Pass for SkyObjectsPass {
         stats.stages_skipped = self.stages_skipped;
         stats.objects_ref_hidden = self.ref_hidden;
         stats.objects_below_horizon = self.below_horizon;
+        stats.objects_off_screen = self.off_screen;
         let mut reduced: Vec<usize> = self.visible.iter().filter(|e| e.reduced).map(|e| e.index).collect();
         reduced.dedup();
         stats.objects_reduced = reduced.len() as u32;
