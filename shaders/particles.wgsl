@@ -28,3 +28,33 @@ fn vs_main(@builtin(vertex_index) vi: u32, p: Particle) -> ParticleOut {
 fn fs_flash(in: ParticleOut) -> @location(0) vec4<f32> {
     return vec4<f32>(to_target(in.color.rgb * in.color.a), 1.0);
 }
+
+// The run of reduced layers above a dome emitter, when its particles are drawn after that run's
+// composite (src/render/particles.rs, `draw_under_run`). Keep `RunComposite` in sync with
+// `Composite` in reduced_layers.wgsl.
+struct RunComposite {
+    uv_from_pixel: vec4<f32>,
+};
+@group(2) @binding(0) var<uniform> run_composite: RunComposite;
+@group(2) @binding(1) var run_layers: texture_2d<f32>;
+@group(2) @binding(2) var run_sampler: sampler;
+
+fn run_at(pixel: vec2<f32>) -> vec4<f32> {
+    return textureSampleLevel(run_layers, run_sampler, pixel * run_composite.uv_from_pixel.xy, 0.0);
+}
+
+// Additive under the run: the added light shows through its transmittance.
+@fragment
+fn fs_main_under_run(in: ParticleOut) -> @location(0) vec4<f32> {
+    let c = sprite_additive(in);
+    return vec4<f32>(c.rgb * run_at(in.clip.xy).a, c.a);
+}
+
+// Alpha under the run (premultiplied, blended One, OneMinusSrcAlpha): a (T m + C) over (1 - a)
+// of the frame leaves C + T (a m + (1 - a) target).
+@fragment
+fn fs_alpha_under_run(in: ParticleOut) -> @location(0) vec4<f32> {
+    let c = sprite_alpha(in);
+    let run = run_at(in.clip.xy);
+    return vec4<f32>(c.a * (run.a * c.rgb + run.rgb), c.a);
+}

@@ -32,3 +32,16 @@ fn fs_main(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
 fn fs_background(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
     return vec4<f32>(textureSample(layers, layers_sampler, pixel.xy * composite.uv_from_pixel.xy).rgb, 1.0);
 }
+
+// Two runs at once as the background: the upper (group 2) over the lower (group 1), over black.
+// Only the pair's pipeline layout has group 2.
+@group(2) @binding(0) var<uniform> composite_upper: Composite;
+@group(2) @binding(1) var layers_upper: texture_2d<f32>;
+@group(2) @binding(2) var layers_upper_sampler: sampler;
+
+@fragment
+fn fs_pair_background(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
+    let lower = textureSample(layers, layers_sampler, pixel.xy * composite.uv_from_pixel.xy);
+    let upper = textureSample(layers_upper, layers_upper_sampler, pixel.xy * composite_upper.uv_from_pixel.xy);
+    return vec4<f32>(upper.rgb + upper.a * lower.rgb, 1.0);
+}

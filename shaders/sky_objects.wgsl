@@ -35,6 +35,16 @@ struct Draw {
 @group(1) @binding(9) var sky_view: texture_2d<f32>;
 @group(1) @binding(10) var sky_view_sampler: sampler;
 
+// The run of reduced layers above this draw, when it is drawn after that run's composite
+// (UNDER_RUN): premultiplied colour and transmittance (reduced_layers.wgsl). Keep `RunComposite`
+// in sync with `Composite` there.
+struct RunComposite {
+    uv_from_pixel: vec4<f32>,
+};
+@group(2) @binding(0) var<uniform> run_composite: RunComposite;
+@group(2) @binding(1) var run_layers: texture_2d<f32>;
+@group(2) @binding(2) var run_sampler: sampler;
+
 const UV_MESH: u32 = 0u;
 const UV_SUN: u32 = 1u;
 const UV_CELESTIAL: u32 = 2u;
@@ -89,6 +99,10 @@ override LIVE_3: bool = true;
 // the target holds comes with TARGET_KIND and TONE_KIND (tone.wgsl).
 override VIEW_STAGE: u32 = 4u;
 override LIGHTING: u32 = 0u;
+// Drawn after the composite of the run above it (src/render/sky_objects.rs, `UNDER_RUN_BLENDS`),
+// with its blend (0 opaque, 1 alpha, 2 additive weighted by alpha, 3 additive).
+override UNDER_RUN: bool = false;
+override BLEND_KIND: u32 = 0u;
 
 fn stage_count() -> u32 {
     if SPECIALISED {
@@ -297,5 +311,20 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         let coverage = mix(0.35, 1.0, smoothstep(0.0, 0.25, lit));
         color = vec4<f32>(color.rgb * (0.04 + 0.96 * lit), color.a * coverage * step(r2, 1.0));
     }
+    if UNDER_RUN {
+        color = under_run(color, in.clip.xy);
+    }
     return color;
+}
+
+// What a draw writes after the run above it is already in the frame, so that the frame ends as
+// C + T x (this draw over what was there), with the run's colour C and transmittance T here.
+fn under_run(color: vec4<f32>, pixel: vec2<f32>) -> vec4<f32> {
+    let run = textureSampleLevel(run_layers, run_sampler, pixel * run_composite.uv_from_pixel.xy, 0.0);
+    switch BLEND_KIND {
+        case 0u: { return vec4<f32>(run.rgb + run.a * color.rgb, color.a); }
+        case 1u: { return vec4<f32>(color.a * (run.a * color.rgb + run.rgb), color.a); }
+        case 2u: { return vec4<f32>(run.a * color.a * color.rgb, color.a); }
+        default: { return vec4<f32>(run.a * color.rgb, color.a); }
+    }
 }

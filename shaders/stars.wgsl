@@ -36,8 +36,30 @@ fn vs_main(@builtin(vertex_index) vi: u32, @location(0) celestial_dir: vec3<f32>
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    return star_color(in);
+}
+
+fn star_color(in: VertexOut) -> vec4<f32> {
     let falloff = exp(-dot(in.local, in.local) * 4.0);
     let a = clamp(falloff * in.brightness * params.color.a, 0.0, 1.0);
     // Premultiplied (additive blending weights by the source alpha): see glare.wgsl.
     return vec4<f32>(to_target(params.color.rgb * a), 1.0);
+}
+
+// The run of reduced layers above the stars, when they are drawn after its composite
+// (src/render/stars.rs, `draw_under_run`). Keep `RunComposite` in sync with `Composite` in
+// reduced_layers.wgsl.
+struct RunComposite {
+    uv_from_pixel: vec4<f32>,
+};
+@group(2) @binding(0) var<uniform> run_composite: RunComposite;
+@group(2) @binding(1) var run_layers: texture_2d<f32>;
+@group(2) @binding(2) var run_sampler: sampler;
+
+// Added light under the run shows through its transmittance.
+@fragment
+fn fs_under_run(in: VertexOut) -> @location(0) vec4<f32> {
+    let transmittance = textureSampleLevel(run_layers, run_sampler, in.clip.xy * run_composite.uv_from_pixel.xy, 0.0).a;
+    let c = star_color(in);
+    return vec4<f32>(c.rgb * transmittance, c.a);
 }

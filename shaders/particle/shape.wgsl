@@ -73,6 +73,10 @@ fn sprite_coverage(local: vec2<f32>, shape: u32, bits: u32) -> f32 {
 // lightning flash over the sky) covers everything.
 @fragment
 fn fs_main(in: ParticleOut) -> @location(0) vec4<f32> {
+    return sprite_additive(in);
+}
+
+fn sprite_additive(in: ParticleOut) -> vec4<f32> {
     if (in.misc.x == 4u) {
         let t = textureSample(sprite, sprite_sampler, in.local * 0.5 + vec2<f32>(0.5));
         return vec4<f32>(to_target(in.color.rgb * t.rgb * in.color.a * t.a), 1.0);
@@ -87,6 +91,10 @@ fn fs_main(in: ParticleOut) -> @location(0) vec4<f32> {
 // Alpha blending.
 @fragment
 fn fs_alpha(in: ParticleOut) -> @location(0) vec4<f32> {
+    return sprite_alpha(in);
+}
+
+fn sprite_alpha(in: ParticleOut) -> vec4<f32> {
     var coverage = 1.0;
     var rgb = in.color.rgb;
     if (in.misc.x == 4u) {

@@ -187,6 +187,9 @@ pub struct ParticlesPass {
     sampler: wgpu::Sampler,
     /// Alpha, additive, and the flash's (additive, `fs_flash`).
     pipeline: Pipelines<[wgpu::RenderPipeline; 3]>,
+    /// Alpha and additive, drawn after the run of reduced layers above them
+    /// ([`Pass::draw_under_run`]).
+    under_run: Pipelines<[wgpu::RenderPipeline; 2]>,
     set: Staged<Option<EmitterSet>>,
     /// The flash's one instance.
     flash: EmitterGpu,
@@ -214,6 +217,17 @@ impl ParticlesPass {
                 [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", super::ADDITIVE_ALPHA, "additive"), ("fs_flash", super::ADDITIVE_ALPHA, "flash")],
             )
         })?;
+        let run_layout = super::reduced_layers::run_layout(b.device, "Particles::run_layout");
+        let under_layout = b.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("Particles::under_run_pipeline_layout"),
+            bind_group_layouts: &[Some(b.globals_layout), Some(&bind_layout), Some(&run_layout)],
+            immediate_size: 0,
+        });
+        let under_run = Pipelines::new_render(b, under_layout, |b, l| {
+            // Premultiplied by the shader (fs_alpha_under_run).
+            let over = wgpu::BlendState { color: wgpu::BlendComponent::OVER, alpha: wgpu::BlendComponent::OVER };
+            build_entries(b, l, "particles", "Particles::under_run_pipeline", [("fs_alpha_under_run", over, "alpha"), ("fs_main_under_run", super::ADDITIVE_ALPHA, "additive")])
+        })?;
         let sampler = sampler(b.device, "Particles::sampler");
         // The flash's bind group: its texture is never sampled (shape 5), wgpu zero-fills it.
         let texture = b.device.create_texture(&wgpu::TextureDescriptor {
@@ -236,7 +250,7 @@ impl ParticlesPass {
             ],
         });
         let flash = EmitterGpu { name: "flash".into(), bind_group, additive: true, buffer: None, count: 0, camera: false, priority: 63 };
-        Ok(Self { bind_layout, sampler, pipeline, set: Staged::new(None), flash, alive: 0 })
+        Ok(Self { bind_layout, sampler, pipeline, under_run, set: Staged::new(None), flash, alive: 0 })
     }
 }
 
@@ -250,11 +264,13 @@ impl Pass for ParticlesPass {
     }
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
-        self.pipeline.stage(b)
+        self.pipeline.stage(b)?;
+        self.under_run.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipeline.commit(accept);
+        self.under_run.commit(accept);
     }
 
     fn stage_sky(&mut self, up: &mut SkyUpload<'_>) {
@@ -298,6 +314,17 @@ impl Pass for ParticlesPass {
             return draw_emitter(rpass, [flash, flash], &self.flash);
         }
         self.set.current.as_ref().and_then(|s| s.emitters.get(key)).map_or(0, |g| draw_emitter(rpass, [alpha, additive], g))
+    }
+
+    fn can_draw_under_run(&self, key: usize, _target: Target) -> bool {
+        key != FLASH_KEY && self.set.current.as_ref().is_some_and(|s| s.emitters.get(key).is_some())
+    }
+
+    fn draw_under_run(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, run: &wgpu::BindGroup) -> u32 {
+        let [alpha, additive] = self.under_run.for_target(target);
+        let Some(g) = self.set.current.as_ref().and_then(|s| s.emitters.get(key)) else { return 0 };
+        rpass.set_bind_group(2, run, &[]);
+        draw_emitter(rpass, [alpha, additive], g)
     }
 
     fn stats(&self, stats: &mut FrameStats) {

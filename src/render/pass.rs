@@ -250,6 +250,19 @@ pub trait Pass: Any {
         0
     }
 
+    /// Whether [`Pass::draw_under_run`] can draw item `key` this frame. The sky phase joins two
+    /// runs of reduced layers into one composite only when every item between them can.
+    fn can_draw_under_run(&self, _key: usize, _target: Target) -> bool {
+        false
+    }
+
+    /// Records item `key` after the composite of the run of reduced layers that follows it in the
+    /// sky phase, as if drawn before that run: corrected by the run's colour and transmittance
+    /// (`run`, its buffer's bind group: [`super::reduced_layers::run_layout`], as group 2).
+    fn draw_under_run(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target, _run: &wgpu::BindGroup) -> u32 {
+        0
+    }
+
     /// Records one item into the compute phase.
     fn dispatch(&self, _cpass: &mut wgpu::ComputePass<'_>, _key: usize) {}
 

@@ -116,6 +116,9 @@ pub struct ReducedLayersPass {
     /// The composite (blended over the frame, depth-tested), and the background (the first run
     /// of a frame, drawn before the scene: replacing the clear, neither blended nor tested).
     pipelines: Pipelines<[wgpu::RenderPipeline; 2]>,
+    /// The background of two runs at once, the upper over the lower (runs joined across the
+    /// billboards between them: [`ReducedLayersPass::draw_pair_background`]).
+    pair: Pipelines<wgpu::RenderPipeline>,
     /// The composite's uniform (frame pixel to texture coordinates, any divisor).
     uniform: wgpu::Buffer,
     sampler: wgpu::Sampler,
@@ -129,16 +132,20 @@ impl ReducedLayersPass {
     /// Builds the layouts and pipelines; buffers come with the first frame that needs them.
     pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
         let device = b.device;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ReducedLayers::layout"),
-            entries: &[super::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), super::texture_entry(1), super::sampler_entry(2)],
-        });
+        let layout = run_layout(device, "ReducedLayers::layout");
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("ReducedLayers::pipeline_layout"),
             bind_group_layouts: &[Some(b.globals_layout), Some(&layout)],
             immediate_size: 0,
         });
         let pipelines = Pipelines::new_render(b, pipeline_layout, Self::build)?;
+        // Two runs read at once (group 1 the lower, group 2 the upper).
+        let pair_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("ReducedLayers::pair_pipeline_layout"),
+            bind_group_layouts: &[Some(b.globals_layout), Some(&layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let pair = Pipelines::new_render(b, pair_layout, Self::build_pair)?;
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ReducedLayers::uniform"),
             size: std::mem::size_of::<CompositeUniform>() as u64,
@@ -151,7 +158,7 @@ impl ReducedLayersPass {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        Ok(Self { layout, pipelines, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new() })
+        Ok(Self { layout, pipelines, pair, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new() })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 2]> {
@@ -180,6 +187,29 @@ impl ReducedLayersPass {
             make("ReducedLayers::pipeline", "fs_main", Some(COMPOSITE_BLEND), wgpu::CompareFunction::Less)?,
             make("ReducedLayers::background_pipeline", "fs_background", None, wgpu::CompareFunction::Always)?,
         ])
+    }
+
+    fn build_pair(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
+        let module = shaders::module(b.device, b.library, "reduced_layers")?;
+        let label = "ReducedLayers::pair_background_pipeline";
+        shaders::validated(b.device, label, || {
+            b.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: super::depth_state(false, wgpu::CompareFunction::Always),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_pair_background"),
+                    targets: &[Some(wgpu::ColorTargetState { format: b.color_format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
+                    compilation_options: Default::default(),
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
     }
 
     /// Size of the reduced buffers for a frame size and divisor, pixels.
@@ -265,11 +295,13 @@ impl Pass for ReducedLayersPass {
     }
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
-        self.pipelines.stage(b)
+        self.pipelines.stage(b)?;
+        self.pair.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipelines.commit(accept);
+        self.pair.commit(accept);
     }
 
     fn prepare(&mut self, cx: &FrameContext<'_>) {
@@ -293,7 +325,33 @@ impl Pass for ReducedLayersPass {
     }
 }
 
+/// The bind group layout of one run's buffer (composite uniform, buffer, sampler): the composite
+/// reads it, and so do sky objects drawn under a run ([`super::sky_objects`]).
+pub fn run_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &[super::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), super::texture_entry(1), super::sampler_entry(2)],
+    })
+}
+
 impl ReducedLayersPass {
+    /// The bind group that reads run `run`'s buffer ([`run_layout`]).
+    pub fn run_bind_group(&self, run: usize) -> Option<&wgpu::BindGroup> {
+        self.buffers.get(run).map(|b| &b.bind_group)
+    }
+
+    /// Draws runs `lower` and `upper` at once as the frame's background (see
+    /// [`Self::draw_background`]): the upper run over the lower. What lies between them in the sky
+    /// phase (billboards) is drawn afterwards under the upper run's transmittance and colour.
+    pub fn draw_pair_background(&self, rpass: &mut wgpu::RenderPass<'_>, (lower, upper): (usize, usize), target: Target) -> u32 {
+        let (Some(a), Some(b)) = (self.buffers.get(lower), self.buffers.get(upper)) else { return 0 };
+        rpass.set_pipeline(self.pair.for_target(target));
+        rpass.set_bind_group(1, &a.bind_group, &[]);
+        rpass.set_bind_group(2, &b.bind_group, &[]);
+        rpass.draw(0..3, 0..1);
+        1
+    }
+
     /// Draws run `run` as the frame's background, into the scene's pass before the scene: the
     /// target holds only its clear colour (black) then, so compositing over it is writing the
     /// run's colour, and the scene drawn next covers what it hides. A full-screen pass without

@@ -37,11 +37,15 @@ pub struct RenderOptions {
     /// Resolution of the dome layers (skydome, galaxy, clouds, fog): below full, each run of
     /// consecutive dome layers is drawn into a smaller buffer and composited in its place.
     pub dome_resolution: DomeResolution,
+    /// With dome layers in reduced buffers: the first two runs (the skydome's and the clouds')
+    /// are composited at once, and the billboards between them drawn afterwards, corrected by
+    /// the upper run (the same picture, one full-screen pass less). Off: one composite per run.
+    pub join_runs: bool,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { scene: true, depth_split: true, glare: true, occluder: None, skips: Skips::default(), dome_resolution: DomeResolution::default() }
+        Self { scene: true, depth_split: true, glare: true, occluder: None, skips: Skips::default(), dome_resolution: DomeResolution::default(), join_runs: true }
     }
 }
 
@@ -96,6 +100,9 @@ pub struct FrameStats {
     /// Each run of reduced layers this frame, in draw order: its buffer's divisor (2: half the
     /// frame's width and height, 4: a quarter). One composite each.
     pub reduced_runs: Vec<u32>,
+    /// Full-screen composites of those runs (the background included): one less than the runs
+    /// when the first two are joined ([`RenderOptions::join_runs`]).
+    pub composites: u32,
     /// The star field was not drawn: transparent this frame.
     pub stars_skipped: bool,
     /// The `lut` tables were not rebuilt: nothing they depend on moved.
@@ -336,6 +343,10 @@ impl SkyRenderer {
         // The first run, when the sky phase draws nothing before it, is the frame's background:
         // drawn first in the scene's pass, over the clear colour.
         let background = reduced_pass.is_some() && runs.first().is_some_and(|&(start, _)| start == 0);
+        // And the second joins it when every draw between them (billboards) can be drawn after
+        // it, corrected by it: one full-screen pass for both.
+        let joined = background && options.join_runs && runs.len() >= 2 && sky_items[runs[0].1..runs[1].0].iter().all(|(i, it)| self.passes[*i].can_draw_under_run(it.key, kind));
+        stats.composites = runs.len() as u32 - u32::from(joined);
 
         if let Some(t) = self.timer.as_mut() {
             t.begin_frame();
@@ -413,17 +424,24 @@ impl SkyRenderer {
                     };
                     rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
                     if let (Phase::Scene, true, Some(layers)) = (phase, background, self.pass::<ReducedLayersPass>()) {
-                        stats.draw_calls += layers.draw_background(&mut rpass, 0, kind);
+                        stats.draw_calls += if joined { layers.draw_pair_background(&mut rpass, (0, 1), kind) } else { layers.draw_background(&mut rpass, 0, kind) };
                     }
+                    let upper_run = self.pass::<ReducedLayersPass>().and_then(|l| l.run_bind_group(1)).filter(|_| joined);
                     if draws_here {
                         let mut k = 0;
                         while k < list.len() {
                             if let (Phase::Sky, Some(r), Some(rp)) = (phase, runs.iter().position(|&(start, _)| start == k), reduced_pass) {
-                                // The background run is already in the frame.
-                                if !(background && r == 0) {
+                                // The background run (or two) is already in the frame.
+                                if !(background && r == 0 || joined && r == 1) {
                                     stats.draw_calls += self.passes[rp].draw(&mut rpass, r, kind);
                                 }
                                 k = runs[r].1;
+                                continue;
+                            }
+                            if let (Phase::Sky, Some(run)) = (phase, upper_run.filter(|_| k >= runs[0].1 && k < runs[1].0)) {
+                                let (i, it) = &list[k];
+                                stats.draw_calls += self.passes[*i].draw_under_run(&mut rpass, it.key, kind, run);
+                                k += 1;
                                 continue;
                             }
                             let (i, it) = &list[k];

@@ -176,6 +176,9 @@ struct VariantKey {
     tone: u32,
     /// Drawn into a reduced-resolution buffer ([`super::reduced_layers`]).
     reduced: bool,
+    /// Drawn on the frame after a run of reduced layers that lies above it, corrected by that
+    /// run's colour and transmittance (`UNDER_RUN` in the shader).
+    under_run: bool,
 }
 
 impl VariantKey {
@@ -198,6 +201,7 @@ impl VariantKey {
             target,
             tone,
             reduced: false,
+            under_run: false,
         }
     }
 
@@ -214,6 +218,8 @@ impl VariantKey {
             ("LIGHTING", f64::from(self.lighting)),
             ("TARGET_KIND", if self.target == Target::Hdr { 2.0 } else { 1.0 }),
             ("TONE_KIND", f64::from(self.tone)),
+            ("UNDER_RUN", f64::from(u8::from(self.under_run))),
+            ("BLEND_KIND", self.blend as f64),
         ];
         for k in 0..4 {
             c.push((MODES[k], f64::from(self.modes[k])));
@@ -230,6 +236,9 @@ impl VariantKey {
 pub struct SkyObjectsPass {
     bind_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
+    /// Bound as group 2 (a run's buffer) when a draw is not under a run: every pipeline's
+    /// layout has the group, only `UNDER_RUN` variants read it.
+    no_run: wgpu::BindGroup,
     display_format: wgpu::TextureFormat,
     pipelines: Pipelines<SkyObjectPipelines>,
     /// Specialised pipelines by material signature (`None`: building it failed; the generic one
@@ -306,6 +315,20 @@ const BLENDS: [Option<wgpu::BlendState>; 4] = [
     }),
 ];
 
+/// Blends of draws under a run (`UNDER_RUN` in shaders/sky_objects.wgsl, which premultiplies what
+/// it writes), by blend index of [`BLENDS`]: a draw that would have gone before the run goes
+/// after it, so that run and the one below composite at once. With the run's colour C and
+/// transmittance T at the pixel, the frame must end as C + T x (the draw over what was there):
+/// opaque writes C + T m; alpha writes T a m + a C over (1 - a) of the target; additive ones add
+/// T times their term. Alpha channels blend as the plain draws'.
+const UNDER_RUN_BLENDS: [Option<wgpu::BlendState>; 4] = {
+    const ADD: wgpu::BlendComponent = wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add };
+    const KEEP: wgpu::BlendComponent = wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add };
+    const OVER: wgpu::BlendComponent =
+        wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha, operation: wgpu::BlendOperation::Add };
+    [None, Some(wgpu::BlendState { color: OVER, alpha: OVER }), Some(wgpu::BlendState { color: ADD, alpha: KEEP }), Some(wgpu::BlendState { color: ADD, alpha: KEEP })]
+};
+
 impl SkyObjectsPass {
     /// Builds the layouts and pipelines.
     pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
@@ -315,16 +338,46 @@ impl SkyObjectsPass {
         entries.extend((0..4).map(|i| super::sampler_entry(5 + i)));
         entries.extend([super::texture_entry(9), super::sampler_entry(10)]);
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("SkyObjects::draw_layout"), entries: &entries });
+        let run_layout = super::reduced_layers::run_layout(device, "SkyObjects::run_layout");
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("SkyObjects::pipeline_layout"),
-            bind_group_layouts: &[Some(globals), Some(&bind_layout)],
+            bind_group_layouts: &[Some(globals), Some(&bind_layout), Some(&run_layout)],
             immediate_size: 0,
         });
+        let no_run = {
+            let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("SkyObjects::no_run_uniform"),
+                size: 16,
+                usage: wgpu::BufferUsages::UNIFORM,
+                mapped_at_creation: false,
+            });
+            let texture = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("SkyObjects::no_run_texture"),
+                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba8Unorm,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            });
+            let view = texture.create_view(&Default::default());
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("SkyObjects::no_run"),
+                layout: &run_layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
+                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&b.shared.sky_view_sampler) },
+                ],
+            })
+        };
         let pipelines = Pipelines::new_render(b, pipeline_layout.clone(), Self::build)?;
         let sky_view = (b.shared.sky_view_view.clone(), b.shared.sky_view_sampler.clone());
         Ok(Self {
             bind_layout,
             pipeline_layout,
+            no_run,
             display_format: b.color_format,
             pipelines,
             variants: HashMap::new(),
@@ -354,29 +407,30 @@ impl SkyObjectsPass {
     }
 
     /// The pipeline signature of draw `e` this frame, if its version was prepared for `target`.
-    fn entry_key(&self, e: &Visible, target: Target) -> Option<VariantKey> {
+    fn entry_key(&self, e: &Visible, target: Target, under_run: bool) -> Option<VariantKey> {
         let k = self.keys.get(&(e.index, e.version)).filter(|k| k.target == target)?;
         let live = std::array::from_fn(|s| k.live[s] && e.part[s]);
         let view_stage = if (k.view_stage as usize) < 4 && !e.part[k.view_stage as usize] { NO_STAGE } else { k.view_stage };
         let blend = if e.on_top { BLEND_ADD } else { k.blend };
-        Some(VariantKey { live, view_stage, blend, reduced: e.reduced, ..*k })
+        Some(VariantKey { live, view_stage, blend, reduced: e.reduced, under_run: under_run && !e.reduced, ..*k })
     }
 
     /// Records draw `key` into the frame's target or, `reduced`, into a reduced-resolution
     /// buffer; returns draw calls.
-    fn record(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, reduced: bool) -> u32 {
+    fn record(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, reduced: bool, under_run: Option<&wgpu::BindGroup>) -> u32 {
         let (Some(draws), Some(e)) = (&self.draws.current, self.visible.get(key)) else { return 0 };
         let d = &draws.objects[e.index][e.version];
-        let specialised = self.entry_key(e, target).and_then(|k| self.variants.get(&k)).and_then(Option::as_ref);
+        let specialised = self.entry_key(e, target, under_run.is_some()).and_then(|k| self.variants.get(&k)).and_then(Option::as_ref);
         let pipeline = match specialised {
             Some(p) => p,
             // The generic pipeline draws every term: only right for whole draws on the frame.
-            None if !reduced && e.part == [true; 4] && !e.on_top => &self.pipelines.for_target(target).generic[blend_index(d.blend)],
+            None if !reduced && under_run.is_none() && e.part == [true; 4] && !e.on_top => &self.pipelines.for_target(target).generic[blend_index(d.blend)],
             // Building it failed and was logged.
             None => return 0,
         };
         rpass.set_pipeline(pipeline);
         rpass.set_bind_group(1, &d.bind_group, &[]);
+        rpass.set_bind_group(2, under_run.unwrap_or(&self.no_run), &[]);
         rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
         rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
         rpass.draw_indexed(0..d.mesh.index_count, 0, 0..1);
@@ -384,17 +438,23 @@ impl SkyObjectsPass {
     }
 
     /// Builds the specialised pipelines this frame's draws need and do not have yet.
-    fn build_variants(&mut self, device: &wgpu::Device, target: Target) {
-        for e in &self.visible {
-            let Some(key) = self.entry_key(e, target) else { continue };
+    fn build_variants(&mut self, device: &wgpu::Device, target: Target, under_runs: bool) {
+        let keys: Vec<VariantKey> =
+            self.visible.iter().flat_map(|e| [self.entry_key(e, target, false), self.entry_key(e, target, under_runs && !e.reduced).filter(|k| k.under_run)]).flatten().collect();
+        for key in keys {
             if self.variants.contains_key(&key) {
                 continue;
             }
             let constants = key.constants();
-            let (format, blend) = match (key.reduced, key.target) {
-                (true, target) => (super::reduced_layers::reduced_format(target), Some(super::reduced_layers::REDUCED_BLENDS[key.blend])),
-                (false, Target::Hdr) => (super::HDR_FORMAT, BLENDS[key.blend]),
-                (false, Target::Display) => (self.display_format, BLENDS[key.blend]),
+            let format = match (key.reduced, key.target) {
+                (true, target) => super::reduced_layers::reduced_format(target),
+                (false, Target::Hdr) => super::HDR_FORMAT,
+                (false, Target::Display) => self.display_format,
+            };
+            let blend = match (key.reduced, key.under_run) {
+                (true, _) => Some(super::reduced_layers::REDUCED_BLENDS[key.blend]),
+                (false, true) => UNDER_RUN_BLENDS[key.blend],
+                (false, false) => BLENDS[key.blend],
             };
             let label = format!("SkyObjects::pipeline {key:?}");
             let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, (blend, format, !key.reduced), &constants);
@@ -557,7 +617,9 @@ impl Pass for SkyObjectsPass {
                 }
             }
         }
-        self.build_variants(cx.device, cx.target);
+        // Draws on the frame may come between two runs that the renderer joins: their
+        // corrected variants are built too.
+        self.build_variants(cx.device, cx.target, reduce_domes);
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
@@ -566,11 +628,19 @@ impl Pass for SkyObjectsPass {
     }
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        self.record(rpass, key, target, false)
+        self.record(rpass, key, target, false, None)
     }
 
     fn draw_reduced(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        self.record(rpass, key, target, true)
+        self.record(rpass, key, target, true, None)
+    }
+
+    fn can_draw_under_run(&self, key: usize, target: Target) -> bool {
+        self.visible.get(key).and_then(|e| self.entry_key(e, target, true)).is_some_and(|k| k.under_run && self.variants.get(&k).is_some_and(Option::is_some))
+    }
+
+    fn draw_under_run(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, run: &wgpu::BindGroup) -> u32 {
+        self.record(rpass, key, target, false, Some(run))
     }
 
     fn stats(&self, stats: &mut FrameStats) {

@@ -33,6 +33,8 @@ struct StarInstance {
 pub struct StarsPass {
     bind_layout: wgpu::BindGroupLayout,
     pipeline: Pipelines<wgpu::RenderPipeline>,
+    /// The same drawn after the run of reduced layers above the stars ([`Pass::draw_under_run`]).
+    under_run: Pipelines<wgpu::RenderPipeline>,
     field: Staged<Option<StarField>>,
     /// Whether the stars show this frame.
     visible: bool,
@@ -51,11 +53,18 @@ impl StarsPass {
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipeline = Pipelines::new_render(b, pipeline_layout, Self::build)?;
-        Ok(Self { bind_layout, pipeline, field: Staged::new(None), visible: false, skipped: false })
+        let pipeline = Pipelines::new_render(b, pipeline_layout, |b, l| Self::build(b, l, "fs_main"))?;
+        let run_layout = super::reduced_layers::run_layout(device, "Stars::run_layout");
+        let under_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("Stars::under_run_pipeline_layout"),
+            bind_group_layouts: &[Some(globals), Some(&bind_layout), Some(&run_layout)],
+            immediate_size: 0,
+        });
+        let under_run = Pipelines::new_render(b, under_layout, |b, l| Self::build(b, l, "fs_under_run"))?;
+        Ok(Self { bind_layout, pipeline, under_run, field: Staged::new(None), visible: false, skipped: false })
     }
 
-    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, entry: &str) -> RenderResult<wgpu::RenderPipeline> {
         let (device, format) = (b.device, b.color_format);
         let module = shaders::module(device, b.library, "stars")?;
         let constants = b.target_constants();
@@ -79,7 +88,7 @@ impl StarsPass {
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
-                    entry_point: Some("fs_main"),
+                    entry_point: Some(entry),
                     targets: &[Some(wgpu::ColorTargetState { format, blend: Some(super::ADDITIVE_ALPHA), write_mask: wgpu::ColorWrites::ALL })],
                     compilation_options: options.clone(),
                 }),
@@ -100,11 +109,13 @@ impl Pass for StarsPass {
     }
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
-        self.pipeline.stage(b)
+        self.pipeline.stage(b)?;
+        self.under_run.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipeline.commit(accept);
+        self.under_run.commit(accept);
     }
 
     fn stage_sky(&mut self, up: &mut SkyUpload<'_>) {
@@ -136,6 +147,20 @@ impl Pass for StarsPass {
         let Some(field) = &self.field.current else { return 0 };
         rpass.set_pipeline(self.pipeline.for_target(target));
         rpass.set_bind_group(1, &field.bind_group, &[]);
+        rpass.set_vertex_buffer(0, field.instances.slice(..));
+        rpass.draw(0..4, 0..field.count);
+        1
+    }
+
+    fn can_draw_under_run(&self, _key: usize, _target: Target) -> bool {
+        self.field.current.is_some()
+    }
+
+    fn draw_under_run(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target, run: &wgpu::BindGroup) -> u32 {
+        let Some(field) = &self.field.current else { return 0 };
+        rpass.set_pipeline(self.under_run.for_target(target));
+        rpass.set_bind_group(1, &field.bind_group, &[]);
+        rpass.set_bind_group(2, run, &[]);
         rpass.set_vertex_buffer(0, field.instances.slice(..));
         rpass.draw(0..4, 0..field.count);
         1
