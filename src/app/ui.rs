@@ -537,6 +537,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
             s.objects_drawn,
             if runs.is_empty() { "none".into() } else { runs.join(", ") }
         ));
+        ui.checkbox(&mut c.options.join_runs, format!("join the first two runs ({} composites)", s.composites));
     });
     let median = |v: &VecDeque<f32>| {
         let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();
