@@ -1,4 +1,4 @@
-//! requires: particle/shape
+//! requires: particle/shape, reduced/run
 // Particles on the dome (sky phase): emitters attached to sky objects, in directions, at the
 // sky's depth like the objects they belong to; also the lightning flash over the sky (shape 5,
 // a full-screen triangle). (globals.wgsl is prepended by the loader.)
@@ -29,19 +29,8 @@ fn fs_flash(in: ParticleOut) -> @location(0) vec4<f32> {
     return vec4<f32>(to_target(in.color.rgb * in.color.a), 1.0);
 }
 
-// The run of reduced layers above a dome emitter, when its particles are drawn after that run's
-// composite (src/render/particles.rs, `draw_under_run`). Keep `RunComposite` in sync with
-// `Composite` in reduced_layers.wgsl.
-struct RunComposite {
-    uv_from_pixel: vec4<f32>,
-};
-@group(2) @binding(0) var<uniform> run_composite: RunComposite;
-@group(2) @binding(1) var run_layers: texture_2d<f32>;
-@group(2) @binding(2) var run_sampler: sampler;
-
-fn run_at(pixel: vec2<f32>) -> vec4<f32> {
-    return textureSampleLevel(run_layers, run_sampler, pixel * run_composite.uv_from_pixel.xy, 0.0);
-}
+// Dome emitters' particles drawn after the composite of the run of reduced layers above them
+// (src/render/particles.rs, `draw_under_run`).
 
 // Additive under the run: the added light shows through its transmittance.
 @fragment

@@ -1,14 +1,9 @@
+//! requires: reduced/run
 // Composite of a run of dome layers drawn at reduced resolution (src/render/reduced_layers.rs).
 // The run's buffer holds premultiplied colour and, in alpha, the transmittance of the run over
 // what lies behind it; upsampled bilinearly, it goes over the frame as target = colour +
 // transmittance * target (the pipeline's blend), depth-tested against the main scene like the
 // layers themselves. (globals.wgsl is prepended by the loader.)
-
-// Keep in sync with `CompositeUniform` in src/render/reduced_layers.rs.
-struct Composite {
-    // Frame pixel to texture coordinates (1 / frame size): every buffer holds the whole frame.
-    uv_from_pixel: vec4<f32>,
-};
 
 @group(1) @binding(0) var<uniform> composite: Composite;
 @group(1) @binding(1) var layers: texture_2d<f32>;
@@ -33,15 +28,11 @@ fn fs_background(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> 
     return vec4<f32>(textureSample(layers, layers_sampler, pixel.xy * composite.uv_from_pixel.xy).rgb, 1.0);
 }
 
-// Two runs at once as the background: the upper (group 2) over the lower (group 1), over black.
-// Only the pair's pipeline layout has group 2.
-@group(2) @binding(0) var<uniform> composite_upper: Composite;
-@group(2) @binding(1) var layers_upper: texture_2d<f32>;
-@group(2) @binding(2) var layers_upper_sampler: sampler;
-
+// Two runs at once as the background: the upper (group 2, reduced/run.wgsl) over the lower
+// (group 1), over black. Only the pair's pipeline layout has group 2.
 @fragment
 fn fs_pair_background(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
     let lower = textureSample(layers, layers_sampler, pixel.xy * composite.uv_from_pixel.xy);
-    let upper = textureSample(layers_upper, layers_upper_sampler, pixel.xy * composite_upper.uv_from_pixel.xy);
+    let upper = run_at(pixel.xy);
     return vec4<f32>(upper.rgb + upper.a * lower.rgb, 1.0);
 }

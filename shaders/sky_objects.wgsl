@@ -1,4 +1,4 @@
-//! requires: sky_model/sky_view_map, sky_model/tone
+//! requires: sky_model/sky_view_map, sky_model/tone, reduced/run
 // Sky objects: procedural shapes with a NeL-style material of up to 4 texture stages.
 // The material is a sum of terms: an `add` stage starts a term (texture x constant), a
 // `modulate` stage multiplies the current term; the result times the diffuse colour.
@@ -34,16 +34,6 @@ struct Draw {
 // A physical sky model's colour by direction (sky_view.wgsl), replacing the gradient stage.
 @group(1) @binding(9) var sky_view: texture_2d<f32>;
 @group(1) @binding(10) var sky_view_sampler: sampler;
-
-// The run of reduced layers above this draw, when it is drawn after that run's composite
-// (UNDER_RUN): premultiplied colour and transmittance (reduced_layers.wgsl). Keep `RunComposite`
-// in sync with `Composite` there.
-struct RunComposite {
-    uv_from_pixel: vec4<f32>,
-};
-@group(2) @binding(0) var<uniform> run_composite: RunComposite;
-@group(2) @binding(1) var run_layers: texture_2d<f32>;
-@group(2) @binding(2) var run_sampler: sampler;
 
 const UV_MESH: u32 = 0u;
 const UV_SUN: u32 = 1u;
@@ -320,7 +310,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
 // What a draw writes after the run above it is already in the frame, so that the frame ends as
 // C + T x (this draw over what was there), with the run's colour C and transmittance T here.
 fn under_run(color: vec4<f32>, pixel: vec2<f32>) -> vec4<f32> {
-    let run = textureSampleLevel(run_layers, run_sampler, pixel * run_composite.uv_from_pixel.xy, 0.0);
+    let run = run_at(pixel);
     switch BLEND_KIND {
         case 0u: { return vec4<f32>(run.rgb + run.a * color.rgb, color.a); }
         case 1u: { return vec4<f32>(color.a * (run.a * color.rgb + run.rgb), color.a); }

@@ -1,4 +1,4 @@
-//! requires: sky_model/tone
+//! requires: sky_model/tone, reduced/run
 // Point-star field: one screen-aligned sprite per star, rotating with the celestial frame.
 // (globals.wgsl is prepended by the loader.)
 
@@ -46,20 +46,11 @@ fn star_color(in: VertexOut) -> vec4<f32> {
     return vec4<f32>(to_target(params.color.rgb * a), 1.0);
 }
 
-// The run of reduced layers above the stars, when they are drawn after its composite
-// (src/render/stars.rs, `draw_under_run`). Keep `RunComposite` in sync with `Composite` in
-// reduced_layers.wgsl.
-struct RunComposite {
-    uv_from_pixel: vec4<f32>,
-};
-@group(2) @binding(0) var<uniform> run_composite: RunComposite;
-@group(2) @binding(1) var run_layers: texture_2d<f32>;
-@group(2) @binding(2) var run_sampler: sampler;
-
-// Added light under the run shows through its transmittance.
+// Added light under the run above the stars (drawn after its composite: src/render/stars.rs,
+// `draw_under_run`) shows through the run's transmittance.
 @fragment
 fn fs_under_run(in: VertexOut) -> @location(0) vec4<f32> {
-    let transmittance = textureSampleLevel(run_layers, run_sampler, in.clip.xy * run_composite.uv_from_pixel.xy, 0.0).a;
+    let transmittance = run_at(in.clip.xy).a;
     let c = star_color(in);
     return vec4<f32>(c.rgb * transmittance, c.a);
 }

@@ -229,18 +229,8 @@ impl ParticlesPass {
             build_entries(b, l, "particles", "Particles::under_run_pipeline", [("fs_alpha_under_run", over, "alpha"), ("fs_main_under_run", super::ADDITIVE_ALPHA, "additive")])
         })?;
         let sampler = sampler(b.device, "Particles::sampler");
-        // The flash's bind group: its texture is never sampled (shape 5), wgpu zero-fills it.
-        let texture = b.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("Particles::flash_texture"),
-            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let view = texture.create_view(&Default::default());
+        // The flash's bind group: its texture is never sampled (fs_flash).
+        let view = super::textures::unused_view(b.device, "Particles::flash_texture");
         let bind_group = b.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("Particles::flash_bind_group"),
             layout: &bind_layout,

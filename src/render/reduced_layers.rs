@@ -94,7 +94,7 @@ const COMPOSITE_BLEND: wgpu::BlendState = wgpu::BlendState {
     alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
 };
 
-/// The composite's uniform. Keep in sync with `Composite` in shaders/reduced_layers.wgsl.
+/// The composite's uniform. Keep in sync with `Composite` in shaders/reduced/run.wgsl.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 struct CompositeUniform {
@@ -163,53 +163,15 @@ impl ReducedLayersPass {
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 2]> {
         let module = shaders::module(b.device, b.library, "reduced_layers")?;
-        let make = |label: &str, entry: &str, blend: Option<wgpu::BlendState>, compare: wgpu::CompareFunction| {
-            shaders::validated(b.device, label, || {
-                b.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(layout),
-                    vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
-                    primitive: wgpu::PrimitiveState::default(),
-                    depth_stencil: super::depth_state(false, compare),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(entry),
-                        targets: &[Some(wgpu::ColorTargetState { format: b.color_format, blend, write_mask: wgpu::ColorWrites::ALL })],
-                        compilation_options: Default::default(),
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-            })
-        };
         Ok([
-            make("ReducedLayers::pipeline", "fs_main", Some(COMPOSITE_BLEND), wgpu::CompareFunction::Less)?,
-            make("ReducedLayers::background_pipeline", "fs_background", None, wgpu::CompareFunction::Always)?,
+            full_screen_pipeline(b, layout, &module, "ReducedLayers::pipeline", "fs_main", Some(COMPOSITE_BLEND), wgpu::CompareFunction::Less)?,
+            full_screen_pipeline(b, layout, &module, "ReducedLayers::background_pipeline", "fs_background", None, wgpu::CompareFunction::Always)?,
         ])
     }
 
     fn build_pair(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
         let module = shaders::module(b.device, b.library, "reduced_layers")?;
-        let label = "ReducedLayers::pair_background_pipeline";
-        shaders::validated(b.device, label, || {
-            b.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(layout),
-                vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: super::depth_state(false, wgpu::CompareFunction::Always),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_pair_background"),
-                    targets: &[Some(wgpu::ColorTargetState { format: b.color_format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
-                    compilation_options: Default::default(),
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        })
+        full_screen_pipeline(b, layout, &module, "ReducedLayers::pair_background_pipeline", "fs_pair_background", None, wgpu::CompareFunction::Always)
     }
 
     /// Size of the reduced buffers for a frame size and divisor, pixels.
@@ -323,6 +285,37 @@ impl Pass for ReducedLayersPass {
         rpass.draw(0..3, 0..1);
         1
     }
+}
+
+/// A full-screen triangle of `module` (shaders/reduced_layers.wgsl) with fragment entry `entry`,
+/// into the frame's target, depth-tested with `compare` and never writing depth.
+fn full_screen_pipeline(
+    b: &PassBuild<'_>,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    label: &str,
+    entry: &str,
+    blend: Option<wgpu::BlendState>,
+    compare: wgpu::CompareFunction,
+) -> RenderResult<wgpu::RenderPipeline> {
+    shaders::validated(b.device, label, || {
+        b.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            vertex: wgpu::VertexState { module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: super::depth_state(false, compare),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some(entry),
+                targets: &[Some(wgpu::ColorTargetState { format: b.color_format, blend, write_mask: wgpu::ColorWrites::ALL })],
+                compilation_options: Default::default(),
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    })
 }
 
 /// The bind group layout of one run's buffer (composite uniform, buffer, sampler): the composite

@@ -330,7 +330,7 @@ impl SkyRenderer {
         // before the scene; the sky pass composites each in its run's place.
         let reduce = options.dome_resolution.divisors().0 > 1;
         if reduce {
-            *sky_items = join_additive_runs(sky_items);
+            join_additive_runs(sky_items);
         }
         let runs = if reduce { reduced_runs(sky_items) } else { Vec::new() };
         // A run's buffer is as fine as its finest layer needs.
@@ -398,8 +398,8 @@ impl SkyRenderer {
                     if let (Phase::Scene, Some(rp)) = (phase, reduced_pass) {
                         // The reduced buffers first: the first may be the background.
                         let sky_list = &items[Phase::Sky.index()];
+                        let layers = (self.passes[rp].as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>();
                         for (r, &(start, end)) in runs.iter().enumerate() {
-                            let layers = (self.passes[rp].as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>();
                             let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(r == 0, r + 1 == runs.len()));
                             let Some(mut rpass) = layers.and_then(|l| l.begin(encoder, r, run_writes)) else { continue };
                             rpass.set_bind_group(0, &self.globals.bind_group, &[]);
@@ -529,24 +529,22 @@ pub fn release_freed_memory() {
     }
 }
 
-/// The sky phase's draws with every full-resolution additive draw moved past the reduced
-/// additive layers that follow it. Additive draws commute (target + a + b, clamped, in either
+/// Moves every full-resolution additive draw of the sky phase past the reduced additive layers
+/// that follow it. Additive draws commute (target + a + b, clamped, in either
 /// order), so the picture is the same; reduced layers that only such draws kept apart (the
 /// skydome's fine stars between it and the galaxy) then share a run and one composite.
-fn join_additive_runs(list: &[(usize, DrawItem)]) -> Vec<(usize, DrawItem)> {
-    let mut out = list.to_vec();
+fn join_additive_runs(list: &mut [(usize, DrawItem)]) {
     let mut moved = true;
     while moved {
         moved = false;
-        for k in 0..out.len().saturating_sub(1) {
-            let (a, b) = (out[k].1, out[k + 1].1);
+        for k in 0..list.len().saturating_sub(1) {
+            let (a, b) = (list[k].1, list[k + 1].1);
             if !a.reduced && a.additive && b.reduced && b.additive {
-                out.swap(k, k + 1);
+                list.swap(k, k + 1);
                 moved = true;
             }
         }
     }
-    out
 }
 
 /// The runs of consecutive items marked `reduced` in a sorted phase list: (start, end) indices.
@@ -608,7 +606,8 @@ mod tests {
         // Skydome (reduced, opaque), its fine stars (full, additive), galaxy (reduced, additive),
         // sun (full, additive), clouds (reduced, alpha), fog (reduced, alpha).
         let list = [item(0, true, false), item(1, false, true), item(2, true, true), item(3, false, true), item(4, true, false), item(5, true, false)];
-        let joined = join_additive_runs(&list);
+        let mut joined = list;
+        join_additive_runs(&mut joined);
         let keys: Vec<usize> = joined.iter().map(|(_, it)| it.key).collect();
         // The stars go past the galaxy; the sun stays before the alpha-blended clouds.
         assert_eq!(keys, [0, 2, 1, 3, 4, 5]);
@@ -616,6 +615,8 @@ mod tests {
         assert_eq!(reduced_runs(&joined), [(0, 2), (4, 6)]);
         // Nothing to join: unchanged.
         let plain = [item(0, true, false), item(1, false, false), item(2, true, true)];
-        assert_eq!(join_additive_runs(&plain), plain.to_vec());
+        let mut unchanged = plain;
+        join_additive_runs(&mut unchanged);
+        assert_eq!(unchanged, plain);
     }
 }

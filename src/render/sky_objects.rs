@@ -351,17 +351,7 @@ impl SkyObjectsPass {
                 usage: wgpu::BufferUsages::UNIFORM,
                 mapped_at_creation: false,
             });
-            let texture = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("SkyObjects::no_run_texture"),
-                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba8Unorm,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            });
-            let view = texture.create_view(&Default::default());
+            let view = super::textures::unused_view(device, "SkyObjects::no_run_texture");
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("SkyObjects::no_run"),
                 layout: &run_layout,
@@ -439,29 +429,31 @@ impl SkyObjectsPass {
 
     /// Builds the specialised pipelines this frame's draws need and do not have yet.
     fn build_variants(&mut self, device: &wgpu::Device, target: Target, under_runs: bool) {
-        let keys: Vec<VariantKey> =
-            self.visible.iter().flat_map(|e| [self.entry_key(e, target, false), self.entry_key(e, target, under_runs && !e.reduced).filter(|k| k.under_run)]).flatten().collect();
-        for key in keys {
-            if self.variants.contains_key(&key) {
-                continue;
+        for e in &self.visible {
+            // Drawn as it is, and (on the frame) possibly after the run above it.
+            let wanted = [self.entry_key(e, target, false), self.entry_key(e, target, under_runs).filter(|k| k.under_run)];
+            for key in wanted.into_iter().flatten() {
+                if self.variants.contains_key(&key) {
+                    continue;
+                }
+                let constants = key.constants();
+                let format = match (key.reduced, key.target) {
+                    (true, target) => super::reduced_layers::reduced_format(target),
+                    (false, Target::Hdr) => super::HDR_FORMAT,
+                    (false, Target::Display) => self.display_format,
+                };
+                let blend = match (key.reduced, key.under_run) {
+                    (true, _) => Some(super::reduced_layers::REDUCED_BLENDS[key.blend]),
+                    (false, true) => UNDER_RUN_BLENDS[key.blend],
+                    (false, false) => BLENDS[key.blend],
+                };
+                let label = format!("SkyObjects::pipeline {key:?}");
+                let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, (blend, format, !key.reduced), &constants);
+                if let Err(e) = &built {
+                    log::error!("{label}: {e}; the generic pipeline draws this material whole on the frame, reduced or split parts are not drawn");
+                }
+                self.variants.insert(key, built.ok());
             }
-            let constants = key.constants();
-            let format = match (key.reduced, key.target) {
-                (true, target) => super::reduced_layers::reduced_format(target),
-                (false, Target::Hdr) => super::HDR_FORMAT,
-                (false, Target::Display) => self.display_format,
-            };
-            let blend = match (key.reduced, key.under_run) {
-                (true, _) => Some(super::reduced_layers::REDUCED_BLENDS[key.blend]),
-                (false, true) => UNDER_RUN_BLENDS[key.blend],
-                (false, false) => BLENDS[key.blend],
-            };
-            let label = format!("SkyObjects::pipeline {key:?}");
-            let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, (blend, format, !key.reduced), &constants);
-            if let Err(e) = &built {
-                log::error!("{label}: {e}; the generic pipeline draws this material whole on the frame, reduced or split parts are not drawn");
-            }
-            self.variants.insert(key, built.ok());
         }
     }
 }

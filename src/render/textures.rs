@@ -32,6 +32,22 @@ pub struct TextureCache {
 /// Texture format of every sky texture: colours stay display-encoded, like the 2005 pipeline.
 pub const TEXTURE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
+/// A 1 x 1 texture (zero-filled by wgpu) for a binding the shader never samples in that draw.
+pub fn unused_view(device: &wgpu::Device, label: &str) -> wgpu::TextureView {
+    device
+        .create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: TEXTURE_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        })
+        .create_view(&Default::default())
+}
+
 /// Creates a texture from RGBA8 data.
 pub fn upload(device: &wgpu::Device, queue: &wgpu::Queue, label: &str, width: u32, height: u32, rgba8: &[u8]) -> wgpu::Texture {
     let texture = device.create_texture(&wgpu::TextureDescriptor {
