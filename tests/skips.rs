@@ -19,7 +19,8 @@ fn skips_change_no_pixel_and_are_counted() {
     // At full resolution: a skipped stage can let a dome layer go to a reduced buffer, which
     // moves pixels by a level or two (tests/reduced_layers.rs bounds that).
     let on = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
-    let off = RenderOptions { skips: Skips { dark_stages: false, invisible_stars: false, unchanged_tables: false, below_horizon: false, off_screen: false }, ..on };
+    let off =
+        RenderOptions { skips: Skips { dark_stages: false, invisible_stars: false, unchanged_tables: false, below_horizon: false, off_screen: false, unneeded_mips: false }, ..on };
     // Two frames each: the second finds the tables and the map current.
     h.render(&sky, &input, &camera, &on).expect("rendered");
     let with = h.render(&sky, &input, &camera, &on).expect("rendered");
@@ -60,4 +61,39 @@ fn skips_change_no_pixel_and_are_counted() {
         let (d, _) = common::diff(&with, &without, 1);
         assert_eq!(d.differing, 0.0, "{resolution:?}: skipping dome layers out of view changed {:.4} of the pixels (largest {})", d.differing, d.max);
     }
+}
+
+/// Stages that no pixel of a draw minifies are sampled from level 0 alone: the bound on their
+/// texel density must hold wherever they are drawn, or a pixel would move. By day, at dusk, at
+/// night and in a storm, at the horizon, the zenith and straight at the sun, at full and at
+/// reduced resolution, on the built-in sky and the desert (Quake-mapped storm clouds).
+#[test]
+fn level0_samplers_change_no_pixel() {
+    let desert = skytune::sky::load_sky_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("skies/desert/sky.toml")).expect("desert sky");
+    let mut h = common::headless(480, 270);
+    let mut level0 = 0;
+    for sky in [default_sky(), desert] {
+        h.set_sky(&sky).expect("uploaded");
+        for (hour, weather) in [(12.0, 0.0), (18.5, 0.3), (23.0, 0.0), (15.0, 1.0)] {
+            let input = FrameInput::new(hour, weather);
+            let (yaw_deg, pitch_deg) = skytune::sky::eval::azimuth_elevation(sky.evaluate(&input).towards_sun);
+            let at_sun = Camera { yaw_deg, pitch_deg, ..Camera::default() };
+            for camera in [Camera::default(), Camera::preset("zenith").expect("zenith view"), at_sun] {
+                for resolution in [DomeResolution::Full, DomeResolution::Auto] {
+                    let on = RenderOptions { glare: false, dome_resolution: resolution, ..Default::default() };
+                    let with = h.render(&sky, &input, &camera, &on).expect("rendered");
+                    level0 += h.renderer.stats.stages_level0;
+                    let without = h.render(&sky, &input, &camera, &RenderOptions { skips: Skips { unneeded_mips: false, ..on.skips }, ..on }).expect("rendered");
+                    assert_eq!(h.renderer.stats.stages_level0, 0);
+                    let (d, _) = common::diff(&with, &without, 0);
+                    assert_eq!(
+                        d.differing, 0.0,
+                        "{hour} h, weather {weather}, {camera:?}, {resolution:?}: level-0 sampling moved {:.4} of the pixels (largest {})",
+                        d.differing, d.max
+                    );
+                }
+            }
+        }
+    }
+    assert!(level0 > 20, "the skip applies ({level0} stages over every frame)");
 }

@@ -514,6 +514,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         format!("{} below the horizon behind the scene", s.objects_below_horizon),
         format!("{} dome layers out of view", s.objects_off_screen),
         format!("{} black texture stages", s.stages_skipped),
+        format!("mip selection of {} stages no pixel minifies", s.stages_level0),
     ];
     if s.stars_skipped {
         skipped.push("the star field (transparent)".into());
@@ -551,7 +552,8 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         ui.checkbox(&mut k.invisible_stars, "skip transparent stars");
         ui.checkbox(&mut k.unchanged_tables, "skip unchanged tables and map");
         ui.checkbox(&mut k.below_horizon, "skip objects behind the scene");
-        ui.checkbox(&mut k.off_screen, "skip dome layers out of view");
+        ui.checkbox(&mut k.off_screen, "skip dome layers and scene out of view");
+        ui.checkbox(&mut k.unneeded_mips, "skip unneeded mip selection");
     });
     let all_on = c.options.skips == crate::render::Skips::default();
     if before == crate::render::Skips::default() && !all_on {

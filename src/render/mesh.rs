@@ -55,12 +55,21 @@ fn sphere_band(top_deg: f32, bottom_deg: f32, rings: u32, segments: u32) -> Mesh
     m
 }
 
+/// The (azimuth, elevation) grid of a dome shape: (top_deg, bottom_deg, rings, segments).
+pub fn dome_grid(shape: &Shape) -> Option<(f32, f32, u32, u32)> {
+    match *shape {
+        Shape::Dome { bottom_deg } => Some((90.0, bottom_deg.get(), 16, 32)),
+        Shape::DomeBand { bottom_deg, top_deg } => Some((top_deg.get(), bottom_deg.get(), 6, 48)),
+        Shape::Billboard { .. } | Shape::Quad { .. } => None,
+    }
+}
+
 /// Geometry of a shape.
 pub fn shape_mesh(shape: &Shape) -> MeshData {
-    match *shape {
-        Shape::Dome { bottom_deg } => sphere_band(90.0, bottom_deg.get(), 16, 32),
-        Shape::DomeBand { bottom_deg, top_deg } => sphere_band(top_deg.get(), bottom_deg.get(), 6, 48),
-        Shape::Billboard { .. } | Shape::Quad { .. } => MeshData {
+    match dome_grid(shape) {
+        Some((top_deg, bottom_deg, rings, segments)) => sphere_band(top_deg, bottom_deg, rings, segments),
+        // Billboards and quads: one square.
+        None => MeshData {
             vertices: [[-1.0, 1.0, 0.0, 0.0], [1.0, 1.0, 1.0, 0.0], [-1.0, -1.0, 0.0, 1.0], [1.0, -1.0, 1.0, 1.0]]
                 .iter()
                 .map(|&[x, y, u, v]| SkyVertex { position: [x, y, 1.0], uv: [u, v] })

@@ -62,8 +62,12 @@ pub struct Skips {
     /// [`SCENE_COVERS_BELOW_DEG`]) are not drawn: the scene covers that part of the sky.
     pub below_horizon: bool,
     /// Dome layers whose band of elevations the frame does not show (a fog band under a view
-    /// of the zenith) are not drawn, nor composited.
+    /// of the zenith) are not drawn, nor composited; nor are the parts of the main-scene
+    /// stand-in wholly outside the view.
     pub off_screen: bool,
+    /// Texture stages that no pixel of a draw minifies are sampled from level 0 alone (the same
+    /// texels; lavapipe then skips computing the level of detail).
+    pub unneeded_mips: bool,
 }
 
 /// The main-scene stand-in covers every direction more than this far below the horizon, degrees
@@ -72,7 +76,7 @@ pub const SCENE_COVERS_BELOW_DEG: f32 = 2.0;
 
 impl Default for Skips {
     fn default() -> Self {
-        Self { dark_stages: true, invisible_stars: true, unchanged_tables: true, below_horizon: true, off_screen: true }
+        Self { dark_stages: true, invisible_stars: true, unchanged_tables: true, below_horizon: true, off_screen: true, unneeded_mips: true }
     }
 }
 
@@ -95,6 +99,8 @@ pub struct FrameStats {
     pub objects_below_horizon: u32,
     /// Dome layers not drawn because the frame does not show their elevations.
     pub objects_off_screen: u32,
+    /// Texture stages sampled from level 0 alone (no pixel minifies them), over every draw.
+    pub stages_level0: u32,
     /// Sky objects drawn into a reduced-resolution buffer ([`RenderOptions::dome_resolution`]).
     pub objects_reduced: u32,
     /// Each run of reduced layers this frame, in draw order: its buffer's divisor (2: half the

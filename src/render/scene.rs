@@ -25,9 +25,15 @@ fn terrain_height(x: f32, z: f32) -> f32 {
     (30.0 * (x / 190.0).sin() * (z / 240.0).cos() + 9.0 * (x / 55.0 + z / 80.0).sin()) * flat * flat - 0.5
 }
 
-fn scene_geometry() -> (Vec<SceneVertex>, Vec<u32>) {
-    let (mut v, mut idx) = (Vec::new(), Vec::new());
-    const N: u32 = 96;
+/// Terrain cells along each side, and cells along each side of a chunk (the unit of culling).
+const TERRAIN_CELLS: u32 = 96;
+const CHUNK_CELLS: u32 = 12;
+
+/// The stand-in's geometry: vertices, indices, and the chunks the indices are grouped in (index
+/// range and world-space bounds), the buildings last.
+fn scene_geometry() -> (Vec<SceneVertex>, Vec<u32>, Vec<Chunk>) {
+    let (mut v, mut idx, mut chunks) = (Vec::new(), Vec::new(), Vec::new());
+    const N: u32 = TERRAIN_CELLS;
     const EXTENT: f32 = 2500.0;
     for j in 0..=N {
         for i in 0..=N {
@@ -39,13 +45,27 @@ fn scene_geometry() -> (Vec<SceneVertex>, Vec<u32>) {
             v.push(SceneVertex { position: [x, terrain_height(x, z), z], normal: n.to_array(), albedo: [0.25 * shade, 0.32 * shade, 0.16 * shade] });
         }
     }
-    for j in 0..N {
-        for i in 0..N {
-            let a = j * (N + 1) + i;
-            let b = a + N + 1;
-            idx.extend_from_slice(&[a, b, a + 1, a + 1, b, b + 1]);
+    // Indices chunk by chunk, so a chunk is one index range; within a chunk the cells keep
+    // their row-major order (and each its two triangles), as the frame draws them.
+    for cj in 0..N / CHUNK_CELLS {
+        for ci in 0..N / CHUNK_CELLS {
+            let start = idx.len() as u32;
+            let (mut lo, mut hi) = (glam::Vec3::splat(f32::INFINITY), glam::Vec3::splat(f32::NEG_INFINITY));
+            for j in cj * CHUNK_CELLS..(cj + 1) * CHUNK_CELLS {
+                for i in ci * CHUNK_CELLS..(ci + 1) * CHUNK_CELLS {
+                    let a = j * (N + 1) + i;
+                    let b = a + N + 1;
+                    for k in [a, b, a + 1, a + 1, b, b + 1] {
+                        idx.push(k);
+                        let p = glam::Vec3::from(v[k as usize].position);
+                        (lo, hi) = (lo.min(p), hi.max(p));
+                    }
+                }
+            }
+            chunks.push(Chunk { indices: start..idx.len() as u32, bounds: (lo, hi) });
         }
     }
+    let buildings_start = idx.len() as u32;
     // Buildings: (azimuth deg, distance m, width m, height m).
     for &(az, dist, w, h) in &[
         (150.0f32, 60.0f32, 14.0f32, 18.0f32),
@@ -71,7 +91,31 @@ fn scene_geometry() -> (Vec<SceneVertex>, Vec<u32>) {
             idx.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
         }
     }
-    (v, idx)
+    let (lo, hi) = v[(buildings_start as usize).min(v.len())..].iter().fold((glam::Vec3::splat(f32::INFINITY), glam::Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), x| {
+        let p = glam::Vec3::from(x.position);
+        (lo.min(p), hi.max(p))
+    });
+    chunks.push(Chunk { indices: buildings_start..idx.len() as u32, bounds: (lo, hi) });
+    (v, idx, chunks)
+}
+
+/// A group of the stand-in's triangles drawn or culled together.
+#[derive(Debug, Clone)]
+struct Chunk {
+    /// Its range in the index buffer.
+    indices: std::ops::Range<u32>,
+    /// World-space bounding box (min, max), metres.
+    bounds: (glam::Vec3, glam::Vec3),
+}
+
+/// Whether a world-space box lies wholly outside one plane of the clip volume (wgpu's: depth 0
+/// to w): then none of it can reach a pixel, so culling it changes nothing drawn.
+fn outside_frustum(clip_from_world: &glam::Mat4, (lo, hi): (glam::Vec3, glam::Vec3)) -> bool {
+    let corners = (0..8)
+        .map(|k| clip_from_world.mul_vec4(glam::Vec4::new(if k & 1 == 0 { lo.x } else { hi.x }, if k & 2 == 0 { lo.y } else { hi.y }, if k & 4 == 0 { lo.z } else { hi.z }, 1.0)));
+    let corners: Vec<glam::Vec4> = corners.collect();
+    let planes: [fn(&glam::Vec4) -> bool; 6] = [|c| c.x < -c.w, |c| c.x > c.w, |c| c.y < -c.w, |c| c.y > c.w, |c| c.z < 0.0, |c| c.z > c.w];
+    planes.iter().any(|outside| corners.iter().all(outside))
 }
 
 /// A rectangle in clip space (NDC x, y) drawn into the scene's depth: a known occluder.
@@ -98,7 +142,9 @@ pub struct ScenePass {
     pipelines: Pipelines<ScenePipelines>,
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
-    index_count: u32,
+    chunks: Vec<Chunk>,
+    /// This frame's index ranges: the chunks in view, neighbours merged.
+    ranges: Vec<std::ops::Range<u32>>,
     occluder: wgpu::Buffer,
 }
 
@@ -112,7 +158,7 @@ impl ScenePass {
             immediate_size: 0,
         });
         let pipelines = Pipelines::new_render(b, pipeline_layout, Self::build)?;
-        let (v, i) = scene_geometry();
+        let (v, i, chunks) = scene_geometry();
         let vertices =
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("Scene::vertices"), contents: bytemuck::cast_slice(&v), usage: wgpu::BufferUsages::VERTEX });
         let indices =
@@ -123,7 +169,7 @@ impl ScenePass {
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Self { pipelines, vertices, indices, index_count: i.len() as u32, occluder })
+        Ok(Self { pipelines, vertices, indices, chunks, ranges: Vec::new(), occluder })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<ScenePipelines> {
@@ -190,6 +236,17 @@ impl Pass for ScenePass {
     }
 
     fn prepare(&mut self, cx: &FrameContext<'_>) {
+        // Chunks wholly out of view are not submitted: on a software rasteriser every triangle
+        // costs its vertex shading, clipping and setup even when it reaches no pixel.
+        let (clip_from_world, _) = cx.camera.matrices(cx.aspect());
+        self.ranges.clear();
+        let cull = cx.options.skips.off_screen;
+        for c in self.chunks.iter().filter(|c| !(cull && outside_frustum(&clip_from_world, c.bounds))) {
+            match self.ranges.last_mut() {
+                Some(r) if r.end == c.indices.start => r.end = c.indices.end,
+                _ => self.ranges.push(c.indices.clone()),
+            }
+        }
         if let Some(o) = &cx.options.occluder {
             let ([x0, y0], [x1, y1]) = (o.min, o.max);
             let quad: [[f32; 2]; 6] = [[x0, y0], [x1, y0], [x1, y1], [x0, y0], [x1, y1], [x0, y1]];
@@ -212,7 +269,10 @@ impl Pass for ScenePass {
             rpass.set_pipeline(&p.scene);
             rpass.set_vertex_buffer(0, self.vertices.slice(..));
             rpass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-            rpass.draw_indexed(0..self.index_count, 0, 0..1);
+            for r in &self.ranges {
+                rpass.draw_indexed(r.clone(), 0, 0..1);
+            }
+            return self.ranges.len() as u32;
         } else {
             rpass.set_pipeline(&p.occluder);
             rpass.set_vertex_buffer(0, self.occluder.slice(..));

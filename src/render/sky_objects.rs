@@ -258,6 +258,8 @@ pub struct SkyObjectsPass {
     below_horizon: u32,
     /// Dome layers outside the frame's elevations this frame.
     off_screen: u32,
+    /// Stages sampled from level 0 alone this frame, over every draw.
+    level0_stages: u32,
     /// This frame's pipeline signature of every drawn version, by (object index, version).
     keys: HashMap<(usize, usize), VariantKey>,
 }
@@ -279,6 +281,8 @@ struct Visible {
     part: [bool; 4],
     /// The fine terms of a split opaque layer: added on top of its reduced part.
     on_top: bool,
+    /// Stages (bit k: stage k) that no pixel of this draw minifies: sampled from level 0 alone.
+    level0: u8,
 }
 
 /// Blend index of [`BLENDS`] that adds colour as it is (the fine terms of a split opaque layer).
@@ -379,6 +383,7 @@ impl SkyObjectsPass {
             ref_hidden: 0,
             below_horizon: 0,
             off_screen: 0,
+            level0_stages: 0,
             keys: HashMap::new(),
         })
     }
@@ -419,7 +424,7 @@ impl SkyObjectsPass {
             None => return 0,
         };
         rpass.set_pipeline(pipeline);
-        rpass.set_bind_group(1, &d.bind_group, &[]);
+        rpass.set_bind_group(1, &d.bind_groups[usize::from(e.level0 & d.level0_able)], &[]);
         rpass.set_bind_group(2, under_run.unwrap_or(&self.no_run), &[]);
         rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
         rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
@@ -569,7 +574,7 @@ impl Pass for SkyObjectsPass {
                 Ok(versions) => {
                     for v in versions {
                         let d = &draws.objects[of.index][v.version];
-                        let entry = Visible { index: of.index, priority: of.priority, version: v.version, reduced: false, divisor: 1, part: [true; 4], on_top: false };
+                        let entry = Visible { index: of.index, priority: of.priority, version: v.version, reduced: false, divisor: 1, part: [true; 4], on_top: false, level0: 0 };
                         let dome = matches!(d.shape, Shape::Dome { .. } | Shape::DomeBand { .. });
                         let Some(key) = self.keys.get(&(of.index, v.version)).filter(|_| reduce_domes && dome) else {
                             self.visible.push(entry);
@@ -609,6 +614,24 @@ impl Pass for SkyObjectsPass {
                 }
             }
         }
+        // Stages whose level of detail stays at most 1/2 wherever they are drawn, at each draw's
+        // resolution: the mipmapped sampler (nearest level, linear within it, the same filter
+        // either side of 0) reads level 0 there too (Vulkan: level ceil(lod + 1/2) - 1), so a
+        // level-0 sampler gives the same pixels without the level-of-detail work.
+        self.level0_stages = 0;
+        if cx.options.skips.unneeded_mips {
+            let view = FrameView::new(cx.camera, cx.aspect(), (lowest_deg, highest_deg), cx.frame.towards_sun);
+            for e in &mut self.visible {
+                let d = &draws.objects[e.index][e.version];
+                // Frame pixels per degree at the frame's centre (the fewest: a perspective frame
+                // has more per degree towards its edges), in this draw's buffer.
+                let px_per_deg = view.centre_px_per_deg(cx.size.1) / e.divisor as f32;
+                e.level0 = (0..MAX_STAGES)
+                    .filter(|&k| d.maps[k].as_ref().is_some_and(|m| m.peak_texels_per_deg(&d.shape, &view) * LOD_MARGIN <= px_per_deg * std::f32::consts::SQRT_2))
+                    .fold(0, |m, k| m | 1 << k);
+                self.level0_stages += e.level0.count_ones();
+            }
+        }
         // Draws on the frame may come between two runs that the renderer joins: their
         // corrected variants are built too.
         self.build_variants(cx.device, cx.target, reduce_domes);
@@ -644,6 +667,7 @@ impl Pass for SkyObjectsPass {
         stats.objects_ref_hidden = self.ref_hidden;
         stats.objects_below_horizon = self.below_horizon;
         stats.objects_off_screen = self.off_screen;
+        stats.stages_level0 = self.level0_stages;
         let mut reduced: Vec<usize> = self.visible.iter().filter(|e| e.reduced).map(|e| e.index).collect();
         reduced.dedup();
         stats.objects_reduced = reduced.len() as u32;
@@ -653,7 +677,12 @@ impl Pass for SkyObjectsPass {
 /// GPU resources of one version (standard or fallback pass) of an object.
 struct VersionDraw {
     uniform: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
+    /// By the stages sampled from level 0 alone (bit k: stage k, within `level0_able`).
+    bind_groups: Vec<wgpu::BindGroup>,
+    /// Stages that have a level-0 variant: those with a texture or the gradient.
+    level0_able: u8,
+    /// How each stage's texture lies on the sky (None: no stage or no texture).
+    maps: [Option<StageMap>; MAX_STAGES],
     mesh: Arc<GpuMesh>,
     gradient: Option<(wgpu::Texture, u32)>,
     /// The stage the gradient feeds (and a physical sky model replaces).
@@ -683,6 +712,119 @@ fn stage_texels_per_deg(stage: &crate::sky::resolved::Stage, shape: &Shape) -> f
         UvSource::Celestial => (w / 360.0).max(h / 180.0),
         UvSource::Quake { z_scale, z_offset, t_scale, .. } => {
             w.max(h) * quake_uv_per_rad(z_scale.get(), z_offset.get(), t_scale.get(), bottom_deg.min(top_deg), bottom_deg.max(top_deg)).to_radians()
+        }
+    }
+}
+
+/// How much larger a stage's computed peak texel density may be than the level-of-detail the
+/// rasteriser derives (from differences across 2x2 pixels, along triangles' chords rather than
+/// arcs) before a level-0 sampler could differ from the mipmapped one.
+const LOD_MARGIN: f32 = 1.25;
+
+/// What the frame shows, for bounding how finely a texture lands on its pixels.
+struct FrameView {
+    /// Lowest and highest elevation in the frame, degrees.
+    elevation_deg: (f32, f32),
+    /// Largest angle between the sun and a direction in the frame, degrees.
+    sun_max_deg: f32,
+    /// Half the frame's vertical field of view, radians.
+    half_fov_y: f32,
+}
+
+impl FrameView {
+    fn new(camera: &Camera, aspect: f32, elevation_deg: (f32, f32), towards_sun: Vec3) -> Self {
+        let half_fov_y = (camera.fov_y_deg.to_radians() * 0.5).min(1.55);
+        let t = half_fov_y.tan();
+        let half_diagonal = (t * t * (1.0 + aspect * aspect)).sqrt().atan();
+        let to_sun = camera.forward().dot(towards_sun.normalize_or_zero()).clamp(-1.0, 1.0).acos();
+        Self { elevation_deg, sun_max_deg: (to_sun + half_diagonal).to_degrees().min(180.0), half_fov_y }
+    }
+
+    /// Pixels per degree of view direction at the frame's centre for a frame `height_px` high.
+    fn centre_px_per_deg(&self, height_px: u32) -> f32 {
+        height_px as f32 * 0.5 / self.half_fov_y.tan() * std::f32::consts::PI / 180.0
+    }
+}
+
+/// How one stage's texture lies on the sky: its mapping and its size in texels across one
+/// repeat of the mapping, times the stage's repeats (u, v).
+#[derive(Debug, Clone)]
+struct StageMap {
+    uv: UvSource,
+    texels: (f32, f32),
+}
+
+impl StageMap {
+    /// None for a stage without a texture of its own (the gradient: one texel wide, no levels).
+    fn of(stage: &crate::sky::resolved::Stage) -> Option<Self> {
+        let t = stage.texture.as_ref()?;
+        Some(Self { uv: stage.uv, texels: (t.width as f32 * stage.uv_scale[0].abs(), t.height as f32 * stage.uv_scale[1].abs()) })
+    }
+
+    /// The most texels of this stage that one degree of view direction crosses anywhere `view`
+    /// shows of `shape`, along any screen direction (infinite where unbounded: the celestial
+    /// mapping's poles, the antisolar point of a repeating sun mapping).
+    fn peak_texels_per_deg(&self, shape: &Shape, view: &FrameView) -> f32 {
+        let (w, h) = self.texels;
+        let (lo, hi) = view.elevation_deg;
+        match self.uv {
+            UvSource::Mesh => match super::mesh::dome_grid(shape) {
+                // u runs once round the azimuth, v once from the top ring to the bottom one. Along
+                // a ring a degree of view crosses 1 / cos(elevation) degrees of azimuth. Each band
+                // of triangles between two rings spans a chord of both; the triangles round a pole
+                // are spanned by the ring next to it.
+                Some((top_deg, bottom_deg, rings, _)) => {
+                    let (shape_lo, shape_hi) = (bottom_deg.min(top_deg), bottom_deg.max(top_deg));
+                    let (a, b) = (lo.max(shape_lo), hi.min(shape_hi));
+                    if a > b {
+                        return 0.0;
+                    }
+                    let step = ((shape_hi - shape_lo) / rings as f32).max(1e-3);
+                    let ring_lo = shape_lo + ((a - shape_lo) / step).floor() * step;
+                    let ring_hi = (shape_lo + ((b - shape_lo) / step).ceil() * step).min(shape_hi);
+                    let inward = |e: f32| if e.abs() >= 90.0 - 1e-3 { e - step * e.signum() } else { e };
+                    let steepest = inward(ring_lo).abs().max(inward(ring_hi).abs()).min(89.9);
+                    let along = w / 360.0 / steepest.to_radians().cos();
+                    let across = h / (shape_hi - shape_lo).max(1e-3);
+                    along.max(across)
+                }
+                // A square size_deg across, flat at its distance: a texel is smaller in angle
+                // away from its centre (by cos^2 at the corners, half a diagonal out).
+                None => {
+                    let size_deg = match *shape {
+                        Shape::Billboard { size_deg } | Shape::Quad { size_deg } => size_deg.get(),
+                        _ => return f32::INFINITY,
+                    };
+                    let half_diagonal = (size_deg * 0.5 * std::f32::consts::SQRT_2).to_radians();
+                    if half_diagonal >= 1.5 {
+                        return f32::INFINITY;
+                    }
+                    w.max(h) / size_deg / half_diagonal.cos().powi(2)
+                }
+            },
+            // Distance from the sun maps linearly to radius, size_deg across; round the sun a
+            // degree of view crosses angle / sin(angle) degrees of that map.
+            UvSource::Sun { size_deg } => {
+                let angle = view.sun_max_deg.to_radians();
+                if angle >= std::f32::consts::PI - 0.02 {
+                    return f32::INFINITY;
+                }
+                let stretch = if angle > 1e-3 { (angle / angle.sin()).max(1.0) } else { 1.0 };
+                w.max(h) / size_deg.get().abs().max(1e-3) * stretch
+            }
+            UvSource::Celestial => f32::INFINITY,
+            UvSource::Quake { z_scale, z_offset, t_scale, .. } => {
+                let (shape_lo, shape_hi) = match *shape {
+                    Shape::Dome { bottom_deg } => (bottom_deg.get(), 90.0),
+                    Shape::DomeBand { bottom_deg, top_deg } => (bottom_deg.get().min(top_deg.get()), bottom_deg.get().max(top_deg.get())),
+                    Shape::Billboard { .. } | Shape::Quad { .. } => return f32::INFINITY,
+                };
+                let (a, b) = (lo.max(shape_lo), hi.min(shape_hi));
+                if a > b {
+                    return 0.0;
+                }
+                w.max(h) * quake_uv_per_rad(z_scale.get(), z_offset.get(), t_scale.get(), a, b).to_radians()
+            }
         }
     }
 }
@@ -785,6 +927,7 @@ impl SkyObjectDraws {
                         let gradient_view = gradient.as_ref().map(|(t, _)| t.create_view(&Default::default()));
                         let mut views = Vec::new();
                         let mut samplers = Vec::new();
+                        let mut level0_samplers = Vec::new();
                         for k in 0..MAX_STAGES {
                             let stage = v.stages.get(k);
                             let view = match (stage.and_then(|s| s.texture.as_ref()), &gradient_view) {
@@ -793,7 +936,9 @@ impl SkyObjectDraws {
                                 _ => cache.white.clone(),
                             };
                             views.push(view);
-                            samplers.push(if stage.is_some_and(|s| s.clamp) { cache.clamp.clone() } else { cache.repeat.clone() });
+                            let clamp = stage.is_some_and(|s| s.clamp);
+                            samplers.push(if clamp { cache.clamp.clone() } else { cache.repeat.clone() });
+                            level0_samplers.push(if clamp { cache.clamp_level0.clone() } else { cache.repeat_level0.clone() });
                         }
                         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
                             label: Some(&format!("{label}::uniform")),
@@ -801,23 +946,46 @@ impl SkyObjectDraws {
                             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                             mapped_at_creation: false,
                         });
-                        let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }];
-                        for (k, view) in views.iter().enumerate() {
-                            entries.push(wgpu::BindGroupEntry { binding: 1 + k as u32, resource: wgpu::BindingResource::TextureView(view) });
-                        }
-                        for (k, s) in samplers.iter().enumerate() {
-                            entries.push(wgpu::BindGroupEntry { binding: 5 + k as u32, resource: wgpu::BindingResource::Sampler(s) });
-                        }
-                        entries.push(wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(&sky_view.0) });
-                        entries.push(wgpu::BindGroupEntry { binding: 10, resource: wgpu::BindingResource::Sampler(&sky_view.1) });
-                        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&format!("{label}::bind_group")), layout, entries: &entries });
+                        let maps: [Option<StageMap>; MAX_STAGES] = std::array::from_fn(|k| v.stages.get(k).and_then(StageMap::of));
+                        let level0_able = (0..MAX_STAGES).filter(|&k| maps[k].is_some()).fold(0u8, |m, k| m | 1 << k);
+                        // One bind group per subset of those stages, indexed by the subset's mask (a
+                        // mask that is no subset is never indexed, and gets its subset's), so that
+                        // a frame only picks one.
+                        let bind_groups = (0..=level0_able)
+                            .map(|mask| {
+                                let mask = mask & level0_able;
+                                let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }];
+                                for (k, view) in views.iter().enumerate() {
+                                    entries.push(wgpu::BindGroupEntry { binding: 1 + k as u32, resource: wgpu::BindingResource::TextureView(view) });
+                                }
+                                for k in 0..MAX_STAGES {
+                                    let s = if mask & (1 << k) != 0 { &level0_samplers[k] } else { &samplers[k] };
+                                    entries.push(wgpu::BindGroupEntry { binding: 5 + k as u32, resource: wgpu::BindingResource::Sampler(s) });
+                                }
+                                entries.push(wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(&sky_view.0) });
+                                entries.push(wgpu::BindGroupEntry { binding: 10, resource: wgpu::BindingResource::Sampler(&sky_view.1) });
+                                device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&format!("{label}::bind_group[{mask:04b}]")), layout, entries: &entries })
+                            })
+                            .collect();
                         let gradient_stage = v.gradients.as_ref().map(|g| g.stage);
                         let mut texels_per_deg = [0.0; 4];
                         for (k, s) in v.stages.iter().enumerate() {
                             let oversampling = s.texture.as_ref().map_or(1.0, |t| *oversampling.entry(t.key.clone()).or_insert_with(|| texture_oversampling(t)));
                             texels_per_deg[k] = stage_texels_per_deg(s, &v.shape) / oversampling;
                         }
-                        VersionDraw { uniform, bind_group, mesh, gradient, gradient_stage, blend: v.blend, shape: v.shape, base: DrawUniform::from(v), texels_per_deg }
+                        VersionDraw {
+                            uniform,
+                            bind_groups,
+                            level0_able,
+                            maps,
+                            mesh,
+                            gradient,
+                            gradient_stage,
+                            blend: v.blend,
+                            shape: v.shape,
+                            base: DrawUniform::from(v),
+                            texels_per_deg,
+                        }
                     })
                     .collect()
             })

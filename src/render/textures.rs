@@ -27,6 +27,11 @@ pub struct TextureCache {
     pub repeat: wgpu::Sampler,
     /// Linear, clamped to edge.
     pub clamp: wgpu::Sampler,
+    /// As `repeat`, level 0 only: for stages no pixel minifies (same texels; on lavapipe a
+    /// sampler whose level of detail is pinned skips computing it).
+    pub repeat_level0: wgpu::Sampler,
+    /// As `clamp`, level 0 only.
+    pub clamp_level0: wgpu::Sampler,
 }
 
 /// Texture format of every sky texture: colours stay display-encoded, like the 2005 pipeline.
@@ -106,7 +111,7 @@ pub fn write(queue: &wgpu::Queue, texture: &wgpu::Texture, width: u32, height: u
     );
 }
 
-fn sampler(device: &wgpu::Device, label: &str, mode: wgpu::AddressMode) -> wgpu::Sampler {
+fn sampler(device: &wgpu::Device, label: &str, mode: wgpu::AddressMode, lod_max_clamp: f32) -> wgpu::Sampler {
     device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some(label),
         address_mode_u: mode,
@@ -115,6 +120,7 @@ fn sampler(device: &wgpu::Device, label: &str, mode: wgpu::AddressMode) -> wgpu:
         mag_filter: wgpu::FilterMode::Linear,
         min_filter: wgpu::FilterMode::Linear,
         mipmap_filter: wgpu::MipmapFilterMode::Nearest,
+        lod_max_clamp,
         ..Default::default()
     })
 }
@@ -129,15 +135,27 @@ impl TextureCache {
             uploaded: 0,
             reused: 0,
             white,
-            repeat: sampler(device, "TextureCache::repeat", wgpu::AddressMode::Repeat),
-            clamp: sampler(device, "TextureCache::clamp", wgpu::AddressMode::ClampToEdge),
+            repeat: sampler(device, "TextureCache::repeat", wgpu::AddressMode::Repeat, 32.0),
+            clamp: sampler(device, "TextureCache::clamp", wgpu::AddressMode::ClampToEdge, 32.0),
+            repeat_level0: sampler(device, "TextureCache::repeat_level0", wgpu::AddressMode::Repeat, 0.0),
+            clamp_level0: sampler(device, "TextureCache::clamp_level0", wgpu::AddressMode::ClampToEdge, 0.0),
         }
     }
 
     /// An empty cache for the next sky that can take over this one's textures; this one stays
     /// valid until the next sky is committed.
     pub fn successor(&self) -> Self {
-        Self { views: HashMap::new(), previous: self.views.clone(), uploaded: 0, reused: 0, white: self.white.clone(), repeat: self.repeat.clone(), clamp: self.clamp.clone() }
+        Self {
+            views: HashMap::new(),
+            previous: self.views.clone(),
+            uploaded: 0,
+            reused: 0,
+            white: self.white.clone(),
+            repeat: self.repeat.clone(),
+            clamp: self.clamp.clone(),
+            repeat_level0: self.repeat_level0.clone(),
+            clamp_level0: self.clamp_level0.clone(),
+        }
     }
 
     /// Textures held.
