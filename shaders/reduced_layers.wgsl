@@ -5,34 +5,44 @@
 // transmittance * target (the pipeline's blend), depth-tested against the main scene like the
 // layers themselves. (globals.wgsl is prepended by the loader.)
 
-@group(1) @binding(0) var<uniform> composite: Composite;
 @group(1) @binding(1) var layers: texture_2d<f32>;
 @group(1) @binding(2) var layers_sampler: sampler;
 
+struct CompositeOut {
+    @builtin(position) clip: vec4<f32>,
+    // Texture coordinates of the whole frame (every buffer holds it), sampled as interpolated at
+    // level 0: no arithmetic per pixel and no derivatives (lavapipe differences those of
+    // coordinates computed per pixel, see sky_objects.wgsl).
+    @location(0) uv: vec2<f32>,
+};
+
 @vertex
-fn vs_main(@builtin(vertex_index) vi: u32) -> @builtin(position) vec4<f32> {
+fn vs_main(@builtin(vertex_index) vi: u32) -> CompositeOut {
     let p = vec2<f32>(f32((vi << 1u) & 2u), f32(vi & 2u));
+    var out: CompositeOut;
     // Inside the sky's depth range, as the layers' own draws.
-    return vec4<f32>(p * 2.0 - vec2<f32>(1.0), 0.5, 1.0);
+    out.clip = vec4<f32>(p * 2.0 - vec2<f32>(1.0), 0.5, 1.0);
+    out.uv = vec2<f32>(p.x, 1.0 - p.y);
+    return out;
 }
 
 @fragment
-fn fs_main(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
-    return textureSample(layers, layers_sampler, pixel.xy * composite.uv_from_pixel.xy);
+fn fs_main(in: CompositeOut) -> @location(0) vec4<f32> {
+    return textureSampleLevel(layers, layers_sampler, in.uv, 0.0);
 }
 
 // The first run of a frame as its background (drawn before the scene, over the clear colour,
 // black): colour + transmittance x black, the target's alpha (1) kept.
 @fragment
-fn fs_background(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
-    return vec4<f32>(textureSample(layers, layers_sampler, pixel.xy * composite.uv_from_pixel.xy).rgb, 1.0);
+fn fs_background(in: CompositeOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(textureSampleLevel(layers, layers_sampler, in.uv, 0.0).rgb, 1.0);
 }
 
-// Two runs at once as the background: the upper (group 2, reduced/run.wgsl) over the lower
-// (group 1), over black. Only the pair's pipeline layout has group 2.
+// The two joined runs combined once at the finer run's resolution, the upper over the lower, so
+// that the background samples one buffer instead of two at every frame pixel.
 @fragment
-fn fs_pair_background(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
-    let lower = textureSample(layers, layers_sampler, pixel.xy * composite.uv_from_pixel.xy);
-    let upper = run_at(pixel.xy);
+fn fs_combine(in: CompositeOut) -> @location(0) vec4<f32> {
+    let lower = textureSampleLevel(layers, layers_sampler, in.uv, 0.0);
+    let upper = textureSampleLevel(run_layers, run_sampler, in.uv, 0.0);
     return vec4<f32>(upper.rgb + upper.a * lower.rgb, 1.0);
 }

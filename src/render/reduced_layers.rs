@@ -116,9 +116,9 @@ pub struct ReducedLayersPass {
     /// The composite (blended over the frame, depth-tested), and the background (the first run
     /// of a frame, drawn before the scene: replacing the clear, neither blended nor tested).
     pipelines: Pipelines<[wgpu::RenderPipeline; 2]>,
-    /// The background of two runs at once, the upper over the lower (runs joined across the
-    /// billboards between them: [`ReducedLayersPass::draw_pair_background`]).
-    pair: Pipelines<wgpu::RenderPipeline>,
+    /// Combines two runs into one buffer, the upper over the lower (runs joined across the
+    /// billboards between them: [`ReducedLayersPass::record_combined`]).
+    combine: Pipelines<wgpu::RenderPipeline>,
     /// The composite's uniform (frame pixel to texture coordinates, any divisor).
     uniform: wgpu::Buffer,
     sampler: wgpu::Sampler,
@@ -126,6 +126,8 @@ pub struct ReducedLayersPass {
     made_for: ((u32, u32), Target),
     /// Per run of a frame; reused while the size, target and run's divisor stay.
     buffers: Vec<RunBuffer>,
+    /// The first two runs combined, at the finer one's divisor, when the frame joins them.
+    combined: Option<RunBuffer>,
 }
 
 impl ReducedLayersPass {
@@ -145,7 +147,7 @@ impl ReducedLayersPass {
             bind_group_layouts: &[Some(b.globals_layout), Some(&layout), Some(&layout)],
             immediate_size: 0,
         });
-        let pair = Pipelines::new_render(b, pair_layout, Self::build_pair)?;
+        let combine = Pipelines::new_render(b, pair_layout, Self::build_combine)?;
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("ReducedLayers::uniform"),
             size: std::mem::size_of::<CompositeUniform>() as u64,
@@ -158,7 +160,7 @@ impl ReducedLayersPass {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        Ok(Self { layout, pipelines, pair, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new() })
+        Ok(Self { layout, pipelines, combine, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new(), combined: None })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 2]> {
@@ -169,9 +171,27 @@ impl ReducedLayersPass {
         ])
     }
 
-    fn build_pair(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
+    fn build_combine(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
         let module = shaders::module(b.device, b.library, "reduced_layers")?;
-        full_screen_pipeline(b, layout, &module, "ReducedLayers::pair_background_pipeline", "fs_pair_background", None, wgpu::CompareFunction::Always)
+        let label = "ReducedLayers::combine_pipeline";
+        shaders::validated(b.device, label, || {
+            b.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_combine"),
+                    targets: &[Some(wgpu::ColorTargetState { format: reduced_format(b.target), blend: None, write_mask: wgpu::ColorWrites::ALL })],
+                    compilation_options: Default::default(),
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
     }
 
     /// Size of the reduced buffers for a frame size and divisor, pixels.
@@ -179,11 +199,12 @@ impl ReducedLayersPass {
         (width.div_ceil(divisor).max(1), height.div_ceil(divisor).max(1))
     }
 
-    /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, for the frame size and
-    /// target.
-    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), target: Target, divisors: &[u32]) {
+    /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, and the combination
+    /// of the first two at `combined` when the frame joins them, for the frame size and target.
+    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), target: Target, divisors: &[u32], combined: Option<u32>) {
         if self.made_for != (size, target) {
             self.buffers.clear();
+            self.combined = None;
             self.made_for = (size, target);
             // Each buffer holds the whole frame (its viewport is the whole buffer, even where the
             // frame's size is not a multiple of the divisor): texture coordinates are the frame's.
@@ -194,34 +215,74 @@ impl ReducedLayersPass {
             if self.buffers.get(run).is_some_and(|b| b.divisor == divisor) {
                 continue;
             }
-            let (width, height) = Self::buffer_size(size, divisor);
-            let texture = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(&format!("ReducedLayers::buffer {run}")),
-                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: reduced_format(target),
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            });
-            let view = texture.create_view(&Default::default());
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("ReducedLayers::bind_group"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: self.uniform.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
-                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
-                ],
-            });
-            let buffer = RunBuffer { view, bind_group, divisor };
+            let buffer = self.buffer(device, &format!("ReducedLayers::buffer {run}"), divisor);
             if run < self.buffers.len() {
                 self.buffers[run] = buffer;
             } else {
                 self.buffers.push(buffer);
             }
         }
+        if let Some(divisor) = combined.filter(|&d| self.combined.as_ref().is_none_or(|b| b.divisor != d)) {
+            self.combined = Some(self.buffer(device, "ReducedLayers::combined", divisor));
+        }
+    }
+
+    /// A buffer of the whole frame at `divisor`, with the bind group that reads it.
+    fn buffer(&self, device: &wgpu::Device, label: &str, divisor: u32) -> RunBuffer {
+        let (width, height) = Self::buffer_size(self.made_for.0, divisor);
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: reduced_format(self.made_for.1),
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&format!("{label}::bind_group")),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.uniform.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+            ],
+        });
+        RunBuffer { view, bind_group, divisor }
+    }
+
+    /// Records the combination of runs 0 and 1 into the combined buffer ([`Self::ensure`]): one
+    /// full-screen pass at reduced resolution, where the background would sample both buffers
+    /// at every frame pixel.
+    pub fn record_combined(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        globals: &wgpu::BindGroup,
+        target: Target,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) -> u32 {
+        let (Some(out), Some(lower), Some(upper)) = (&self.combined, self.buffers.first(), self.buffers.get(1)) else { return 0 };
+        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("ReducedLayers::combine"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &out.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rpass.set_pipeline(self.combine.for_target(target));
+        rpass.set_bind_group(0, globals, &[]);
+        rpass.set_bind_group(1, &lower.bind_group, &[]);
+        rpass.set_bind_group(2, &upper.bind_group, &[]);
+        rpass.draw(0..3, 0..1);
+        1
     }
 
     /// Begins the render pass that draws run `run` into its buffer (cleared to nothing in front:
@@ -258,18 +319,19 @@ impl Pass for ReducedLayersPass {
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
         self.pipelines.stage(b)?;
-        self.pair.stage(b)
+        self.combine.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipelines.commit(accept);
-        self.pair.commit(accept);
+        self.combine.commit(accept);
     }
 
     fn prepare(&mut self, cx: &FrameContext<'_>) {
         // Buffers of another size are of no further use.
         if self.made_for.0 != cx.size {
             self.buffers.clear();
+            self.combined = None;
             self.made_for = ((0, 0), Target::Display);
         }
     }
@@ -333,14 +395,13 @@ impl ReducedLayersPass {
         self.buffers.get(run).map(|b| &b.bind_group)
     }
 
-    /// Draws runs `lower` and `upper` at once as the frame's background (see
-    /// [`Self::draw_background`]): the upper run over the lower. What lies between them in the sky
+    /// Draws the combination of runs 0 and 1 ([`Self::record_combined`]) as the frame's
+    /// background (see [`Self::draw_background`]). What lies between the two runs in the sky
     /// phase (billboards) is drawn afterwards under the upper run's transmittance and colour.
-    pub fn draw_pair_background(&self, rpass: &mut wgpu::RenderPass<'_>, (lower, upper): (usize, usize), target: Target) -> u32 {
-        let (Some(a), Some(b)) = (self.buffers.get(lower), self.buffers.get(upper)) else { return 0 };
-        rpass.set_pipeline(self.pair.for_target(target));
-        rpass.set_bind_group(1, &a.bind_group, &[]);
-        rpass.set_bind_group(2, &b.bind_group, &[]);
+    pub fn draw_pair_background(&self, rpass: &mut wgpu::RenderPass<'_>, target: Target) -> u32 {
+        let Some(buffer) = &self.combined else { return 0 };
+        rpass.set_pipeline(&self.pipelines.for_target(target)[1]);
+        rpass.set_bind_group(1, &buffer.bind_group, &[]);
         rpass.draw(0..3, 0..1);
         1
     }

@@ -342,9 +342,6 @@ impl SkyRenderer {
         // A run's buffer is as fine as its finest layer needs.
         let divisors: Vec<u32> = runs.iter().map(|&(start, end)| sky_items[start..end].iter().map(|(_, it)| it.divisor.max(1) as u32).min().unwrap_or(1)).collect();
         stats.reduced_runs.clone_from(&divisors);
-        if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
-            layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors);
-        }
         let reduced_pass = self.passes.iter().position(|p| (p.as_ref() as &dyn std::any::Any).is::<ReducedLayersPass>()).filter(|_| !runs.is_empty());
         // The first run, when the sky phase draws nothing before it, is the frame's background:
         // drawn first in the scene's pass, over the clear colour.
@@ -353,6 +350,11 @@ impl SkyRenderer {
         // it, corrected by it: one full-screen pass for both.
         let joined = background && options.join_runs && runs.len() >= 2 && sky_items[runs[0].1..runs[1].0].iter().all(|(i, it)| self.passes[*i].can_draw_under_run(it.key, kind));
         stats.composites = runs.len() as u32 - u32::from(joined);
+        // Joined runs are combined at the finer one's resolution first.
+        let combined = joined.then(|| divisors[0].min(divisors[1]));
+        if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
+            layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors, combined);
+        }
 
         if let Some(t) = self.timer.as_mut() {
             t.begin_frame();
@@ -406,12 +408,16 @@ impl SkyRenderer {
                         let sky_list = &items[Phase::Sky.index()];
                         let layers = (self.passes[rp].as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>();
                         for (r, &(start, end)) in runs.iter().enumerate() {
-                            let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(r == 0, r + 1 == runs.len()));
+                            let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(r == 0, r + 1 == runs.len() && !joined));
                             let Some(mut rpass) = layers.and_then(|l| l.begin(encoder, r, run_writes)) else { continue };
                             rpass.set_bind_group(0, &self.globals.bind_group, &[]);
                             for (i, it) in &sky_list[start..end] {
                                 stats.draw_calls += self.passes[*i].draw_reduced(&mut rpass, it.key, kind);
                             }
+                        }
+                        if let (true, Some(l)) = (joined, layers) {
+                            let writes = self.timer.as_mut().and_then(|t| t.reduced_writes(false, true));
+                            stats.draw_calls += l.record_combined(encoder, &self.globals.bind_group, kind, writes);
                         }
                     }
                     let queries = list.iter().find_map(|(i, _)| self.passes[*i].occlusion_query_set());
@@ -430,7 +436,7 @@ impl SkyRenderer {
                     };
                     rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
                     if let (Phase::Scene, true, Some(layers)) = (phase, background, self.pass::<ReducedLayersPass>()) {
-                        stats.draw_calls += if joined { layers.draw_pair_background(&mut rpass, (0, 1), kind) } else { layers.draw_background(&mut rpass, 0, kind) };
+                        stats.draw_calls += if joined { layers.draw_pair_background(&mut rpass, kind) } else { layers.draw_background(&mut rpass, 0, kind) };
                     }
                     let upper_run = self.pass::<ReducedLayersPass>().and_then(|l| l.run_bind_group(1)).filter(|_| joined);
                     if draws_here {
