@@ -258,8 +258,10 @@ pub struct SkyObjectsPass {
     below_horizon: u32,
     /// Dome layers outside the frame's elevations this frame.
     off_screen: u32,
-    /// Stages sampled from level 0 alone this frame, over every draw.
+    /// Stages sampled from level 0 alone this frame, over every draw (in some of its rows).
     level0_stages: u32,
+    /// This frame's draw parts ([`Visible::parts`]): index range, level-0 stages.
+    parts: Vec<(std::ops::Range<u32>, u8)>,
     /// This frame's pipeline signature of every drawn version, by (object index, version).
     keys: HashMap<(usize, usize), VariantKey>,
 }
@@ -281,8 +283,10 @@ struct Visible {
     part: [bool; 4],
     /// The fine terms of a split opaque layer: added on top of its reduced part.
     on_top: bool,
-    /// Stages (bit k: stage k) that no pixel of this draw minifies: sampled from level 0 alone.
-    level0: u8,
+    /// Its parts this frame: `parts[start..start + count]` of the pass, each an index range and
+    /// the stages (bit k: stage k) that no pixel of it minifies, sampled from level 0 alone
+    /// (`count` 0: the whole mesh, every stage mipmapped).
+    parts: (u32, u32),
 }
 
 /// Blend index of [`BLENDS`] that adds colour as it is (the fine terms of a split opaque layer).
@@ -384,6 +388,7 @@ impl SkyObjectsPass {
             below_horizon: 0,
             off_screen: 0,
             level0_stages: 0,
+            parts: Vec::new(),
             keys: HashMap::new(),
         })
     }
@@ -424,12 +429,20 @@ impl SkyObjectsPass {
             None => return 0,
         };
         rpass.set_pipeline(pipeline);
-        rpass.set_bind_group(1, &d.bind_groups[usize::from(e.level0 & d.level0_able)], &[]);
         rpass.set_bind_group(2, under_run.unwrap_or(&self.no_run), &[]);
         rpass.set_vertex_buffer(0, d.mesh.vertices.slice(..));
         rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-        rpass.draw_indexed(0..d.mesh.index_count, 0, 0..1);
-        1
+        let (start, count) = (e.parts.0 as usize, e.parts.1 as usize);
+        if count == 0 {
+            rpass.set_bind_group(1, &d.bind_groups[0], &[]);
+            rpass.draw_indexed(0..d.mesh.index_count, 0, 0..1);
+            return 1;
+        }
+        for (indices, level0) in &self.parts[start..start + count] {
+            rpass.set_bind_group(1, &d.bind_groups[usize::from(level0 & d.level0_able)], &[]);
+            rpass.draw_indexed(indices.clone(), 0, 0..1);
+        }
+        count as u32
     }
 
     /// Builds the specialised pipelines this frame's draws need and do not have yet.
@@ -574,7 +587,8 @@ impl Pass for SkyObjectsPass {
                 Ok(versions) => {
                     for v in versions {
                         let d = &draws.objects[of.index][v.version];
-                        let entry = Visible { index: of.index, priority: of.priority, version: v.version, reduced: false, divisor: 1, part: [true; 4], on_top: false, level0: 0 };
+                        let entry =
+                            Visible { index: of.index, priority: of.priority, version: v.version, reduced: false, divisor: 1, part: [true; 4], on_top: false, parts: (0, 0) };
                         let dome = matches!(d.shape, Shape::Dome { .. } | Shape::DomeBand { .. });
                         let Some(key) = self.keys.get(&(of.index, v.version)).filter(|_| reduce_domes && dome) else {
                             self.visible.push(entry);
@@ -618,7 +632,11 @@ impl Pass for SkyObjectsPass {
         // resolution: the mipmapped sampler (nearest level, linear within it, the same filter
         // either side of 0) reads level 0 there too (Vulkan: level ceil(lod + 1/2) - 1), so a
         // level-0 sampler gives the same pixels without the level-of-detail work.
+        // Domes decide per ring of triangles, since texture coordinates crowd towards the pole (a
+        // view of the zenith needs the tiled stars' levels round the zenith, not lower down); the
+        // rings the frame does not show are left out.
         self.level0_stages = 0;
+        self.parts.clear();
         if cx.options.skips.unneeded_mips {
             let view = FrameView::new(cx.camera, cx.aspect(), (lowest_deg, highest_deg), cx.frame.towards_sun);
             for e in &mut self.visible {
@@ -626,10 +644,45 @@ impl Pass for SkyObjectsPass {
                 // Frame pixels per degree at the frame's centre (the fewest: a perspective frame
                 // has more per degree towards its edges), in this draw's buffer.
                 let px_per_deg = view.centre_px_per_deg(cx.size.1) / e.divisor as f32;
-                e.level0 = (0..MAX_STAGES)
-                    .filter(|&k| d.maps[k].as_ref().is_some_and(|m| m.peak_texels_per_deg(&d.shape, &view) * LOD_MARGIN <= px_per_deg * std::f32::consts::SQRT_2))
-                    .fold(0, |m, k| m | 1 << k);
-                self.level0_stages += e.level0.count_ones();
+                let level0 = |view: &FrameView| {
+                    (0..MAX_STAGES)
+                        .filter(|&k| d.maps[k].as_ref().is_some_and(|m| m.peak_texels_per_deg(&d.shape, view) * LOD_MARGIN <= px_per_deg * std::f32::consts::SQRT_2))
+                        .fold(0u8, |m, k| m | 1 << k)
+                };
+                let start = self.parts.len();
+                let mut used = 0u8;
+                match super::mesh::dome_grid(&d.shape) {
+                    Some((top_deg, bottom_deg, rings, segments)) => {
+                        let per_ring = segments * 6;
+                        for r in 0..rings {
+                            let (a, b) = (top_deg + (bottom_deg - top_deg) * r as f32 / rings as f32, top_deg + (bottom_deg - top_deg) * (r + 1) as f32 / rings as f32);
+                            let (ring_lo, ring_hi) = (a.min(b), a.max(b));
+                            // With the margin of the chords' sag (tests in mesh.rs).
+                            if ring_lo - 0.5 > highest_deg || ring_hi + 0.5 < lowest_deg {
+                                continue;
+                            }
+                            let band = FrameView { elevation_deg: (lowest_deg.max(ring_lo), highest_deg.min(ring_hi)), ..view };
+                            let mask = level0(&band);
+                            used |= mask;
+                            let indices = r * per_ring..(r + 1) * per_ring;
+                            let ours = self.parts.len() > start;
+                            match self.parts.last_mut() {
+                                Some((range, m)) if ours && *m == mask && range.end == indices.start => range.end = indices.end,
+                                _ => self.parts.push((indices, mask)),
+                            }
+                        }
+                        // No ring in view: one empty part, drawn as nothing.
+                        if self.parts.len() == start {
+                            self.parts.push((0..0, 0));
+                        }
+                    }
+                    None => {
+                        used = level0(&view);
+                        self.parts.push((0..d.mesh.index_count, used));
+                    }
+                }
+                e.parts = (start as u32, (self.parts.len() - start) as u32);
+                self.level0_stages += used.count_ones();
             }
         }
         // Draws on the frame may come between two runs that the renderer joins: their
