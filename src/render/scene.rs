@@ -65,7 +65,7 @@ fn scene_geometry() -> (Vec<SceneVertex>, Vec<u32>, Vec<Chunk>) {
             chunks.push(Chunk { indices: start..idx.len() as u32, bounds: (lo, hi) });
         }
     }
-    let buildings_start = idx.len() as u32;
+    let (buildings_start, buildings_first_vertex) = (idx.len() as u32, v.len());
     // Buildings: (azimuth deg, distance m, width m, height m).
     for &(az, dist, w, h) in &[
         (150.0f32, 60.0f32, 14.0f32, 18.0f32),
@@ -91,7 +91,7 @@ fn scene_geometry() -> (Vec<SceneVertex>, Vec<u32>, Vec<Chunk>) {
             idx.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
         }
     }
-    let (lo, hi) = v[(buildings_start as usize).min(v.len())..].iter().fold((glam::Vec3::splat(f32::INFINITY), glam::Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), x| {
+    let (lo, hi) = v[buildings_first_vertex..].iter().fold((glam::Vec3::splat(f32::INFINITY), glam::Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), x| {
         let p = glam::Vec3::from(x.position);
         (lo.min(p), hi.max(p))
     });
@@ -279,5 +279,31 @@ impl Pass for ScenePass {
             rpass.draw(0..6, 0..1);
         }
         1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chunks_cover_the_stand_in_and_bound_their_triangles() {
+        let (v, idx, chunks) = scene_geometry();
+        let mut next = 0;
+        for c in &chunks {
+            assert_eq!(c.indices.start, next, "chunks follow each other");
+            next = c.indices.end;
+            for &k in &idx[c.indices.start as usize..c.indices.end as usize] {
+                let p = glam::Vec3::from(v[k as usize].position);
+                assert!(p.cmpge(c.bounds.0).all() && p.cmple(c.bounds.1).all(), "{p} outside {:?}", c.bounds);
+            }
+        }
+        assert_eq!(next as usize, idx.len(), "every triangle is in a chunk");
+        // At the horizon, the terrain behind the viewer is left out; the buildings (all round the
+        // viewer, some in view) are kept.
+        let (clip_from_world, _) = crate::render::Camera::default().matrices(16.0 / 9.0);
+        let culled = chunks.iter().filter(|c| outside_frustum(&clip_from_world, c.bounds)).count();
+        assert!(culled > chunks.len() / 3, "{culled} of {} chunks left out", chunks.len());
+        assert!(!outside_frustum(&clip_from_world, chunks[chunks.len() - 1].bounds));
     }
 }
