@@ -173,25 +173,7 @@ impl ReducedLayersPass {
 
     fn build_combine(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
         let module = shaders::module(b.device, b.library, "reduced_layers")?;
-        let label = "ReducedLayers::combine_pipeline";
-        shaders::validated(b.device, label, || {
-            b.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(layout),
-                vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_combine"),
-                    targets: &[Some(wgpu::ColorTargetState { format: reduced_format(b.target), blend: None, write_mask: wgpu::ColorWrites::ALL })],
-                    compilation_options: Default::default(),
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        })
+        shaders::fullscreen_pipeline_of(b.device, &module, "fs_combine", layout, "ReducedLayers::combine_pipeline", reduced_format(b.target))
     }
 
     /// Size of the reduced buffers for a frame size and divisor, pixels.

@@ -126,17 +126,29 @@ pub fn fullscreen_pipeline(
     format: wgpu::TextureFormat,
 ) -> RenderResult<wgpu::RenderPipeline> {
     let module = module(device, library, name)?;
+    fullscreen_pipeline_of(device, &module, "fs_main", layout, label, format)
+}
+
+/// As [`fullscreen_pipeline`], from a module already made and with fragment entry `entry`.
+pub fn fullscreen_pipeline_of(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    layout: &wgpu::PipelineLayout,
+    label: &str,
+    format: wgpu::TextureFormat,
+) -> RenderResult<wgpu::RenderPipeline> {
     validated(device, label, || {
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(label),
             layout: Some(layout),
-            vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
+            vertex: wgpu::VertexState { module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
             primitive: wgpu::PrimitiveState::default(),
             depth_stencil: None,
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
+                module,
+                entry_point: Some(entry),
                 targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
                 compilation_options: Default::default(),
             }),
