@@ -732,7 +732,7 @@ struct VersionDraw {
     uniform: wgpu::Buffer,
     /// By the stages sampled from level 0 alone (bit k: stage k, within `level0_able`).
     bind_groups: Vec<wgpu::BindGroup>,
-    /// Stages that have a level-0 variant: those with a texture or the gradient.
+    /// Stages that have a level-0 variant: those with a texture of their own.
     level0_able: u8,
     /// How each stage's texture lies on the sky (None: no stage or no texture).
     maps: [Option<StageMap>; MAX_STAGES],
