@@ -644,9 +644,9 @@ impl Pass for SkyObjectsPass {
                 // Frame pixels per degree at the frame's centre (the fewest: a perspective frame
                 // has more per degree towards its edges), in this draw's buffer.
                 let px_per_deg = view.centre_px_per_deg(cx.size.1) / e.divisor as f32;
-                let level0 = |view: &FrameView| {
+                let level0 = |ring: Option<usize>| {
                     (0..MAX_STAGES)
-                        .filter(|&k| d.maps[k].as_ref().is_some_and(|m| m.peak_texels_per_deg(&d.shape, view) * LOD_MARGIN <= px_per_deg * std::f32::consts::SQRT_2))
+                        .filter(|&k| d.maps[k].as_ref().is_some_and(|m| m.peak(&d.shape, ring, &view) * LOD_MARGIN <= px_per_deg * std::f32::consts::SQRT_2))
                         .fold(0u8, |m, k| m | 1 << k)
                 };
                 let start = self.parts.len();
@@ -661,8 +661,7 @@ impl Pass for SkyObjectsPass {
                             if ring_lo - 0.5 > highest_deg || ring_hi + 0.5 < lowest_deg {
                                 continue;
                             }
-                            let band = FrameView { elevation_deg: (lowest_deg.max(ring_lo), highest_deg.min(ring_hi)), ..view };
-                            let mask = level0(&band);
+                            let mask = level0(Some(r as usize));
                             used |= mask;
                             let indices = r * per_ring..(r + 1) * per_ring;
                             let ours = self.parts.len() > start;
@@ -677,7 +676,7 @@ impl Pass for SkyObjectsPass {
                         }
                     }
                     None => {
-                        used = level0(&view);
+                        used = level0(None);
                         self.parts.push((0..d.mesh.index_count, used));
                     }
                 }
@@ -805,13 +804,36 @@ impl FrameView {
 struct StageMap {
     uv: UvSource,
     texels: (f32, f32),
+    /// On a dome, under the mesh or the Quake mapping: the peak density over each ring of
+    /// triangles (top first), which does not depend on the view (the Quake mapping's takes a
+    /// dense search: computed once, not every frame).
+    ring_peaks: Vec<f32>,
 }
 
 impl StageMap {
     /// None for a stage without a texture of its own (the gradient: one texel wide, no levels).
-    fn of(stage: &crate::sky::resolved::Stage) -> Option<Self> {
+    fn of(stage: &crate::sky::resolved::Stage, shape: &Shape) -> Option<Self> {
         let t = stage.texture.as_ref()?;
-        Some(Self { uv: stage.uv, texels: (t.width as f32 * stage.uv_scale[0].abs(), t.height as f32 * stage.uv_scale[1].abs()) })
+        let mut map = Self { uv: stage.uv, texels: (t.width as f32 * stage.uv_scale[0].abs(), t.height as f32 * stage.uv_scale[1].abs()), ring_peaks: Vec::new() };
+        if let (UvSource::Mesh | UvSource::Quake { .. }, Some((top_deg, bottom_deg, rings, _))) = (stage.uv, super::mesh::dome_grid(shape)) {
+            map.ring_peaks = (0..rings)
+                .map(|r| {
+                    let (a, b) = (top_deg + (bottom_deg - top_deg) * r as f32 / rings as f32, top_deg + (bottom_deg - top_deg) * (r + 1) as f32 / rings as f32);
+                    // A view of just this ring (neither mapping looks at the sun or the frame).
+                    map.peak_texels_per_deg(shape, &FrameView { elevation_deg: (a.min(b), a.max(b)), sun_max_deg: 180.0, half_fov_y: 0.0 })
+                })
+                .collect();
+        }
+        Some(map)
+    }
+
+    /// [`Self::peak_texels_per_deg`] over ring `ring` of a dome's triangles (all of it, where the
+    /// frame shows part: as high or higher), or over what `view` shows of the shape.
+    fn peak(&self, shape: &Shape, ring: Option<usize>, view: &FrameView) -> f32 {
+        match ring.and_then(|r| self.ring_peaks.get(r)) {
+            Some(&peak) => peak,
+            None => self.peak_texels_per_deg(shape, view),
+        }
     }
 
     /// The most texels of this stage that one degree of view direction crosses anywhere `view`
@@ -999,7 +1021,7 @@ impl SkyObjectDraws {
                             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                             mapped_at_creation: false,
                         });
-                        let maps: [Option<StageMap>; MAX_STAGES] = std::array::from_fn(|k| v.stages.get(k).and_then(StageMap::of));
+                        let maps: [Option<StageMap>; MAX_STAGES] = std::array::from_fn(|k| v.stages.get(k).and_then(|s| StageMap::of(s, &v.shape)));
                         let level0_able = (0..MAX_STAGES).filter(|&k| maps[k].is_some()).fold(0u8, |m, k| m | 1 << k);
                         // One bind group per subset of those stages, indexed by the subset's mask (a
                         // mask that is no subset is never indexed, and gets its subset's), so that
