@@ -246,19 +246,8 @@ impl ReducedLayersPass {
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> u32 {
         let (Some(out), Some(lower), Some(upper)) = (&self.combined, self.buffers.first(), self.buffers.get(1)) else { return 0 };
-        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("ReducedLayers::combine"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &out.view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        // Every pixel is written: the clear colour does not matter.
+        let mut rpass = self.begin_into(encoder, out, "ReducedLayers::combine", timestamp_writes);
         rpass.set_pipeline(self.combine.for_target(target));
         rpass.set_bind_group(0, globals, &[]);
         rpass.set_bind_group(1, &lower.bind_group, &[]);
@@ -270,9 +259,19 @@ impl ReducedLayersPass {
     /// Begins the render pass that draws run `run` into its buffer (cleared to nothing in front:
     /// colour 0, transmittance 1), its viewport the whole buffer.
     pub fn begin<'e>(&self, encoder: &'e mut wgpu::CommandEncoder, run: usize, timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>) -> Option<wgpu::RenderPass<'e>> {
-        let buffer = self.buffers.get(run)?;
+        Some(self.begin_into(encoder, self.buffers.get(run)?, "ReducedLayers::run", timestamp_writes))
+    }
+
+    /// A render pass into `buffer`, cleared to nothing in front, its viewport the whole buffer.
+    fn begin_into<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        buffer: &RunBuffer,
+        label: &str,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) -> wgpu::RenderPass<'e> {
         let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("ReducedLayers::run"),
+            label: Some(label),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view: &buffer.view,
                 depth_slice: None,
@@ -286,7 +285,7 @@ impl ReducedLayersPass {
         });
         let (w, h) = Self::buffer_size(self.made_for.0, buffer.divisor);
         rpass.set_viewport(0.0, 0.0, w as f32, h as f32, 0.0, 1.0);
-        Some(rpass)
+        rpass
     }
 }
 
@@ -381,11 +380,7 @@ impl ReducedLayersPass {
     /// background (see [`Self::draw_background`]). What lies between the two runs in the sky
     /// phase (billboards) is drawn afterwards under the upper run's transmittance and colour.
     pub fn draw_pair_background(&self, rpass: &mut wgpu::RenderPass<'_>, target: Target) -> u32 {
-        let Some(buffer) = &self.combined else { return 0 };
-        rpass.set_pipeline(&self.pipelines.for_target(target)[1]);
-        rpass.set_bind_group(1, &buffer.bind_group, &[]);
-        rpass.draw(0..3, 0..1);
-        1
+        self.draw_as_background(rpass, self.combined.as_ref(), target)
     }
 
     /// Draws run `run` as the frame's background, into the scene's pass before the scene: the
@@ -393,7 +388,12 @@ impl ReducedLayersPass {
     /// run's colour, and the scene drawn next covers what it hides. A full-screen pass without
     /// blending or depth test costs a software rasteriser about half a blended, tested one.
     pub fn draw_background(&self, rpass: &mut wgpu::RenderPass<'_>, run: usize, target: Target) -> u32 {
-        let Some(buffer) = self.buffers.get(run) else { return 0 };
+        self.draw_as_background(rpass, self.buffers.get(run), target)
+    }
+
+    /// Writes `buffer`'s colour over the frame (the background pipeline); 0 draws without it.
+    fn draw_as_background(&self, rpass: &mut wgpu::RenderPass<'_>, buffer: Option<&RunBuffer>, target: Target) -> u32 {
+        let Some(buffer) = buffer else { return 0 };
         rpass.set_pipeline(&self.pipelines.for_target(target)[1]);
         rpass.set_bind_group(1, &buffer.bind_group, &[]);
         rpass.draw(0..3, 0..1);
