@@ -111,9 +111,9 @@ struct Chunk {
 /// Whether a world-space box lies wholly outside one plane of the clip volume (wgpu's: depth 0
 /// to w): then none of it can reach a pixel, so culling it changes nothing drawn.
 fn outside_frustum(clip_from_world: &glam::Mat4, (lo, hi): (glam::Vec3, glam::Vec3)) -> bool {
-    let corners = (0..8)
-        .map(|k| clip_from_world.mul_vec4(glam::Vec4::new(if k & 1 == 0 { lo.x } else { hi.x }, if k & 2 == 0 { lo.y } else { hi.y }, if k & 4 == 0 { lo.z } else { hi.z }, 1.0)));
-    let corners: Vec<glam::Vec4> = corners.collect();
+    let corners: [glam::Vec4; 8] = std::array::from_fn(|k| {
+        clip_from_world.mul_vec4(glam::Vec4::new(if k & 1 == 0 { lo.x } else { hi.x }, if k & 2 == 0 { lo.y } else { hi.y }, if k & 4 == 0 { lo.z } else { hi.z }, 1.0))
+    });
     let planes: [fn(&glam::Vec4) -> bool; 6] = [|c| c.x < -c.w, |c| c.x > c.w, |c| c.y < -c.w, |c| c.y > c.w, |c| c.z < 0.0, |c| c.z > c.w];
     planes.iter().any(|outside| corners.iter().all(outside))
 }
