@@ -146,3 +146,41 @@ fn joined_runs_give_the_same_picture_with_one_composite_less() {
         assert!(d.differing < 0.001, "{what}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
     }
 }
+
+#[test]
+fn additive_draws_under_the_background_give_the_same_picture() {
+    // The skydome's fine stars, the shooting stars and the star field right after the
+    // background: drawn first onto the cleared frame, the background composited over them,
+    // against the same draws depth-tested in the sky phase. Looking up (no scene in view: there
+    // they go first) and at the horizon (the scene in view: they stay in the sky phase).
+    let mut sky = default_sky();
+    if let Some(e) = sky.emitters.iter_mut().find(|e| e.name == "shooting_stars") {
+        e.rate = 200.0;
+        e.max_particles = 1000;
+    }
+    let mut h = common::headless(640, 360);
+    h.set_sky(&sky).expect("uploaded");
+    let mut lut = FrameInput::new(22.0, 0.2);
+    lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
+    let up = Camera { pitch_deg: 60.0, ..Camera::default() };
+    for (what, input, camera, goes_first) in [
+        ("night, looking up", FrameInput::new(23.0, 0.0), up, true),
+        ("night under clouds, looking up", FrameInput::new(2.0, 0.4), Camera { yaw_deg: 120.0, ..up }, true),
+        ("dusk, looking up", FrameInput::new(18.5, 0.3), up, true),
+        ("lut on the HDR target, looking up", lut, up, true),
+        ("night, horizon", FrameInput::new(23.0, 0.0), Camera { pitch_deg: 10.0, ..Camera::default() }, false),
+    ] {
+        for join_runs in [true, false] {
+            let first = RenderOptions { glare: false, join_runs, ..Default::default() };
+            let one = h.render(&sky, &input, &camera, &first).expect("rendered");
+            let drawn_first = h.renderer.stats.drawn_first;
+            assert_eq!(drawn_first > 0, goes_first, "{what}, joined {join_runs}: {drawn_first} draws first ({:?})", h.renderer.stats);
+            let two = h.render(&sky, &input, &camera, &RenderOptions { additive_first: false, ..first }).expect("rendered");
+            assert_eq!(h.renderer.stats.drawn_first, 0);
+            // The same sums in another order: rounding of the 8-bit target (and of the
+            // combination's transmittance) moves a level or two.
+            let (d, _) = common::diff(&one, &two, 2);
+            assert!(d.differing < 0.001, "{what}, joined {join_runs}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
+        }
+    }
+}

@@ -539,6 +539,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
             if runs.is_empty() { "none".into() } else { runs.join(", ") }
         ));
         ui.checkbox(&mut c.options.join_runs, format!("join the first two runs ({} composites)", s.composites));
+        ui.checkbox(&mut c.options.additive_first, format!("additive draws under the background ({})", s.drawn_first));
     });
     let median = |v: &VecDeque<f32>| {
         let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();

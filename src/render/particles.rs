@@ -118,7 +118,14 @@ pub fn sampler(device: &wgpu::Device, label: &str) -> wgpu::Sampler {
 
 /// Alpha and additive pipelines of a particle shader (`name`), depth-tested, never writing depth.
 pub fn build_pipelines(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, name: &str, label: &str) -> RenderResult<[wgpu::RenderPipeline; 2]> {
-    let [alpha, additive] = build_entries(b, layout, name, label, [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", super::ADDITIVE_ALPHA, "additive")])?;
+    let [alpha, additive] = build_entries(
+        b,
+        layout,
+        name,
+        label,
+        [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", super::ADDITIVE_ALPHA, "additive")],
+        wgpu::CompareFunction::Less,
+    )?;
     Ok([alpha, additive])
 }
 
@@ -129,6 +136,7 @@ fn build_entries<const N: usize>(
     name: &str,
     label: &str,
     entries: [(&str, wgpu::BlendState, &str); N],
+    compare: wgpu::CompareFunction,
 ) -> RenderResult<[wgpu::RenderPipeline; N]> {
     let (device, format) = (b.device, b.color_format);
     let module = shaders::module(device, b.library, name)?;
@@ -151,7 +159,7 @@ fn build_entries<const N: usize>(
                     compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
-                depth_stencil: super::depth_state(false, wgpu::CompareFunction::Less),
+                depth_stencil: super::depth_state(false, compare),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
@@ -190,6 +198,8 @@ pub struct ParticlesPass {
     /// Alpha and additive, drawn after the run of reduced layers above them
     /// ([`Pass::draw_under_run`]).
     under_run: Pipelines<[wgpu::RenderPipeline; 2]>,
+    /// Additive, drawn first under the background, not depth-tested ([`Pass::draw_first`]).
+    first: Pipelines<[wgpu::RenderPipeline; 1]>,
     set: Staged<Option<EmitterSet>>,
     /// The flash's one instance.
     flash: EmitterGpu,
@@ -208,14 +218,18 @@ impl ParticlesPass {
         });
         // The flash covers the screen: its own entry point keeps the shapes' branches, which a
         // SIMD rasteriser would run for every pixel, out of it.
-        let pipeline = Pipelines::new_render(b, pipeline_layout, |b, l| {
+        let pipeline = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| {
             build_entries(
                 b,
                 l,
                 "particles",
                 "Particles::pipeline",
                 [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", super::ADDITIVE_ALPHA, "additive"), ("fs_flash", super::ADDITIVE_ALPHA, "flash")],
+                wgpu::CompareFunction::Less,
             )
+        })?;
+        let first = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| {
+            build_entries(b, l, "particles", "Particles::first_pipeline", [("fs_main", super::ADDITIVE_ALPHA, "additive")], wgpu::CompareFunction::Always)
         })?;
         let run_layout = super::reduced_layers::run_layout(b.device, "Particles::run_layout");
         let under_layout = b.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -226,7 +240,8 @@ impl ParticlesPass {
         let under_run = Pipelines::new_render(b, under_layout, |b, l| {
             // Premultiplied by the shader (fs_alpha_under_run).
             let over = wgpu::BlendState { color: wgpu::BlendComponent::OVER, alpha: wgpu::BlendComponent::OVER };
-            build_entries(b, l, "particles", "Particles::under_run_pipeline", [("fs_alpha_under_run", over, "alpha"), ("fs_main_under_run", super::ADDITIVE_ALPHA, "additive")])
+            let entries = [("fs_alpha_under_run", over, "alpha"), ("fs_main_under_run", super::ADDITIVE_ALPHA, "additive")];
+            build_entries(b, l, "particles", "Particles::under_run_pipeline", entries, wgpu::CompareFunction::Less)
         })?;
         let sampler = sampler(b.device, "Particles::sampler");
         // The flash's bind group: its texture is never sampled (fs_flash).
@@ -240,7 +255,7 @@ impl ParticlesPass {
             ],
         });
         let flash = EmitterGpu { name: "flash".into(), bind_group, additive: true, buffer: None, count: 0, camera: false, priority: 63 };
-        Ok(Self { bind_layout, sampler, pipeline, under_run, set: Staged::new(None), flash, alive: 0 })
+        Ok(Self { bind_layout, sampler, pipeline, under_run, first, set: Staged::new(None), flash, alive: 0 })
     }
 }
 
@@ -255,12 +270,14 @@ impl Pass for ParticlesPass {
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
         self.pipeline.stage(b)?;
-        self.under_run.stage(b)
+        self.under_run.stage(b)?;
+        self.first.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipeline.commit(accept);
         self.under_run.commit(accept);
+        self.first.commit(accept);
     }
 
     fn stage_sky(&mut self, up: &mut SkyUpload<'_>) {
@@ -315,6 +332,15 @@ impl Pass for ParticlesPass {
         let Some(g) = self.set.current.as_ref().and_then(|s| s.emitters.get(key)) else { return 0 };
         rpass.set_bind_group(2, run, &[]);
         draw_emitter(rpass, [alpha, additive], g)
+    }
+
+    fn can_draw_first(&self, key: usize, _target: Target) -> bool {
+        self.set.current.as_ref().and_then(|s| s.emitters.get(key)).is_some_and(|g| g.additive)
+    }
+
+    fn draw_first(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
+        let [additive] = self.first.for_target(target);
+        self.set.current.as_ref().and_then(|s| s.emitters.get(key)).filter(|g| g.additive).map_or(0, |g| draw_emitter(rpass, [additive, additive], g))
     }
 
     fn stats(&self, stats: &mut FrameStats) {

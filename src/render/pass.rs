@@ -263,6 +263,18 @@ pub trait Pass: Any {
         0
     }
 
+    /// Whether [`Pass::draw_first`] can draw additive item `key` this frame.
+    fn can_draw_first(&self, _key: usize, _target: Target) -> bool {
+        false
+    }
+
+    /// Records additive item `key` onto the cleared frame, before the background run is
+    /// composited over it ([`super::RenderOptions::additive_first`]): without depth test, since
+    /// the scene drawn afterwards covers what it hides. Adding onto black is writing.
+    fn draw_first(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target) -> u32 {
+        0
+    }
+
     /// Records one item into the compute phase.
     fn dispatch(&self, _cpass: &mut wgpu::ComputePass<'_>, _key: usize) {}
 

@@ -113,9 +113,11 @@ struct RunBuffer {
 /// The reduced buffers of a frame size and the composite pipelines.
 pub struct ReducedLayersPass {
     layout: wgpu::BindGroupLayout,
-    /// The composite (blended over the frame, depth-tested), and the background (the first run
-    /// of a frame, drawn before the scene: replacing the clear, neither blended nor tested).
-    pipelines: Pipelines<[wgpu::RenderPipeline; 2]>,
+    /// The composite (blended over the frame, depth-tested); the background (the first run of
+    /// a frame, drawn before the scene: replacing the clear, neither blended nor tested); and the
+    /// background over additive draws already on the frame (blended, not tested), of one run and
+    /// of the joined pair (whose combination holds the upper run's transmittance).
+    pipelines: Pipelines<[wgpu::RenderPipeline; 4]>,
     /// Combines two runs into one buffer, the upper over the lower (runs joined across the
     /// billboards between them: [`ReducedLayersPass::record_combined`]).
     combine: Pipelines<wgpu::RenderPipeline>,
@@ -163,11 +165,15 @@ impl ReducedLayersPass {
         Ok(Self { layout, pipelines, combine, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new(), combined: None })
     }
 
-    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 2]> {
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 4]> {
         let module = shaders::module(b.device, b.library, "reduced_layers")?;
+        let always = wgpu::CompareFunction::Always;
         Ok([
             full_screen_pipeline(b, layout, &module, "ReducedLayers::pipeline", "fs_main", Some(COMPOSITE_BLEND), wgpu::CompareFunction::Less)?,
-            full_screen_pipeline(b, layout, &module, "ReducedLayers::background_pipeline", "fs_background", None, wgpu::CompareFunction::Always)?,
+            full_screen_pipeline(b, layout, &module, "ReducedLayers::background_pipeline", "fs_background", None, always)?,
+            // Over what the frame holds: a run's own transmittance is not what lies under it.
+            full_screen_pipeline(b, layout, &module, "ReducedLayers::background_over_pipeline", "fs_background", Some(COMPOSITE_BLEND), always)?,
+            full_screen_pipeline(b, layout, &module, "ReducedLayers::pair_background_over_pipeline", "fs_main", Some(COMPOSITE_BLEND), always)?,
         ])
     }
 
@@ -379,22 +385,26 @@ impl ReducedLayersPass {
     /// Draws the combination of runs 0 and 1 ([`Self::record_combined`]) as the frame's
     /// background (see [`Self::draw_background`]). What lies between the two runs in the sky
     /// phase (billboards) is drawn afterwards under the upper run's transmittance and colour.
-    pub fn draw_pair_background(&self, rpass: &mut wgpu::RenderPass<'_>, target: Target) -> u32 {
-        self.draw_as_background(rpass, self.combined.as_ref(), target)
+    /// `over`: composited over additive draws already on the frame, which lie under the upper
+    /// run.
+    pub fn draw_pair_background(&self, rpass: &mut wgpu::RenderPass<'_>, target: Target, over: bool) -> u32 {
+        self.draw_as_background(rpass, self.combined.as_ref(), target, if over { 3 } else { 1 })
     }
 
     /// Draws run `run` as the frame's background, into the scene's pass before the scene: the
     /// target holds only its clear colour (black) then, so compositing over it is writing the
     /// run's colour, and the scene drawn next covers what it hides. A full-screen pass without
     /// blending or depth test costs a software rasteriser about half a blended, tested one.
-    pub fn draw_background(&self, rpass: &mut wgpu::RenderPass<'_>, run: usize, target: Target) -> u32 {
-        self.draw_as_background(rpass, self.buffers.get(run), target)
+    /// `over`: added to additive draws already on the frame, which lie on top of the run.
+    pub fn draw_background(&self, rpass: &mut wgpu::RenderPass<'_>, run: usize, target: Target, over: bool) -> u32 {
+        self.draw_as_background(rpass, self.buffers.get(run), target, if over { 2 } else { 1 })
     }
 
-    /// Writes `buffer`'s colour over the frame (the background pipeline); 0 draws without it.
-    fn draw_as_background(&self, rpass: &mut wgpu::RenderPass<'_>, buffer: Option<&RunBuffer>, target: Target) -> u32 {
+    /// Writes `buffer`'s colour over the frame with background pipeline `pipeline`; 0 draws
+    /// without it.
+    fn draw_as_background(&self, rpass: &mut wgpu::RenderPass<'_>, buffer: Option<&RunBuffer>, target: Target, pipeline: usize) -> u32 {
         let Some(buffer) = buffer else { return 0 };
-        rpass.set_pipeline(&self.pipelines.for_target(target)[1]);
+        rpass.set_pipeline(&self.pipelines.for_target(target)[pipeline]);
         rpass.set_bind_group(1, &buffer.bind_group, &[]);
         rpass.draw(0..3, 0..1);
         1

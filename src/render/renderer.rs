@@ -41,11 +41,26 @@ pub struct RenderOptions {
     /// are composited at once, and the billboards between them drawn afterwards, corrected by
     /// the upper run (the same picture, one full-screen pass less). Off: one composite per run.
     pub join_runs: bool,
+    /// With the first run of dome layers as the frame's background: the additive draws that
+    /// follow it (the skydome's fine stars, the star field) go first onto the cleared frame,
+    /// neither depth-tested nor corrected by a run, and the background is composited over them
+    /// (the same sums; the scene drawn next covers what it hides). Off: drawn in the sky phase,
+    /// depth-tested, each sampling the run above it.
+    pub additive_first: bool,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { scene: true, depth_split: true, glare: true, occluder: None, skips: Skips::default(), dome_resolution: DomeResolution::default(), join_runs: true }
+        Self {
+            scene: true,
+            depth_split: true,
+            glare: true,
+            occluder: None,
+            skips: Skips::default(),
+            dome_resolution: DomeResolution::default(),
+            join_runs: true,
+            additive_first: true,
+        }
     }
 }
 
@@ -59,7 +74,8 @@ pub struct Skips {
     /// The `lut` tables and the sky-view map are not recomputed while nothing they depend on moved.
     pub unchanged_tables: bool,
     /// With the main scene drawn, billboards and quads entirely below the horizon (by more than
-    /// [`SCENE_COVERS_BELOW_DEG`]) are not drawn: the scene covers that part of the sky.
+    /// [`SCENE_COVERS_BELOW_DEG`]) are not drawn, nor the rows of dome triangles there: the
+    /// scene covers that part of the sky.
     pub below_horizon: bool,
     /// Dome layers whose band of elevations the frame does not show (a fog band under a view
     /// of the zenith) are not drawn, nor composited; nor are the parts of the main-scene
@@ -109,6 +125,8 @@ pub struct FrameStats {
     /// Full-screen composites of those runs (the background included): one less than the runs
     /// when the first two are joined ([`RenderOptions::join_runs`]).
     pub composites: u32,
+    /// Additive draws put under the background ([`RenderOptions::additive_first`]).
+    pub drawn_first: u32,
     /// The star field was not drawn: transparent this frame.
     pub stars_skipped: bool,
     /// The `lut` tables were not rebuilt: nothing they depend on moved.
@@ -300,6 +318,7 @@ impl SkyRenderer {
     /// Call [`Self::after_submit`] once the encoder is submitted.
     pub fn render(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &RenderTarget<'_>, frame: &FrameSky, camera: &Camera, options: &RenderOptions) {
         let (w, h) = target.size;
+        let (wf, hf) = (w as f32, h as f32);
         let kind = if self.has_sky && frame.sky_model.kind.is_physical() { Target::Hdr } else { Target::Display };
         let globals = Globals::new(frame, camera, w, h, kind);
         ctx.queue.write_buffer(&self.globals.buffer, 0, bytemuck::bytes_of(&globals));
@@ -352,6 +371,19 @@ impl SkyRenderer {
         stats.composites = runs.len() as u32 - u32::from(joined);
         // Joined runs are combined at the finer one's resolution first.
         let combined = joined.then(|| divisors[0].min(divisors[1]));
+        // The additive draws right after the background go under it, first onto the cleared
+        // frame: items `first` of the sky phase. Not where the scene covers part of the frame:
+        // they would pay for its pixels, which the depth test spares them in the sky phase.
+        let scene_in_view = options.scene && camera.elevation_range_deg(wf / hf.max(1.0)).0 < -SCENE_COVERS_BELOW_DEG;
+        let first = match runs.first() {
+            Some(&(_, start)) if background && options.additive_first && !scene_in_view => {
+                let limit = runs.get(1).map_or(sky_items.len(), |r| r.0);
+                let end = (start..limit).find(|&k| !(sky_items[k].1.additive && self.passes[sky_items[k].0].can_draw_first(sky_items[k].1.key, kind))).unwrap_or(limit);
+                start..end
+            }
+            _ => 0..0,
+        };
+        stats.drawn_first = first.len() as u32;
         if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
             layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors, combined);
         }
@@ -359,7 +391,6 @@ impl SkyRenderer {
         if let Some(t) = self.timer.as_mut() {
             t.begin_frame();
         }
-        let (wf, hf) = (w as f32, h as f32);
         let split = options.depth_split;
         for phase in Phase::ALL {
             let list = &items[phase.index()];
@@ -436,12 +467,21 @@ impl SkyRenderer {
                     };
                     rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
                     if let (Phase::Scene, true, Some(layers)) = (phase, background, self.pass::<ReducedLayersPass>()) {
-                        stats.draw_calls += if joined { layers.draw_pair_background(&mut rpass, kind) } else { layers.draw_background(&mut rpass, 0, kind) };
+                        for (i, it) in &items[Phase::Sky.index()][first.clone()] {
+                            stats.draw_calls += self.passes[*i].draw_first(&mut rpass, it.key, kind);
+                        }
+                        let over = !first.is_empty();
+                        stats.draw_calls += if joined { layers.draw_pair_background(&mut rpass, kind, over) } else { layers.draw_background(&mut rpass, 0, kind, over) };
                     }
                     let upper_run = self.pass::<ReducedLayersPass>().and_then(|l| l.run_bind_group(1)).filter(|_| joined);
                     if draws_here {
                         let mut k = 0;
                         while k < list.len() {
+                            // Already under the background.
+                            if phase == Phase::Sky && k == first.start && !first.is_empty() {
+                                k = first.end;
+                                continue;
+                            }
                             if let (Phase::Sky, Some(r), Some(rp)) = (phase, runs.iter().position(|&(start, _)| start == k), reduced_pass) {
                                 // The background run (or two) is already in the frame.
                                 if !(background && r == 0 || joined && r == 1) {

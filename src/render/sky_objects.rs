@@ -176,9 +176,21 @@ struct VariantKey {
     tone: u32,
     /// Drawn into a reduced-resolution buffer ([`super::reduced_layers`]).
     reduced: bool,
-    /// Drawn on the frame after a run of reduced layers that lies above it, corrected by that
-    /// run's colour and transmittance (`UNDER_RUN` in the shader).
-    under_run: bool,
+    /// Where on the frame it goes ([`Placement::Plain`] for reduced draws).
+    placement: Placement,
+}
+
+/// Where a draw on the frame goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+enum Placement {
+    /// In its place in the sky phase, depth-tested against the scene.
+    Plain,
+    /// After a run of reduced layers that lies above it, corrected by that run's colour and
+    /// transmittance (`UNDER_RUN` in the shader).
+    UnderRun,
+    /// Additive, first onto the cleared frame under the background run, not depth-tested
+    /// ([`super::RenderOptions::additive_first`]).
+    First,
 }
 
 impl VariantKey {
@@ -201,7 +213,7 @@ impl VariantKey {
             target,
             tone,
             reduced: false,
-            under_run: false,
+            placement: Placement::Plain,
         }
     }
 
@@ -218,7 +230,7 @@ impl VariantKey {
             ("LIGHTING", f64::from(self.lighting)),
             ("TARGET_KIND", if self.target == Target::Hdr { 2.0 } else { 1.0 }),
             ("TONE_KIND", f64::from(self.tone)),
-            ("UNDER_RUN", f64::from(u8::from(self.under_run))),
+            ("UNDER_RUN", f64::from(u8::from(self.placement == Placement::UnderRun))),
             ("BLEND_KIND", self.blend as f64),
         ];
         for k in 0..4 {
@@ -396,7 +408,7 @@ impl SkyObjectsPass {
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<SkyObjectPipelines> {
         let module = shaders::module(b.device, b.library, "sky_objects")?;
         let names = ["SkyObjects::pipeline_opaque", "SkyObjects::pipeline_alpha", "SkyObjects::pipeline_additive"];
-        let one = |i: usize| create_pipeline(b.device, layout, &module, names[i], (BLENDS[i], b.color_format, true), &b.target_constants());
+        let one = |i: usize| create_pipeline(b.device, layout, &module, names[i], (BLENDS[i], b.color_format, Some(wgpu::CompareFunction::Less)), &b.target_constants());
         Ok(SkyObjectPipelines { generic: [one(0)?, one(1)?, one(2)?], module })
     }
 
@@ -407,24 +419,35 @@ impl SkyObjectsPass {
     }
 
     /// The pipeline signature of draw `e` this frame, if its version was prepared for `target`.
-    fn entry_key(&self, e: &Visible, target: Target, under_run: bool) -> Option<VariantKey> {
+    fn entry_key(&self, e: &Visible, target: Target, placement: Placement) -> Option<VariantKey> {
         let k = self.keys.get(&(e.index, e.version)).filter(|k| k.target == target)?;
         let live = std::array::from_fn(|s| k.live[s] && e.part[s]);
         let view_stage = if (k.view_stage as usize) < 4 && !e.part[k.view_stage as usize] { NO_STAGE } else { k.view_stage };
         let blend = if e.on_top { BLEND_ADD } else { k.blend };
-        Some(VariantKey { live, view_stage, blend, reduced: e.reduced, under_run: under_run && !e.reduced, ..*k })
+        let placement = if e.reduced { Placement::Plain } else { placement };
+        Some(VariantKey { live, view_stage, blend, reduced: e.reduced, placement, ..*k })
+    }
+
+    /// Whether draw `e` adds to the frame (its blend, or the fine terms of a split layer).
+    fn additive(&self, e: &Visible) -> bool {
+        e.on_top || self.draws.current.as_ref().is_some_and(|d| d.objects[e.index][e.version].blend == BlendMode::Additive)
+    }
+
+    /// Whether draw `key` has a pipeline for `placement` on the frame this frame.
+    fn can_place(&self, key: usize, target: Target, placement: Placement) -> bool {
+        self.visible.get(key).and_then(|e| self.entry_key(e, target, placement)).is_some_and(|k| k.placement == placement && self.variants.get(&k).is_some_and(Option::is_some))
     }
 
     /// Records draw `key` into the frame's target or, `reduced`, into a reduced-resolution
     /// buffer; returns draw calls.
-    fn record(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, reduced: bool, under_run: Option<&wgpu::BindGroup>) -> u32 {
+    fn record(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, reduced: bool, (placement, under_run): (Placement, Option<&wgpu::BindGroup>)) -> u32 {
         let (Some(draws), Some(e)) = (&self.draws.current, self.visible.get(key)) else { return 0 };
         let d = &draws.objects[e.index][e.version];
-        let specialised = self.entry_key(e, target, under_run.is_some()).and_then(|k| self.variants.get(&k)).and_then(Option::as_ref);
+        let specialised = self.entry_key(e, target, placement).and_then(|k| self.variants.get(&k)).and_then(Option::as_ref);
         let pipeline = match specialised {
             Some(p) => p,
-            // The generic pipeline draws every term: only right for whole draws on the frame.
-            None if !reduced && under_run.is_none() && e.part == [true; 4] && !e.on_top => &self.pipelines.for_target(target).generic[blend_index(d.blend)],
+            // The generic pipeline draws every term: only right for whole draws in their place.
+            None if !reduced && placement == Placement::Plain && e.part == [true; 4] && !e.on_top => &self.pipelines.for_target(target).generic[blend_index(d.blend)],
             // Building it failed and was logged.
             None => return 0,
         };
@@ -446,10 +469,12 @@ impl SkyObjectsPass {
     }
 
     /// Builds the specialised pipelines this frame's draws need and do not have yet.
-    fn build_variants(&mut self, device: &wgpu::Device, target: Target, under_runs: bool) {
+    fn build_variants(&mut self, device: &wgpu::Device, target: Target, runs: bool) {
         for e in &self.visible {
-            // Drawn as it is, and (on the frame) possibly after the run above it.
-            let wanted = [self.entry_key(e, target, false), self.entry_key(e, target, under_runs).filter(|k| k.under_run)];
+            // Drawn as it is, and (on the frame, with runs) possibly after the run above it, or
+            // first under the background when additive.
+            let placed = |p: Placement, wanted: bool| self.entry_key(e, target, p).filter(|k| wanted && k.placement == p);
+            let wanted = [self.entry_key(e, target, Placement::Plain), placed(Placement::UnderRun, runs), placed(Placement::First, runs && self.additive(e))];
             for key in wanted.into_iter().flatten() {
                 if self.variants.contains_key(&key) {
                     continue;
@@ -460,13 +485,20 @@ impl SkyObjectsPass {
                     (false, Target::Hdr) => super::HDR_FORMAT,
                     (false, Target::Display) => self.display_format,
                 };
-                let blend = match (key.reduced, key.under_run) {
+                let blend = match (key.reduced, key.placement) {
                     (true, _) => Some(super::reduced_layers::REDUCED_BLENDS[key.blend]),
-                    (false, true) => UNDER_RUN_BLENDS[key.blend],
-                    (false, false) => BLENDS[key.blend],
+                    (false, Placement::UnderRun) => UNDER_RUN_BLENDS[key.blend],
+                    (false, Placement::Plain | Placement::First) => BLENDS[key.blend],
+                };
+                // Reduced buffers have no depth: the composite is depth-tested instead. Draws
+                // under the background come before the scene, which covers what they hide.
+                let depth = match (key.reduced, key.placement) {
+                    (true, _) => None,
+                    (false, Placement::First) => Some(wgpu::CompareFunction::Always),
+                    (false, _) => Some(wgpu::CompareFunction::Less),
                 };
                 let label = format!("SkyObjects::pipeline {key:?}");
-                let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, (blend, format, !key.reduced), &constants);
+                let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, (blend, format, depth), &constants);
                 if let Err(e) = &built {
                     log::error!("{label}: {e}; the generic pipeline draws this material whole on the frame, reduced or split parts are not drawn");
                 }
@@ -482,7 +514,7 @@ fn create_pipeline(
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     label: &str,
-    (blend, format, depth): (Option<wgpu::BlendState>, wgpu::TextureFormat, bool),
+    (blend, format, depth): (Option<wgpu::BlendState>, wgpu::TextureFormat, Option<wgpu::CompareFunction>),
     constants: &[(&str, f64)],
 ) -> RenderResult<wgpu::RenderPipeline> {
     let options = wgpu::PipelineCompilationOptions { constants, zero_initialize_workgroup_memory: true };
@@ -492,8 +524,7 @@ fn create_pipeline(
             layout: Some(layout),
             vertex: wgpu::VertexState { module, entry_point: Some("vs_main"), buffers: &[Some(SkyVertex::LAYOUT)], compilation_options: options.clone() },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            // Reduced buffers have no depth: the composite is depth-tested instead.
-            depth_stencil: if depth { super::depth_state(false, wgpu::CompareFunction::Less) } else { None },
+            depth_stencil: depth.and_then(|compare| super::depth_state(false, compare)),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module,
@@ -639,6 +670,9 @@ impl Pass for SkyObjectsPass {
         self.parts.clear();
         if cx.options.skips.unneeded_mips {
             let view = FrameView::new(cx.camera, cx.aspect(), (lowest_deg, highest_deg), cx.frame.towards_sun);
+            // Drawn or not, the scene's pixels there are the scene's (reduced buffers keep their
+            // clear colour there, too far below the scene's edge for the upsampling to reach).
+            let covered_below_deg = if cx.options.scene && cx.options.skips.below_horizon { -super::renderer::SCENE_COVERS_BELOW_DEG } else { f32::NEG_INFINITY };
             for e in &mut self.visible {
                 let d = &draws.objects[e.index][e.version];
                 // Frame pixels per degree at the frame's centre (the fewest: a perspective frame
@@ -657,8 +691,9 @@ impl Pass for SkyObjectsPass {
                         for r in 0..rings {
                             let (a, b) = (top_deg + (bottom_deg - top_deg) * r as f32 / rings as f32, top_deg + (bottom_deg - top_deg) * (r + 1) as f32 / rings as f32);
                             let (ring_lo, ring_hi) = (a.min(b), a.max(b));
-                            // With the margin of the chords' sag (tests in mesh.rs).
-                            if ring_lo - 0.5 > highest_deg || ring_hi + 0.5 < lowest_deg {
+                            // With the margin of the chords' sag (tests in mesh.rs); rings the
+                            // scene covers whole are left out too.
+                            if ring_lo - 0.5 > highest_deg || ring_hi + 0.5 < lowest_deg.max(covered_below_deg) {
                                 continue;
                             }
                             let mask = level0(Some(r as usize));
@@ -690,24 +725,31 @@ impl Pass for SkyObjectsPass {
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
-        let additive = |e: &Visible| e.on_top || self.draws.current.as_ref().is_some_and(|d| d.objects[e.index][e.version].blend == BlendMode::Additive);
-        out.extend(self.visible.iter().enumerate().map(|(key, e)| DrawItem { priority: e.priority, key, reduced: e.reduced, additive: additive(e), divisor: e.divisor }));
+        out.extend(self.visible.iter().enumerate().map(|(key, e)| DrawItem { priority: e.priority, key, reduced: e.reduced, additive: self.additive(e), divisor: e.divisor }));
     }
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        self.record(rpass, key, target, false, None)
+        self.record(rpass, key, target, false, (Placement::Plain, None))
     }
 
     fn draw_reduced(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        self.record(rpass, key, target, true, None)
+        self.record(rpass, key, target, true, (Placement::Plain, None))
     }
 
     fn can_draw_under_run(&self, key: usize, target: Target) -> bool {
-        self.visible.get(key).and_then(|e| self.entry_key(e, target, true)).is_some_and(|k| k.under_run && self.variants.get(&k).is_some_and(Option::is_some))
+        self.can_place(key, target, Placement::UnderRun)
     }
 
     fn draw_under_run(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, run: &wgpu::BindGroup) -> u32 {
-        self.record(rpass, key, target, false, Some(run))
+        self.record(rpass, key, target, false, (Placement::UnderRun, Some(run)))
+    }
+
+    fn can_draw_first(&self, key: usize, target: Target) -> bool {
+        self.can_place(key, target, Placement::First)
+    }
+
+    fn draw_first(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
+        self.record(rpass, key, target, false, (Placement::First, None))
     }
 
     fn stats(&self, stats: &mut FrameStats) {

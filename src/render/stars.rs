@@ -35,6 +35,8 @@ pub struct StarsPass {
     pipeline: Pipelines<wgpu::RenderPipeline>,
     /// The same drawn after the run of reduced layers above the stars ([`Pass::draw_under_run`]).
     under_run: Pipelines<wgpu::RenderPipeline>,
+    /// The same drawn first under the background, not depth-tested ([`Pass::draw_first`]).
+    first: Pipelines<wgpu::RenderPipeline>,
     field: Staged<Option<StarField>>,
     /// Whether the stars show this frame.
     visible: bool,
@@ -53,18 +55,19 @@ impl StarsPass {
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipeline = Pipelines::new_render(b, pipeline_layout, |b, l| Self::build(b, l, "fs_main"))?;
+        let pipeline = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| Self::build(b, l, "fs_main", wgpu::CompareFunction::Less))?;
+        let first = Pipelines::new_render(b, pipeline_layout, |b, l| Self::build(b, l, "fs_main", wgpu::CompareFunction::Always))?;
         let run_layout = super::reduced_layers::run_layout(device, "Stars::run_layout");
         let under_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Stars::under_run_pipeline_layout"),
             bind_group_layouts: &[Some(globals), Some(&bind_layout), Some(&run_layout)],
             immediate_size: 0,
         });
-        let under_run = Pipelines::new_render(b, under_layout, |b, l| Self::build(b, l, "fs_under_run"))?;
-        Ok(Self { bind_layout, pipeline, under_run, field: Staged::new(None), visible: false, skipped: false })
+        let under_run = Pipelines::new_render(b, under_layout, |b, l| Self::build(b, l, "fs_under_run", wgpu::CompareFunction::Less))?;
+        Ok(Self { bind_layout, pipeline, under_run, first, field: Staged::new(None), visible: false, skipped: false })
     }
 
-    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, entry: &str) -> RenderResult<wgpu::RenderPipeline> {
+    fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, entry: &str, compare: wgpu::CompareFunction) -> RenderResult<wgpu::RenderPipeline> {
         let (device, format) = (b.device, b.color_format);
         let module = shaders::module(device, b.library, "stars")?;
         let constants = b.target_constants();
@@ -84,7 +87,7 @@ impl StarsPass {
                     compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
-                depth_stencil: super::depth_state(false, wgpu::CompareFunction::Less),
+                depth_stencil: super::depth_state(false, compare),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
@@ -99,6 +102,18 @@ impl StarsPass {
     }
 }
 
+impl StarsPass {
+    /// Draws the star field with `pipeline` (its other groups already bound); 0 draws without one.
+    fn draw_with(&self, rpass: &mut wgpu::RenderPass<'_>, pipeline: &wgpu::RenderPipeline) -> u32 {
+        let Some(field) = &self.field.current else { return 0 };
+        rpass.set_pipeline(pipeline);
+        rpass.set_bind_group(1, &field.bind_group, &[]);
+        rpass.set_vertex_buffer(0, field.instances.slice(..));
+        rpass.draw(0..4, 0..field.count);
+        1
+    }
+}
+
 impl Pass for StarsPass {
     fn name(&self) -> &'static str {
         "stars"
@@ -110,12 +125,14 @@ impl Pass for StarsPass {
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
         self.pipeline.stage(b)?;
-        self.under_run.stage(b)
+        self.under_run.stage(b)?;
+        self.first.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipeline.commit(accept);
         self.under_run.commit(accept);
+        self.first.commit(accept);
     }
 
     fn stage_sky(&mut self, up: &mut SkyUpload<'_>) {
@@ -144,12 +161,15 @@ impl Pass for StarsPass {
     }
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target) -> u32 {
-        let Some(field) = &self.field.current else { return 0 };
-        rpass.set_pipeline(self.pipeline.for_target(target));
-        rpass.set_bind_group(1, &field.bind_group, &[]);
-        rpass.set_vertex_buffer(0, field.instances.slice(..));
-        rpass.draw(0..4, 0..field.count);
-        1
+        self.draw_with(rpass, self.pipeline.for_target(target))
+    }
+
+    fn can_draw_first(&self, _key: usize, _target: Target) -> bool {
+        self.field.current.is_some()
+    }
+
+    fn draw_first(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target) -> u32 {
+        self.draw_with(rpass, self.first.for_target(target))
     }
 
     fn can_draw_under_run(&self, _key: usize, _target: Target) -> bool {
@@ -157,13 +177,8 @@ impl Pass for StarsPass {
     }
 
     fn draw_under_run(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target, run: &wgpu::BindGroup) -> u32 {
-        let Some(field) = &self.field.current else { return 0 };
-        rpass.set_pipeline(self.under_run.for_target(target));
-        rpass.set_bind_group(1, &field.bind_group, &[]);
         rpass.set_bind_group(2, run, &[]);
-        rpass.set_vertex_buffer(0, field.instances.slice(..));
-        rpass.draw(0..4, 0..field.count);
-        1
+        self.draw_with(rpass, self.under_run.for_target(target))
     }
 
     fn stats(&self, stats: &mut FrameStats) {
