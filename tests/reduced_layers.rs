@@ -152,7 +152,8 @@ fn additive_draws_under_the_background_give_the_same_picture() {
     // The skydome's fine stars, the shooting stars and the star field right after the
     // background: drawn first onto the cleared frame, the background composited over them,
     // against the same draws depth-tested in the sky phase. Looking up (no scene in view: there
-    // they go first) and at the horizon (the scene in view: they stay in the sky phase).
+    // they go first) and at the horizon (the scene in view: they stay in the sky phase); by day
+    // only billboards would go, and they stay.
     let mut sky = default_sky();
     if let Some(e) = sky.emitters.iter_mut().find(|e| e.name == "shooting_stars") {
         e.rate = 200.0;
@@ -169,6 +170,8 @@ fn additive_draws_under_the_background_give_the_same_picture() {
         ("dusk, looking up", FrameInput::new(18.5, 0.3), up, true),
         ("lut on the HDR target, looking up", lut, up, true),
         ("night, horizon", FrameInput::new(23.0, 0.0), Camera { pitch_deg: 10.0, ..Camera::default() }, false),
+        // The sun alone would not pay for blending the background.
+        ("noon, looking up", FrameInput::new(12.0, 0.0), Camera { yaw_deg: 180.0, ..up }, false),
     ] {
         for join_runs in [true, false] {
             let first = RenderOptions { glare: false, join_runs, ..Default::default() };

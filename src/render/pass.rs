@@ -268,6 +268,12 @@ pub trait Pass: Any {
         false
     }
 
+    /// Whether item `key` spans much of the frame (a dome layer): drawing such an item first
+    /// pays for the blended background; a few small billboards or sprites do not.
+    fn spans_frame(&self, _key: usize) -> bool {
+        false
+    }
+
     /// Records additive item `key` onto the cleared frame, before the background run is
     /// composited over it ([`super::RenderOptions::additive_first`]): without depth test, since
     /// the scene drawn afterwards covers what it hides. Adding onto black is writing.

@@ -379,7 +379,13 @@ impl SkyRenderer {
             Some(&(_, start)) if background && options.additive_first && !scene_in_view => {
                 let limit = runs.get(1).map_or(sky_items.len(), |r| r.0);
                 let end = (start..limit).find(|&k| !(sky_items[k].1.additive && self.passes[sky_items[k].0].can_draw_first(sky_items[k].1.key, kind))).unwrap_or(limit);
-                start..end
+                // Blending the background costs a full-screen pass about a millisecond: worth it
+                // only when a draw spanning the frame (the skydome's fine stars) is among them.
+                if sky_items[start..end].iter().any(|(i, it)| self.passes[*i].spans_frame(it.key)) {
+                    start..end
+                } else {
+                    0..0
+                }
             }
             _ => 0..0,
         };

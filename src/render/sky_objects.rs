@@ -748,6 +748,11 @@ impl Pass for SkyObjectsPass {
         self.can_place(key, target, Placement::First)
     }
 
+    fn spans_frame(&self, key: usize) -> bool {
+        let (Some(draws), Some(e)) = (&self.draws.current, self.visible.get(key)) else { return false };
+        matches!(draws.objects[e.index][e.version].shape, Shape::Dome { .. } | Shape::DomeBand { .. })
+    }
+
     fn draw_first(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
         self.record(rpass, key, target, false, (Placement::First, None))
     }
