@@ -24,6 +24,10 @@ struct Config {
     sun_moves: bool,
     /// The renderer's skips (all on except where a configuration measures one).
     skips: Skips,
+    /// Hour of the day ([`HOUR`] unless a configuration needs the night's stars).
+    hour: f32,
+    /// [`RenderOptions::additive_first`] (on unless a configuration measures it).
+    additive_first: bool,
     wall_ms: Vec<f32>,
     scene_ms: Vec<f32>,
     sky_ms: Vec<f32>,
@@ -41,6 +45,8 @@ fn median(v: &[f32]) -> f32 {
 }
 
 const HOUR: f32 = 16.0;
+/// The configurations that need the night's stars.
+const NIGHT: f32 = 23.0;
 const WEATHER: f32 = 0.3;
 const ROUNDS: u32 = 3;
 
@@ -65,6 +71,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
 
     let down = Camera { yaw_deg: 180.0, pitch_deg: -38.0, ..Camera::default() };
     let up = Camera { yaw_deg: 180.0, pitch_deg: 40.0, ..Camera::default() };
+    let horizon = Camera { yaw_deg: 180.0, pitch_deg: 10.0, ..Camera::default() };
     let cover_down = scene_coverage(&mut hl, &sky, &down)?;
     let cover_up = scene_coverage(&mut hl, &sky, &up)?;
 
@@ -76,6 +83,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         model: SkyModelKind::Bitmap,
         sun_moves: false,
         skips: Skips::default(),
+        hour: HOUR,
+        additive_first: true,
         wall_ms: Vec::new(),
         scene_ms: Vec::new(),
         sky_ms: Vec::new(),
@@ -104,18 +113,26 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             skips: Skips { unchanged_tables: false, ..Skips::default() },
             ..with_model(mk("sky fills the screen, lut model, sun still, tables and map rebuilt (skip off)", up, true, 4), SkyModelKind::Lut, false)
         },
+        Config { skips: Skips { off_screen: false, ..Skips::default() }, ..mk("sky fills the screen, dome layers and rows out of view drawn (skip off)", up, true, 4) },
+        Config { skips: Skips { unneeded_mips: false, ..Skips::default() }, ..mk("sky fills the screen, every stage mipmapped (skip off)", up, true, 4) },
+        // The scene in view: what lies behind it.
+        mk("horizon", horizon, true, 4),
+        Config { skips: Skips { below_horizon: false, ..Skips::default() }, ..mk("horizon, billboards and dome rows behind the scene drawn (skip off)", horizon, true, 4) },
+        // The night's additive draws (the skydome's fine stars, the star field) under the background.
+        Config { hour: NIGHT, ..mk("night, sky fills the screen", up, true, 4) },
+        Config { hour: NIGHT, additive_first: false, ..mk("night, sky fills the screen, additive draws in the sky phase (additive_first off)", up, true, 4) },
     ];
     let per_round = args.frames.div_ceil(ROUNDS).max(1);
     for round in 0..ROUNDS {
         for c in configs.iter_mut() {
-            let mut input = FrameInput::new(HOUR, WEATHER);
+            let mut input = FrameInput::new(c.hour, WEATHER);
             input.tier = c.tier;
             input.sky_model = Some(SkyModel { kind: c.model, ..sky.model });
-            let options = RenderOptions { depth_split: c.depth_split, glare: false, skips: c.skips, ..Default::default() };
+            let options = RenderOptions { depth_split: c.depth_split, glare: false, skips: c.skips, additive_first: c.additive_first, ..Default::default() };
             // Two warm-up frames: pipelines, caches and the timestamp readback of this configuration.
             for i in 0..per_round + 2 {
                 if c.sun_moves {
-                    input.hour = HOUR + 0.01 * i as f32;
+                    input.hour = c.hour + 0.01 * i as f32;
                 }
                 let t = Instant::now();
                 hl.frame(&sky, &input, &c.camera, &options, 0.0);
@@ -216,6 +233,15 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             input.tier = Tier::FOUR;
             sky.evaluate(&input).objects.iter().filter(|o| matches!(o.versions, Err(skytune::sky::Hidden::RefAlphaZero(_)))).count()
         }
+    );
+    let _ = writeln!(
+        md,
+        "- More skips and options, the same way: dome layers and rows of dome triangles out of view not drawn {:.2} ms; stages that no pixel minifies sampled from level 0 {:.2} ms \
+         (sky filling the screen); billboards and dome rows behind the scene not drawn {:.2} ms (horizon); the night's additive draws put under the background (`additive_first`) {:.2} ms (night, sky filling the screen, hour {NIGHT}).",
+        saving(16, 2),
+        saving(17, 2),
+        saving(19, 18),
+        saving(21, 20)
     );
     skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
     print!("{md}");

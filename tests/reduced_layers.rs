@@ -113,11 +113,9 @@ fn frame_edges_are_covered_when_the_size_is_no_multiple_of_the_divisor() {
     }
 }
 
-#[test]
-fn joined_runs_give_the_same_picture_with_one_composite_less() {
-    // The skydome's run and the clouds' run, with the sun, the moons, the planet, the star field
-    // and the shooting stars between them: composited at once, the rest drawn afterwards under
-    // the clouds' run. Shooting stars frequent enough to be seen.
+/// The built-in sky with shooting stars frequent enough to be seen, uploaded to a 640x360
+/// headless renderer.
+fn night_sky_with_shooting_stars() -> (skytune::sky::Sky, skytune::render::Headless) {
     let mut sky = default_sky();
     if let Some(e) = sky.emitters.iter_mut().find(|e| e.name == "shooting_stars") {
         e.rate = 200.0;
@@ -125,6 +123,15 @@ fn joined_runs_give_the_same_picture_with_one_composite_less() {
     }
     let mut h = common::headless(640, 360);
     h.set_sky(&sky).expect("uploaded");
+    (sky, h)
+}
+
+#[test]
+fn joined_runs_give_the_same_picture_with_one_composite_less() {
+    // The skydome's run and the clouds' run, with the sun, the moons, the planet, the star field
+    // and the shooting stars between them: composited at once, the rest drawn afterwards under
+    // the clouds' run.
+    let (sky, mut h) = night_sky_with_shooting_stars();
     let mut lut = FrameInput::new(17.0, 0.5);
     lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
     for (what, input, camera) in [
@@ -154,13 +161,7 @@ fn additive_draws_under_the_background_give_the_same_picture() {
     // against the same draws depth-tested in the sky phase. Looking up (no scene in view: there
     // they go first) and at the horizon (the scene in view: they stay in the sky phase); by day
     // only billboards would go, and they stay.
-    let mut sky = default_sky();
-    if let Some(e) = sky.emitters.iter_mut().find(|e| e.name == "shooting_stars") {
-        e.rate = 200.0;
-        e.max_particles = 1000;
-    }
-    let mut h = common::headless(640, 360);
-    h.set_sky(&sky).expect("uploaded");
+    let (sky, mut h) = night_sky_with_shooting_stars();
     let mut lut = FrameInput::new(22.0, 0.2);
     lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
     let up = Camera { pitch_deg: 60.0, ..Camera::default() };
