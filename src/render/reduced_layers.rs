@@ -94,6 +94,12 @@ const COMPOSITE_BLEND: wgpu::BlendState = wgpu::BlendState {
     alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
 };
 
+/// Indices of [`ReducedLayersPass`]'s composite pipelines.
+const COMPOSITE: usize = 0;
+const BACKGROUND: usize = 1;
+const BACKGROUND_OVER: usize = 2;
+const PAIR_BACKGROUND_OVER: usize = 3;
+
 /// The composite's uniform. Keep in sync with `Composite` in shaders/reduced/run.wgsl.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
@@ -168,6 +174,7 @@ impl ReducedLayersPass {
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 4]> {
         let module = shaders::module(b.device, b.library, "reduced_layers")?;
         let always = wgpu::CompareFunction::Always;
+        // In the order of COMPOSITE, BACKGROUND, BACKGROUND_OVER and PAIR_BACKGROUND_OVER.
         Ok([
             full_screen_pipeline(b, layout, &module, "ReducedLayers::pipeline", "fs_main", Some(COMPOSITE_BLEND), wgpu::CompareFunction::Less)?,
             full_screen_pipeline(b, layout, &module, "ReducedLayers::background_pipeline", "fs_background", None, always)?,
@@ -329,7 +336,7 @@ impl Pass for ReducedLayersPass {
     /// Composites run `key` (the renderer places it where the run's first layer would draw).
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
         let Some(buffer) = self.buffers.get(key) else { return 0 };
-        rpass.set_pipeline(&self.pipelines.for_target(target)[0]);
+        rpass.set_pipeline(&self.pipelines.for_target(target)[COMPOSITE]);
         rpass.set_bind_group(1, &buffer.bind_group, &[]);
         rpass.draw(0..3, 0..1);
         1
@@ -388,7 +395,7 @@ impl ReducedLayersPass {
     /// `over`: composited over additive draws already on the frame, which lie under the upper
     /// run.
     pub fn draw_pair_background(&self, rpass: &mut wgpu::RenderPass<'_>, target: Target, over: bool) -> u32 {
-        self.draw_as_background(rpass, self.combined.as_ref(), target, if over { 3 } else { 1 })
+        self.draw_as_background(rpass, self.combined.as_ref(), target, if over { PAIR_BACKGROUND_OVER } else { BACKGROUND })
     }
 
     /// Draws run `run` as the frame's background, into the scene's pass before the scene: the
@@ -397,7 +404,7 @@ impl ReducedLayersPass {
     /// blending or depth test costs a software rasteriser about half a blended, tested one.
     /// `over`: added to additive draws already on the frame, which lie on top of the run.
     pub fn draw_background(&self, rpass: &mut wgpu::RenderPass<'_>, run: usize, target: Target, over: bool) -> u32 {
-        self.draw_as_background(rpass, self.buffers.get(run), target, if over { 2 } else { 1 })
+        self.draw_as_background(rpass, self.buffers.get(run), target, if over { BACKGROUND_OVER } else { BACKGROUND })
     }
 
     /// Writes `buffer`'s colour over the frame with background pipeline `pipeline`; 0 draws
