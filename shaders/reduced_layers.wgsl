@@ -38,13 +38,23 @@ fn fs_background(in: CompositeOut) -> @location(0) vec4<f32> {
     return vec4<f32>(textureSampleLevel(layers, layers_sampler, in.uv, 0.0).rgb, 1.0);
 }
 
-// The two joined runs combined once at the finer run's resolution, the upper over the lower, so
-// that the background samples one buffer instead of two at every frame pixel. The lower run is
-// the background (over black): what it lets through does not matter; alpha keeps the upper run's
-// transmittance, for what lies between the two and is drawn before them (`fs_main` over it).
+// The joined runs combined at reduced resolution, the upper (the runs above, combined) over the
+// lower, so that the background samples one buffer instead of one per run at every frame pixel.
+// The lower run is the background (over black): what it lets through does not matter; alpha
+// keeps the upper's transmittance, for what lies between them and is drawn before them (`fs_main`
+// over it).
 @fragment
 fn fs_combine(in: CompositeOut) -> @location(0) vec4<f32> {
     let lower = textureSampleLevel(layers, layers_sampler, in.uv, 0.0);
     let upper = textureSampleLevel(run_layers, run_sampler, in.uv, 0.0);
     return vec4<f32>(upper.rgb + upper.a * lower.rgb, upper.a);
+}
+
+// A combination above the background's (a third joined run and up): what draws between the runs
+// below it go under, so its transmittance is both runs'.
+@fragment
+fn fs_combine_above(in: CompositeOut) -> @location(0) vec4<f32> {
+    let lower = textureSampleLevel(layers, layers_sampler, in.uv, 0.0);
+    let upper = textureSampleLevel(run_layers, run_sampler, in.uv, 0.0);
+    return vec4<f32>(upper.rgb + upper.a * lower.rgb, upper.a * lower.a);
 }

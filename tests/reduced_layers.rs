@@ -130,23 +130,42 @@ fn night_sky_with_shooting_stars() -> (skytune::sky::Sky, skytune::render::Headl
 fn joined_runs_give_the_same_picture_with_one_composite_less() {
     // The skydome's run and the clouds' run, with the sun, the moons, the planet, the star field
     // and the shooting stars between them: composited at once, the rest drawn afterwards under
-    // the clouds' run.
+    // the clouds' run. In a storm, lightning bolts between the clouds and the fog dome: three
+    // runs joined, the bolts under the fog's run and the billboards under both.
     let (sky, mut h) = night_sky_with_shooting_stars();
     let mut lut = FrameInput::new(17.0, 0.5);
     lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
-    for (what, input, camera) in [
-        ("dusk towards the sun", FrameInput::new(17.5, 0.4), Camera { yaw_deg: 270.0, pitch_deg: 10.0, ..Camera::default() }),
-        ("noon, clouds", FrameInput::new(12.0, 0.2), Camera { pitch_deg: 40.0, ..Camera::default() }),
-        ("night, stars and moons", FrameInput::new(2.0, 0.3), Camera { pitch_deg: 35.0, ..Camera::default() }),
-        ("lut on the HDR target", lut, Camera { yaw_deg: 250.0, pitch_deg: 15.0, ..Camera::default() }),
+    let mut storm = sky.clone();
+    if let Some(e) = storm.emitters.iter_mut().find(|e| e.name == "lightning") {
+        e.rate = 200.0;
+        e.max_particles = 40;
+    }
+    let horizon = Camera { yaw_deg: 30.0, pitch_deg: 12.0, ..Camera::default() };
+    // The storm's clouds resolve into a reduced buffer at the full size only.
+    let mut big = common::headless(1280, 720);
+    for (what, sky, input, camera, runs) in [
+        ("dusk towards the sun", &sky, FrameInput::new(17.5, 0.4), Camera { yaw_deg: 270.0, pitch_deg: 10.0, ..Camera::default() }, 2),
+        ("noon, clouds", &sky, FrameInput::new(12.0, 0.2), Camera { pitch_deg: 40.0, ..Camera::default() }, 2),
+        ("night, stars and moons", &sky, FrameInput::new(2.0, 0.3), Camera { pitch_deg: 35.0, ..Camera::default() }, 2),
+        ("lut on the HDR target", &sky, lut, Camera { yaw_deg: 250.0, pitch_deg: 15.0, ..Camera::default() }, 2),
+        ("storm, lightning", &storm, FrameInput::new(15.0, 1.0), horizon, 3),
+        (
+            "storm, lightning, lut on the HDR target",
+            &storm,
+            FrameInput { sky_model: Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model }), ..FrameInput::new(15.0, 1.0) },
+            horizon,
+            3,
+        ),
     ] {
+        let h = if runs == 3 { &mut big } else { &mut h };
+        h.set_sky(sky).expect("uploaded");
         let joined = RenderOptions { glare: false, ..Default::default() };
         let apart = RenderOptions { join_runs: false, ..joined };
-        let one = h.render(&sky, &input, &camera, &joined).expect("rendered");
+        let one = h.render(sky, &input, &camera, &joined).expect("rendered");
         let s = h.renderer.stats.clone();
-        assert!(s.reduced_runs.len() >= 2 && s.composites as usize == s.reduced_runs.len() - 1, "{what}: two runs joined ({s:?})");
+        assert!(s.reduced_runs.len() == runs && s.composites == 1, "{what}: {runs} runs joined ({s:?})");
         eprintln!("{what}: {} particles, {} stars", s.particles, s.stars);
-        let two = h.render(&sky, &input, &camera, &apart).expect("rendered");
+        let two = h.render(sky, &input, &camera, &apart).expect("rendered");
         assert_eq!(h.renderer.stats.composites as usize, h.renderer.stats.reduced_runs.len(), "{what}");
         // The same sums in another order: rounding of the 8-bit target moves a level or two.
         let (d, _) = common::diff(&one, &two, 2);

@@ -538,7 +538,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
             s.objects_drawn,
             if runs.is_empty() { "none".into() } else { runs.join(", ") }
         ));
-        ui.checkbox(&mut c.options.join_runs, format!("join the first two runs ({} composites)", s.composites));
+        ui.checkbox(&mut c.options.join_runs, format!("join the first runs ({} composites)", s.composites));
         ui.checkbox(&mut c.options.additive_first, format!("additive draws under the background ({})", s.drawn_first));
     });
     let median = |v: &VecDeque<f32>| {

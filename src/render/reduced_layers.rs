@@ -98,7 +98,7 @@ const COMPOSITE_BLEND: wgpu::BlendState = wgpu::BlendState {
 const COMPOSITE: usize = 0;
 const BACKGROUND: usize = 1;
 const BACKGROUND_OVER: usize = 2;
-const PAIR_BACKGROUND_OVER: usize = 3;
+const JOINED_BACKGROUND_OVER: usize = 3;
 
 /// The composite's uniform. Keep in sync with `Composite` in shaders/reduced/run.wgsl.
 #[repr(C)]
@@ -122,11 +122,12 @@ pub struct ReducedLayersPass {
     /// The composite (blended over the frame, depth-tested); the background (the first run of
     /// a frame, drawn before the scene: replacing the clear, neither blended nor tested); and the
     /// background over additive draws already on the frame (blended, not tested), of one run and
-    /// of the joined pair (whose combination holds the upper run's transmittance).
+    /// of the joined runs (whose combination holds the transmittance of those above the first).
     pipelines: Pipelines<[wgpu::RenderPipeline; 4]>,
     /// Combines two runs into one buffer, the upper over the lower (runs joined across the
-    /// billboards between them: [`ReducedLayersPass::record_combined`]).
-    combine: Pipelines<wgpu::RenderPipeline>,
+    /// billboards between them: [`ReducedLayersPass::record_combined`]): the background's
+    /// combination (keeping the upper's transmittance) and one above it (the product).
+    combine: Pipelines<[wgpu::RenderPipeline; 2]>,
     /// The composite's uniform (frame pixel to texture coordinates, any divisor).
     uniform: wgpu::Buffer,
     sampler: wgpu::Sampler,
@@ -134,8 +135,9 @@ pub struct ReducedLayersPass {
     made_for: ((u32, u32), Target),
     /// Per run of a frame; reused while the size, target and run's divisor stay.
     buffers: Vec<RunBuffer>,
-    /// The first two runs combined, at the finer one's divisor, when the frame joins them.
-    combined: Option<RunBuffer>,
+    /// When the frame joins its first runs: combination j holds runs j and above (up to the
+    /// last joined, which needs none), at the finest divisor among them.
+    combined: Vec<RunBuffer>,
 }
 
 impl ReducedLayersPass {
@@ -168,25 +170,29 @@ impl ReducedLayersPass {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        Ok(Self { layout, pipelines, combine, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new(), combined: None })
+        Ok(Self { layout, pipelines, combine, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new(), combined: Vec::new() })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 4]> {
         let module = shaders::module(b.device, b.library, "reduced_layers")?;
         let always = wgpu::CompareFunction::Always;
-        // In the order of COMPOSITE, BACKGROUND, BACKGROUND_OVER and PAIR_BACKGROUND_OVER.
+        // In the order of COMPOSITE, BACKGROUND, BACKGROUND_OVER and JOINED_BACKGROUND_OVER.
         Ok([
             full_screen_pipeline(b, layout, &module, "ReducedLayers::pipeline", "fs_main", Some(COMPOSITE_BLEND), wgpu::CompareFunction::Less)?,
             full_screen_pipeline(b, layout, &module, "ReducedLayers::background_pipeline", "fs_background", None, always)?,
             // Over what the frame holds: a run's own transmittance is not what lies under it.
             full_screen_pipeline(b, layout, &module, "ReducedLayers::background_over_pipeline", "fs_background", Some(COMPOSITE_BLEND), always)?,
-            full_screen_pipeline(b, layout, &module, "ReducedLayers::pair_background_over_pipeline", "fs_main", Some(COMPOSITE_BLEND), always)?,
+            full_screen_pipeline(b, layout, &module, "ReducedLayers::joined_background_over_pipeline", "fs_main", Some(COMPOSITE_BLEND), always)?,
         ])
     }
 
-    fn build_combine(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
+    fn build_combine(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 2]> {
         let module = shaders::module(b.device, b.library, "reduced_layers")?;
-        shaders::fullscreen_pipeline_of(b.device, &module, "fs_combine", layout, "ReducedLayers::combine_pipeline", reduced_format(b.target))
+        let format = reduced_format(b.target);
+        Ok([
+            shaders::fullscreen_pipeline_of(b.device, &module, "fs_combine", layout, "ReducedLayers::combine_pipeline", format)?,
+            shaders::fullscreen_pipeline_of(b.device, &module, "fs_combine_above", layout, "ReducedLayers::combine_above_pipeline", format)?,
+        ])
     }
 
     /// Size of the reduced buffers for a frame size and divisor, pixels.
@@ -194,12 +200,12 @@ impl ReducedLayersPass {
         (width.div_ceil(divisor).max(1), height.div_ceil(divisor).max(1))
     }
 
-    /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, and the combination
-    /// of the first two at `combined` when the frame joins them, for the frame size and target.
-    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), target: Target, divisors: &[u32], combined: Option<u32>) {
+    /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, and combination `j`
+    /// of the joined runs at `combined[j]`, for the frame size and target.
+    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), target: Target, divisors: &[u32], combined: &[u32]) {
         if self.made_for != (size, target) {
             self.buffers.clear();
-            self.combined = None;
+            self.combined.clear();
             self.made_for = (size, target);
             // Each buffer holds the whole frame (its viewport is the whole buffer, even where the
             // frame's size is not a multiple of the divisor): texture coordinates are the frame's.
@@ -217,8 +223,17 @@ impl ReducedLayersPass {
                 self.buffers.push(buffer);
             }
         }
-        if let Some(divisor) = combined.filter(|&d| self.combined.as_ref().is_none_or(|b| b.divisor != d)) {
-            self.combined = Some(self.buffer(device, "ReducedLayers::combined", divisor));
+        self.combined.truncate(combined.len());
+        for (j, &divisor) in combined.iter().enumerate() {
+            if self.combined.get(j).is_some_and(|b| b.divisor == divisor) {
+                continue;
+            }
+            let buffer = self.buffer(device, &format!("ReducedLayers::combined {j}"), divisor);
+            if j < self.combined.len() {
+                self.combined[j] = buffer;
+            } else {
+                self.combined.push(buffer);
+            }
         }
     }
 
@@ -248,25 +263,41 @@ impl ReducedLayersPass {
         RunBuffer { view, bind_group, divisor }
     }
 
-    /// Records the combination of runs 0 and 1 into the combined buffer ([`Self::ensure`]): one
-    /// full-screen pass at reduced resolution, where the background would sample both buffers
-    /// at every frame pixel.
+    /// Records the combinations of the joined runs into their buffers ([`Self::ensure`]), from
+    /// the top down: combination j is run j under combination j + 1 (or under the last joined
+    /// run). One full-screen pass at reduced resolution each, where the background would sample
+    /// every buffer at every frame pixel; the last one recorded gets `timestamp_writes`.
     pub fn record_combined(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         globals: &wgpu::BindGroup,
         target: Target,
-        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+        mut timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> u32 {
-        let (Some(out), Some(lower), Some(upper)) = (&self.combined, self.buffers.first(), self.buffers.get(1)) else { return 0 };
-        // Every pixel is written: the clear colour does not matter.
-        let mut rpass = self.begin_into(encoder, out, "ReducedLayers::combine", timestamp_writes);
-        rpass.set_pipeline(self.combine.for_target(target));
-        rpass.set_bind_group(0, globals, &[]);
-        rpass.set_bind_group(1, &lower.bind_group, &[]);
-        rpass.set_bind_group(2, &upper.bind_group, &[]);
-        rpass.draw(0..3, 0..1);
-        1
+        let [background, above] = self.combine.for_target(target);
+        let mut draws = 0;
+        for (j, out) in self.combined.iter().enumerate().rev() {
+            let (Some(lower), Some(upper)) = (self.buffers.get(j), self.upper_bind_group(j + 1)) else { return draws };
+            // Every pixel is written: the clear colour does not matter.
+            let mut rpass = self.begin_into(encoder, out, "ReducedLayers::combine", if j == 0 { timestamp_writes.take() } else { None });
+            rpass.set_pipeline(if j == 0 { background } else { above });
+            rpass.set_bind_group(0, globals, &[]);
+            rpass.set_bind_group(1, &lower.bind_group, &[]);
+            rpass.set_bind_group(2, upper, &[]);
+            rpass.draw(0..3, 0..1);
+            draws += 1;
+        }
+        draws
+    }
+
+    /// What lies above the draws between joined runs j - 1 and j: combination j, or run j's
+    /// buffer when it is the last joined ([`run_layout`]). Draws there go under it.
+    pub fn upper_bind_group(&self, j: usize) -> Option<&wgpu::BindGroup> {
+        match self.combined.get(j) {
+            Some(c) => Some(&c.bind_group),
+            None if j == self.combined.len() => self.buffers.get(j).map(|b| &b.bind_group),
+            None => None,
+        }
     }
 
     /// Begins the render pass that draws run `run` into its buffer (cleared to nothing in front:
@@ -325,7 +356,7 @@ impl Pass for ReducedLayersPass {
         // Buffers of another size are of no further use.
         if self.made_for.0 != cx.size {
             self.buffers.clear();
-            self.combined = None;
+            self.combined.clear();
             self.made_for = ((0, 0), Target::Display);
         }
     }
@@ -384,18 +415,13 @@ pub fn run_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
 }
 
 impl ReducedLayersPass {
-    /// The bind group that reads run `run`'s buffer ([`run_layout`]).
-    pub fn run_bind_group(&self, run: usize) -> Option<&wgpu::BindGroup> {
-        self.buffers.get(run).map(|b| &b.bind_group)
-    }
-
-    /// Draws the combination of runs 0 and 1 ([`Self::record_combined`]) as the frame's
-    /// background (see [`Self::draw_background`]). What lies between the two runs in the sky
-    /// phase (billboards) is drawn afterwards under the upper run's transmittance and colour.
-    /// `over`: composited over additive draws already on the frame, which lie under the upper
-    /// run.
-    pub fn draw_pair_background(&self, rpass: &mut wgpu::RenderPass<'_>, target: Target, over: bool) -> u32 {
-        self.draw_as_background(rpass, self.combined.as_ref(), target, if over { PAIR_BACKGROUND_OVER } else { BACKGROUND })
+    /// Draws the combination of the joined runs ([`Self::record_combined`]) as the frame's
+    /// background (see [`Self::draw_background`]). What lies between two of them in the sky
+    /// phase (billboards) is drawn afterwards under what lies above it
+    /// ([`Self::upper_bind_group`]). `over`: composited over additive draws already on the frame,
+    /// which lie under the runs above the first.
+    pub fn draw_joined_background(&self, rpass: &mut wgpu::RenderPass<'_>, target: Target, over: bool) -> u32 {
+        self.draw_as_background(rpass, self.combined.first(), target, if over { JOINED_BACKGROUND_OVER } else { BACKGROUND })
     }
 
     /// Draws run `run` as the frame's background, into the scene's pass before the scene: the

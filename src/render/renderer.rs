@@ -37,9 +37,10 @@ pub struct RenderOptions {
     /// Resolution of the dome layers (skydome, galaxy, clouds, fog): below full, each run of
     /// consecutive dome layers is drawn into a smaller buffer and composited in its place.
     pub dome_resolution: DomeResolution,
-    /// With dome layers in reduced buffers: the first two runs (the skydome's and the clouds')
-    /// are composited at once, and the billboards between them drawn afterwards, corrected by
-    /// the upper run (the same picture, one full-screen pass less). Off: one composite per run.
+    /// With dome layers in reduced buffers: the first runs (the skydome's, the clouds', and
+    /// the fog's after a lightning bolt) are composited at once, and the billboards between them
+    /// drawn afterwards, corrected by the runs above them (the same picture, one full-screen pass
+    /// less per run joined). Off: one composite per run.
     pub join_runs: bool,
     /// With the first run of dome layers as the frame's background: the additive draws that
     /// follow it (the skydome's fine stars, the star field) go first onto the cleared frame,
@@ -122,8 +123,8 @@ pub struct FrameStats {
     /// Each run of reduced layers this frame, in draw order: its buffer's divisor (2: half the
     /// frame's width and height, 4: a quarter). One composite each.
     pub reduced_runs: Vec<u32>,
-    /// Full-screen composites of those runs (the background included): one less than the runs
-    /// when the first two are joined ([`RenderOptions::join_runs`]).
+    /// Full-screen composites of those runs (the background included): one for all the runs
+    /// joined ([`RenderOptions::join_runs`]).
     pub composites: u32,
     /// Additive draws put under the background ([`RenderOptions::additive_first`]).
     pub drawn_first: u32,
@@ -367,10 +368,21 @@ impl SkyRenderer {
         let background = reduced_pass.is_some() && runs.first().is_some_and(|&(start, _)| start == 0);
         // And the second joins it when every draw between them (billboards) can be drawn after
         // it, corrected by it: one full-screen pass for both.
-        let joined = background && options.join_runs && runs.len() >= 2 && sky_items[runs[0].1..runs[1].0].iter().all(|(i, it)| self.passes[*i].can_draw_under_run(it.key, kind));
-        stats.composites = runs.len() as u32 - u32::from(joined);
-        // Joined runs are combined at the finer one's resolution first.
-        let combined = joined.then(|| divisors[0].min(divisors[1]));
+        // So do the runs after it, for as long as every draw between two can (a lightning bolt
+        // between the clouds and the fog): `chain` runs, each combined with those above it.
+        let mut chain = usize::from(background);
+        while background
+            && options.join_runs
+            && chain < runs.len()
+            && sky_items[runs[chain - 1].1..runs[chain].0].iter().all(|(i, it)| self.passes[*i].can_draw_under_run(it.key, kind))
+        {
+            chain += 1;
+        }
+        let joined = chain >= 2;
+        stats.composites = (runs.len() + 1).saturating_sub(chain.max(1)) as u32;
+        // Joined runs are combined from the top down, each combination at the finer resolution
+        // of its run and the combination above it.
+        let combined = combined_divisors(&divisors[..chain]);
         // The additive draws right after the background go under it, first onto the cleared
         // frame: items `first` of the sky phase. Not where the scene covers part of the frame:
         // they would pay for its pixels, which the depth test spares them in the sky phase.
@@ -391,7 +403,7 @@ impl SkyRenderer {
         };
         stats.drawn_first = first.len() as u32;
         if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
-            layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors, combined);
+            layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors, &combined);
         }
 
         if let Some(t) = self.timer.as_mut() {
@@ -477,9 +489,9 @@ impl SkyRenderer {
                             stats.draw_calls += self.passes[*i].draw_first(&mut rpass, it.key, kind);
                         }
                         let over = !first.is_empty();
-                        stats.draw_calls += if joined { layers.draw_pair_background(&mut rpass, kind, over) } else { layers.draw_background(&mut rpass, 0, kind, over) };
+                        stats.draw_calls += if joined { layers.draw_joined_background(&mut rpass, kind, over) } else { layers.draw_background(&mut rpass, 0, kind, over) };
                     }
-                    let upper_run = self.pass::<ReducedLayersPass>().and_then(|l| l.run_bind_group(1)).filter(|_| joined);
+                    let layers = self.pass::<ReducedLayersPass>();
                     if draws_here {
                         let mut k = 0;
                         while k < list.len() {
@@ -489,14 +501,16 @@ impl SkyRenderer {
                                 continue;
                             }
                             if let (Phase::Sky, Some(r), Some(rp)) = (phase, runs.iter().position(|&(start, _)| start == k), reduced_pass) {
-                                // The background run (or two) is already in the frame.
-                                if !(background && r == 0 || joined && r == 1) {
+                                // The background's runs are already in the frame.
+                                if r >= chain {
                                     stats.draw_calls += self.passes[rp].draw(&mut rpass, r, kind);
                                 }
                                 k = runs[r].1;
                                 continue;
                             }
-                            if let (Phase::Sky, Some(run)) = (phase, upper_run.filter(|_| k >= runs[0].1 && k < runs[1].0)) {
+                            // Between two joined runs: under the combination of those above.
+                            let under = (1..chain).find(|&j| k >= runs[j - 1].1 && k < runs[j].0);
+                            if let (Phase::Sky, Some(run)) = (phase, under.and_then(|j| layers.and_then(|l| l.upper_bind_group(j)))) {
                                 let (i, it) = &list[k];
                                 stats.draw_calls += self.passes[*i].draw_under_run(&mut rpass, it.key, kind, run);
                                 k += 1;
@@ -605,6 +619,14 @@ fn join_additive_runs(list: &mut [(usize, DrawItem)]) {
     }
 }
 
+/// Divisors of the combinations of a chain of joined runs (their buffers' `divisors`, lowest
+/// first): combination j holds runs j.. and is as fine as the finest of them. The last run
+/// needs none (its own buffer); fewer than two runs, none at all.
+fn combined_divisors(divisors: &[u32]) -> Vec<u32> {
+    let n = divisors.len();
+    (0..n.saturating_sub(1)).map(|j| divisors[j..].iter().copied().min().unwrap_or(1)).collect()
+}
+
 /// The runs of consecutive items marked `reduced` in a sorted phase list: (start, end) indices.
 fn reduced_runs(list: &[(usize, DrawItem)]) -> Vec<(usize, usize)> {
     let mut runs = Vec::new();
@@ -676,5 +698,16 @@ mod tests {
         let mut unchanged = plain;
         join_additive_runs(&mut unchanged);
         assert_eq!(unchanged, plain);
+    }
+
+    #[test]
+    fn each_combination_is_as_fine_as_its_finest_run() {
+        // Skydome at a quarter, clouds at half, fog at a quarter: combination 0 holds all three,
+        // combination 1 the clouds and the fog; the fog's own buffer stands for itself.
+        assert_eq!(combined_divisors(&[4, 2, 4]), [2, 2]);
+        assert_eq!(combined_divisors(&[4, 4, 2]), [2, 2]);
+        assert_eq!(combined_divisors(&[2, 4]), [2]);
+        assert_eq!(combined_divisors(&[4]), Vec::<u32>::new());
+        assert_eq!(combined_divisors(&[]), Vec::<u32>::new());
     }
 }
