@@ -75,8 +75,8 @@ pub struct Skips {
     /// The `lut` tables and the sky-view map are not recomputed while nothing they depend on moved.
     pub unchanged_tables: bool,
     /// With the main scene drawn, billboards and quads entirely below the horizon (by more than
-    /// [`SCENE_COVERS_BELOW_DEG`]) are not drawn, nor the rows of dome triangles there: the
-    /// scene covers that part of the sky.
+    /// [`SCENE_COVERS_BELOW_DEG`]) are not drawn, nor the rows of dome triangles there (domes
+    /// are drawn by rows with `unneeded_mips`): the scene covers that part of the sky.
     pub below_horizon: bool,
     /// Dome layers whose band of elevations the frame does not show (a fog band under a view
     /// of the zenith) are not drawn, nor composited; nor are the parts of the main-scene
