@@ -212,27 +212,27 @@ impl ReducedLayersPass {
             let u = CompositeUniform { uv_from_pixel: [1.0 / size.0.max(1) as f32, 1.0 / size.1.max(1) as f32, 0.0, 0.0] };
             queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&u));
         }
-        for (run, &divisor) in divisors.iter().enumerate() {
-            if self.buffers.get(run).is_some_and(|b| b.divisor == divisor) {
+        let mut buffers = std::mem::take(&mut self.buffers);
+        self.fit(device, &mut buffers, "ReducedLayers::buffer", divisors);
+        self.buffers = buffers;
+        // Only the frame's combinations: their count is the chain's length.
+        let mut combinations = std::mem::take(&mut self.combined);
+        combinations.truncate(combined.len());
+        self.fit(device, &mut combinations, "ReducedLayers::combined", combined);
+        self.combined = combinations;
+    }
+
+    /// Makes `list[k]` a buffer at `divisors[k]` for every k, keeping those already at theirs.
+    fn fit(&self, device: &wgpu::Device, list: &mut Vec<RunBuffer>, label: &str, divisors: &[u32]) {
+        for (k, &divisor) in divisors.iter().enumerate() {
+            if list.get(k).is_some_and(|b| b.divisor == divisor) {
                 continue;
             }
-            let buffer = self.buffer(device, &format!("ReducedLayers::buffer {run}"), divisor);
-            if run < self.buffers.len() {
-                self.buffers[run] = buffer;
+            let buffer = self.buffer(device, &format!("{label} {k}"), divisor);
+            if k < list.len() {
+                list[k] = buffer;
             } else {
-                self.buffers.push(buffer);
-            }
-        }
-        self.combined.truncate(combined.len());
-        for (j, &divisor) in combined.iter().enumerate() {
-            if self.combined.get(j).is_some_and(|b| b.divisor == divisor) {
-                continue;
-            }
-            let buffer = self.buffer(device, &format!("ReducedLayers::combined {j}"), divisor);
-            if j < self.combined.len() {
-                self.combined[j] = buffer;
-            } else {
-                self.combined.push(buffer);
+                list.push(buffer);
             }
         }
     }
