@@ -108,6 +108,12 @@ override LIGHTING: u32 = 0u;
 // with its blend (0 opaque, 1 alpha, 2 additive weighted by alpha, 3 additive).
 override UNDER_RUN: bool = false;
 override BLEND_KIND: u32 = 0u;
+// An additive draw that spans the frame drawn as the frame's background, first onto it
+// (src/render/sky_objects.rs, `Placement::Background`): it writes the background run's colour plus
+// its own term, neither blended nor depth-tested, in place of the background's composite. 0: not;
+// 1: the background is one run, which lies under the draw; 2: it is the joined runs' combination,
+// whose transmittance (the runs above the draw) weighs the term.
+override BACKGROUND: u32 = 0u;
 
 fn stage_count() -> u32 {
     if SPECIALISED {
@@ -330,7 +336,27 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     if UNDER_RUN {
         color = under_run(color, in.clip.xy);
     }
+    if BACKGROUND != 0u {
+        color = as_background(color, in.clip.xy);
+    }
     return color;
+}
+
+// What an additive draw writes as the frame's background (`BACKGROUND`): the run's colour C plus
+// the draw's term, times the transmittance T of the runs above it when joined; the frame's alpha
+// is 1 as the background composite's. The same sum as the draw added to the cleared frame and the
+// background composited over it (C + T x target).
+fn as_background(color: vec4<f32>, pixel: vec2<f32>) -> vec4<f32> {
+    let run = run_at(pixel);
+    var term = color.rgb;
+    if BLEND_KIND == 2u {
+        term = color.a * color.rgb;
+    }
+    var t = 1.0;
+    if BACKGROUND == 2u {
+        t = run.a;
+    }
+    return vec4<f32>(run.rgb + t * term, 1.0);
 }
 
 // What a draw writes after the run above it is already in the frame, so that the frame ends as

@@ -28,6 +28,8 @@ struct Config {
     hour: f32,
     /// [`RenderOptions::additive_first`] (on unless a configuration measures it).
     additive_first: bool,
+    /// [`RenderOptions::fuse_background`] (on unless a configuration measures it).
+    fuse_background: bool,
     wall_ms: Vec<f32>,
     scene_ms: Vec<f32>,
     sky_ms: Vec<f32>,
@@ -85,6 +87,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         skips: Skips::default(),
         hour: HOUR,
         additive_first: true,
+        fuse_background: true,
         wall_ms: Vec::new(),
         scene_ms: Vec::new(),
         sky_ms: Vec::new(),
@@ -121,6 +124,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         // The night's additive draws (the skydome's fine stars, the star field) under the background.
         Config { hour: NIGHT, ..mk("night, sky fills the screen", up, true, 4) },
         Config { hour: NIGHT, additive_first: false, ..mk("night, sky fills the screen, additive draws in the sky phase (additive_first off)", up, true, 4) },
+        Config { hour: NIGHT, fuse_background: false, ..mk("night, sky fills the screen, background composited over the additive draws (fuse_background off)", up, true, 4) },
     ];
     let per_round = args.frames.div_ceil(ROUNDS).max(1);
     for round in 0..ROUNDS {
@@ -128,7 +132,14 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             let mut input = FrameInput::new(c.hour, WEATHER);
             input.tier = c.tier;
             input.sky_model = Some(SkyModel { kind: c.model, ..sky.model });
-            let options = RenderOptions { depth_split: c.depth_split, glare: false, skips: c.skips, additive_first: c.additive_first, ..Default::default() };
+            let options = RenderOptions {
+                depth_split: c.depth_split,
+                glare: false,
+                skips: c.skips,
+                additive_first: c.additive_first,
+                fuse_background: c.fuse_background,
+                ..Default::default()
+            };
             // Two warm-up frames: pipelines, caches and the timestamp readback of this configuration.
             for i in 0..per_round + 2 {
                 if c.sun_moves {
@@ -237,11 +248,13 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let _ = writeln!(
         md,
         "- More skips and options, the same way: dome layers and rows of dome triangles out of view not drawn {:.2} ms; stages that no pixel minifies sampled from level 0 {:.2} ms \
-         (sky filling the screen); billboards and dome rows behind the scene not drawn {:.2} ms (horizon); the night's additive draws put under the background (`additive_first`) {:.2} ms (night, sky filling the screen, hour {NIGHT}).",
+         (sky filling the screen); billboards and dome rows behind the scene not drawn {:.2} ms (horizon); the night's additive draws put under the background (`additive_first`) {:.2} ms (night, sky filling the screen, hour {NIGHT}); \
+         the skydome's fine stars drawn as the background (`fuse_background`) {:.2} ms (the same night frame).",
         saving(16, 2),
         saving(17, 2),
         saving(19, 18),
-        saving(21, 20)
+        saving(21, 20),
+        saving(22, 20)
     );
     skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
     print!("{md}");

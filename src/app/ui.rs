@@ -540,6 +540,10 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         ));
         ui.checkbox(&mut c.options.join_runs, format!("join the first runs ({} composites)", s.composites));
         ui.checkbox(&mut c.options.additive_first, format!("additive draws under the background ({})", s.drawn_first));
+        ui.add_enabled(
+            c.options.additive_first,
+            egui::Checkbox::new(&mut c.options.fuse_background, format!("one of them as the background ({})", if s.background_fused { "this frame" } else { "not this frame" })),
+        );
     });
     let median = |v: &VecDeque<f32>| {
         let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();

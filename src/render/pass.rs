@@ -281,6 +281,20 @@ pub trait Pass: Any {
         0
     }
 
+    /// Whether [`Pass::draw_as_background`] can draw additive item `key` this frame: it covers
+    /// every pixel of the frame. `joined`: the background is the combination of joined runs.
+    fn can_draw_as_background(&self, _key: usize, _target: Target, _joined: bool) -> bool {
+        false
+    }
+
+    /// Records additive item `key` as the frame's background, in place of the background run's
+    /// composite: it writes the run's colour (`run`, as group 2) plus its own term, weighed by
+    /// the transmittance of the runs above it when `joined`. One full-screen pass, neither blended
+    /// nor depth-tested, where drawing it first and compositing the background over it takes two.
+    fn draw_as_background(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target, _joined: bool, _run: &wgpu::BindGroup) -> u32 {
+        0
+    }
+
     /// Records one item into the compute phase.
     fn dispatch(&self, _cpass: &mut wgpu::ComputePass<'_>, _key: usize) {}
 

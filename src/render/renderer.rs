@@ -48,6 +48,12 @@ pub struct RenderOptions {
     /// (the same sums; the scene drawn next covers what it hides). Off: drawn in the sky phase,
     /// depth-tested, each sampling the run above it.
     pub additive_first: bool,
+    /// With additive draws under the background: one that covers the frame (the skydome's fine
+    /// stars looking up) is drawn as the background itself, writing the background run's colour
+    /// plus its term, the others added after it: one full-screen pass, neither blended nor
+    /// depth-tested, in place of that draw and the background's blended composite. Off: the
+    /// background is composited over them.
+    pub fuse_background: bool,
 }
 
 impl Default for RenderOptions {
@@ -61,6 +67,7 @@ impl Default for RenderOptions {
             dome_resolution: DomeResolution::default(),
             join_runs: true,
             additive_first: true,
+            fuse_background: true,
         }
     }
 }
@@ -128,6 +135,9 @@ pub struct FrameStats {
     pub composites: u32,
     /// Additive draws put under the background ([`RenderOptions::additive_first`]).
     pub drawn_first: u32,
+    /// One of them (the skydome's fine stars) covered the frame and was drawn as the background
+    /// itself, its run's colour plus its term: no separate composite of the background.
+    pub background_fused: bool,
     /// The star field was not drawn: transparent this frame.
     pub stars_skipped: bool,
     /// The `lut` tables were not rebuilt: nothing they depend on moved.
@@ -402,6 +412,21 @@ impl SkyRenderer {
             _ => 0..0,
         };
         stats.drawn_first = first.len() as u32;
+        // One of them that covers the frame can be the background itself (its run's colour plus
+        // its term, written): the others are then added under the runs above the first (joined)
+        // or onto it. Saves the background's full-screen composite and the first draw's blend.
+        let fused =
+            first.clone().filter(|_| options.fuse_background).find(|&k| self.passes[sky_items[k].0].can_draw_as_background(sky_items[k].1.key, kind, joined)).filter(|&f| {
+                first.clone().filter(|&k| k != f).all(|k| {
+                    let (i, it) = &sky_items[k];
+                    if joined {
+                        self.passes[*i].can_draw_under_run(it.key, kind)
+                    } else {
+                        self.passes[*i].can_draw_first(it.key, kind)
+                    }
+                })
+            });
+        stats.background_fused = fused.is_some();
         if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
             layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors, &combined);
         }
@@ -485,11 +510,25 @@ impl SkyRenderer {
                     };
                     rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
                     if let (Phase::Scene, true, Some(layers)) = (phase, background, self.pass::<ReducedLayersPass>()) {
-                        for (i, it) in &items[Phase::Sky.index()][first.clone()] {
-                            stats.draw_calls += self.passes[*i].draw_first(&mut rpass, it.key, kind);
+                        let sky_list = &items[Phase::Sky.index()];
+                        match (fused, layers.upper_bind_group(0)) {
+                            // The background's buffer: the joined runs' combination, or the first run's.
+                            (Some(f), Some(run)) => {
+                                let (i, it) = &sky_list[f];
+                                stats.draw_calls += self.passes[*i].draw_as_background(&mut rpass, it.key, kind, joined, run);
+                                for (i, it) in first.clone().filter(|&k| k != f).map(|k| &sky_list[k]) {
+                                    stats.draw_calls +=
+                                        if joined { self.passes[*i].draw_under_run(&mut rpass, it.key, kind, run) } else { self.passes[*i].draw_first(&mut rpass, it.key, kind) };
+                                }
+                            }
+                            _ => {
+                                for (i, it) in &sky_list[first.clone()] {
+                                    stats.draw_calls += self.passes[*i].draw_first(&mut rpass, it.key, kind);
+                                }
+                                let over = !first.is_empty();
+                                stats.draw_calls += if joined { layers.draw_joined_background(&mut rpass, kind, over) } else { layers.draw_background(&mut rpass, 0, kind, over) };
+                            }
                         }
-                        let over = !first.is_empty();
-                        stats.draw_calls += if joined { layers.draw_joined_background(&mut rpass, kind, over) } else { layers.draw_background(&mut rpass, 0, kind, over) };
                     }
                     let layers = self.pass::<ReducedLayersPass>();
                     if draws_here {

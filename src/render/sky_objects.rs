@@ -191,6 +191,22 @@ enum Placement {
     /// Additive, first onto the cleared frame under the background run, not depth-tested
     /// ([`super::RenderOptions::additive_first`]).
     First,
+    /// Additive and covering the frame: the background itself, its run's colour plus the
+    /// draw's term, neither blended nor depth-tested (`BACKGROUND` in the shader: 1).
+    Background,
+    /// As `Background` over joined runs, the term weighed by the runs above it (`BACKGROUND`: 2).
+    JoinedBackground,
+}
+
+impl Placement {
+    /// The background placement over one run or over joined runs.
+    fn background(joined: bool) -> Self {
+        if joined {
+            Placement::JoinedBackground
+        } else {
+            Placement::Background
+        }
+    }
 }
 
 impl VariantKey {
@@ -232,6 +248,14 @@ impl VariantKey {
             ("TONE_KIND", f64::from(self.tone)),
             ("UNDER_RUN", f64::from(u8::from(self.placement == Placement::UnderRun))),
             ("BLEND_KIND", self.blend as f64),
+            (
+                "BACKGROUND",
+                match self.placement {
+                    Placement::Background => 1.0,
+                    Placement::JoinedBackground => 2.0,
+                    _ => 0.0,
+                },
+            ),
         ];
         for k in 0..4 {
             c.push((MODES[k], f64::from(self.modes[k])));
@@ -276,6 +300,9 @@ pub struct SkyObjectsPass {
     parts: Vec<(std::ops::Range<u32>, u8)>,
     /// This frame's pipeline signature of every drawn version, by (object index, version).
     keys: HashMap<(usize, usize), VariantKey>,
+    /// The lowest and highest elevations the frame shows, degrees (with a margin for the
+    /// dome's chords).
+    frame_elevations_deg: (f32, f32),
 }
 
 /// One draw of this frame: a version of an object, whole or the part of its terms that goes to
@@ -402,6 +429,7 @@ impl SkyObjectsPass {
             level0_stages: 0,
             parts: Vec::new(),
             keys: HashMap::new(),
+            frame_elevations_deg: (-90.0, 90.0),
         })
     }
 
@@ -474,7 +502,15 @@ impl SkyObjectsPass {
             // Drawn as it is, and (on the frame, with runs) possibly after the run above it, or
             // first under the background when additive.
             let placed = |p: Placement, wanted: bool| self.entry_key(e, target, p).filter(|k| wanted && k.placement == p);
-            let wanted = [self.entry_key(e, target, Placement::Plain), placed(Placement::UnderRun, runs), placed(Placement::First, runs && self.additive(e))];
+            // As the background only when it may cover the frame (an additive dome layer).
+            let background = runs && self.additive(e) && self.draws.current.as_ref().is_some_and(|d| matches!(d.objects[e.index][e.version].shape, Shape::Dome { .. }));
+            let wanted = [
+                self.entry_key(e, target, Placement::Plain),
+                placed(Placement::UnderRun, runs),
+                placed(Placement::First, runs && self.additive(e)),
+                placed(Placement::Background, background),
+                placed(Placement::JoinedBackground, background),
+            ];
             for key in wanted.into_iter().flatten() {
                 if self.variants.contains_key(&key) {
                     continue;
@@ -489,12 +525,13 @@ impl SkyObjectsPass {
                     (true, _) => Some(super::reduced_layers::REDUCED_BLENDS[key.blend]),
                     (false, Placement::UnderRun) => UNDER_RUN_BLENDS[key.blend],
                     (false, Placement::Plain | Placement::First) => BLENDS[key.blend],
+                    (false, Placement::Background | Placement::JoinedBackground) => None,
                 };
                 // Reduced buffers have no depth: the composite is depth-tested instead. Draws
                 // under the background come before the scene, which covers what they hide.
                 let depth = match (key.reduced, key.placement) {
                     (true, _) => None,
-                    (false, Placement::First) => Some(wgpu::CompareFunction::Always),
+                    (false, Placement::First | Placement::Background | Placement::JoinedBackground) => Some(wgpu::CompareFunction::Always),
                     (false, _) => Some(wgpu::CompareFunction::Less),
                 };
                 let label = format!("SkyObjects::pipeline {key:?}");
@@ -580,6 +617,7 @@ impl Pass for SkyObjectsPass {
         self.off_screen = 0;
         // The frame's elevations, with a margin for the dome's chords (tests in mesh.rs).
         let (lowest_deg, highest_deg) = cx.camera.elevation_range_deg(cx.size.0 as f32 / cx.size.1.max(1) as f32);
+        self.frame_elevations_deg = (lowest_deg, highest_deg);
         let in_view = |shape: &Shape| match *shape {
             Shape::Dome { bottom_deg } => bottom_deg.get() - 0.5 <= highest_deg,
             Shape::DomeBand { bottom_deg, top_deg } => {
@@ -755,6 +793,21 @@ impl Pass for SkyObjectsPass {
 
     fn draw_first(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
         self.record(rpass, key, target, false, (Placement::First, None))
+    }
+
+    fn can_draw_as_background(&self, key: usize, target: Target, joined: bool) -> bool {
+        let (Some(draws), Some(e)) = (&self.draws.current, self.visible.get(key)) else { return false };
+        // The dome's lowest row reaches below the frame's lowest elevation (with the margin of
+        // its chords' sag), and every row in view is drawn.
+        let covers = match draws.objects[e.index][e.version].shape {
+            Shape::Dome { bottom_deg } => bottom_deg.get() + 0.5 <= self.frame_elevations_deg.0,
+            _ => false,
+        };
+        covers && self.can_place(key, target, Placement::background(joined))
+    }
+
+    fn draw_as_background(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, joined: bool, run: &wgpu::BindGroup) -> u32 {
+        self.record(rpass, key, target, false, (Placement::background(joined), Some(run)))
     }
 
     fn stats(&self, stats: &mut FrameStats) {
