@@ -96,9 +96,16 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
                     let target = hl.target.target();
                     let with = timed(&ctx, |e| hl.renderer.render(&ctx, e, &target, &frame, camera, &with_scene))?;
                     hl.renderer.after_submit();
+                    // Its timestamps read back, so that the next frame records its own.
+                    ctx.wait_idle()?;
+                    hl.renderer.collect_gpu_timings();
                     let target = hl.target.target();
                     let s = timed(&ctx, |e| hl.renderer.render(&ctx, e, &target, &frame, camera, &options))?;
                     hl.renderer.after_submit();
+                    // This frame's own phases, not the frame with the scene before it: its
+                    // timestamps are read back on the next wait.
+                    ctx.wait_idle()?;
+                    hl.renderer.collect_gpu_timings();
                     if i >= 2 {
                         floor_ms.push(f);
                         sky_ms.push(s);

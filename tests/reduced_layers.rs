@@ -179,8 +179,8 @@ fn additive_draws_under_the_background_give_the_same_picture() {
     // background: drawn first onto the cleared frame, the background composited over them,
     // against the same draws depth-tested in the sky phase. Looking up (no scene in view: there
     // they go first) and at the horizon (the scene in view: they stay in the sky phase); by day
-    // only billboards would go, and they stay. Where the skydome covers the frame its fine stars
-    // are the background itself (`fuse_background`), checked against the composite over them too.
+    // only billboards would go, and they stay. The skydome's fine stars are the background itself
+    // (`fuse_background`), checked against the composite over them too.
     let (sky, mut h) = night_sky_with_shooting_stars();
     let mut lut = FrameInput::new(22.0, 0.2);
     lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
@@ -203,8 +203,19 @@ fn additive_draws_under_the_background_give_the_same_picture() {
         ("dusk, looking up", &sky, FrameInput::new(18.5, 0.3), up, RenderOptions::default(), true, true),
         ("lut on the HDR target, looking up", &sky, lut, up, RenderOptions::default(), true, true),
         ("night, horizon", &sky, FrameInput::new(23.0, 0.0), Camera { pitch_deg: 10.0, ..Camera::default() }, RenderOptions::default(), false, false),
-        // No scene, looking below the skydome's lowest row (-20 degrees): first, not fused.
-        ("night, no scene, looking down", &sky, FrameInput::new(23.0, 0.0), Camera { pitch_deg: -5.0, ..Camera::default() }, no_scene, true, false),
+        // No scene, the frame reaching below the skydome's lowest row (-20 degrees): fused, the
+        // background composited below that row first (`Pass::background_gap`).
+        ("night, no scene, horizon", &sky, FrameInput::new(23.0, 0.0), Camera::default(), no_scene, true, true),
+        ("dusk, no scene, looking down", &sky, FrameInput::new(18.5, 0.3), Camera { pitch_deg: -5.0, ..Camera::default() }, no_scene, true, true),
+        (
+            "night under thick clouds, no scene, looking down",
+            &overcast,
+            FrameInput::new(23.0, 0.0),
+            Camera { pitch_deg: -5.0, yaw_deg: 90.0, ..Camera::default() },
+            no_scene,
+            true,
+            true,
+        ),
         // The sun alone would not pay for blending the background.
         ("noon, looking up", &sky, FrameInput::new(12.0, 0.0), Camera { yaw_deg: 180.0, ..up }, RenderOptions::default(), false, false),
     ] {

@@ -91,6 +91,51 @@ impl Camera {
         (lo, hi)
     }
 
+    /// A rectangle of a `size` frame's pixels (x, y, width, height; y down) that holds every
+    /// pixel whose view direction lies below `elevation_deg`, or None when none does. A little
+    /// larger than the tightest such rectangle: elevations are sampled on a grid, and the grid's
+    /// cells bound how far a pixel's elevation strays from its corners'.
+    pub fn pixels_below_elevation(&self, size: (u32, u32), elevation_deg: f32) -> Option<[u32; 4]> {
+        let (w, h) = size;
+        if w == 0 || h == 0 {
+            return None;
+        }
+        let aspect = w as f32 / h as f32;
+        let (_, clip_from_sky) = self.matrices(aspect);
+        let sky_from_clip = clip_from_sky.inverse();
+        const CELLS: u32 = 64;
+        // On the image plane at distance 1 a cell's diagonal is 2 / CELLS of the frame's
+        // half-diagonal, and no angle subtended by a stretch of that plane exceeds its length.
+        let tan_half_fov = (self.fov_y_deg.to_radians() * 0.5).tan();
+        let cell_rad = 2.0 / CELLS as f32 * tan_half_fov * (1.0 + aspect * aspect).sqrt();
+        let sin_below = (elevation_deg.to_radians() + cell_rad).min(std::f32::consts::FRAC_PI_2).sin();
+        let (mut lo, mut hi) = ((CELLS, CELLS), (0, 0));
+        let mut any = false;
+        for j in 0..=CELLS {
+            for i in 0..=CELLS {
+                let ndc = Vec3::new(-1.0 + 2.0 * i as f32 / CELLS as f32, -1.0 + 2.0 * j as f32 / CELLS as f32, 0.5);
+                let d = sky_from_clip.project_point3(ndc).normalize_or_zero();
+                if d.y < sin_below {
+                    any = true;
+                    lo = (lo.0.min(i), lo.1.min(j));
+                    hi = (hi.0.max(i), hi.1.max(j));
+                }
+            }
+        }
+        if !any {
+            return None;
+        }
+        // One cell more on each side: a pixel lies in a cell whose corners were sampled.
+        let (i0, i1) = (lo.0.saturating_sub(1), (hi.0 + 1).min(CELLS));
+        let (j0, j1) = (lo.1.saturating_sub(1), (hi.1 + 1).min(CELLS));
+        let x0 = (u64::from(i0) * u64::from(w) / u64::from(CELLS)) as u32;
+        let x1 = (u64::from(i1) * u64::from(w)).div_ceil(u64::from(CELLS)) as u32;
+        // NDC y points up, pixel rows down.
+        let y0 = (u64::from(CELLS - j1) * u64::from(h) / u64::from(CELLS)) as u32;
+        let y1 = (u64::from(CELLS - j0) * u64::from(h)).div_ceil(u64::from(CELLS)) as u32;
+        Some([x0, y0, x1.min(w) - x0, y1.min(h) - y0])
+    }
+
     /// (clip_from_world, clip_from_sky): the scene camera and its rotation-only twin for the sky.
     pub fn matrices(&self, aspect: f32) -> (Mat4, Mat4) {
         let proj = Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, 0.05, 5000.0);
@@ -127,6 +172,46 @@ mod tests {
                 }
             }
             assert!(seen_lo - lo < 0.5 && hi - seen_hi < 0.5, "{camera:?}: {lo}..{hi} loose against {seen_lo}..{seen_hi}");
+        }
+    }
+
+    #[test]
+    fn pixels_below_an_elevation_lie_in_their_rectangle() {
+        let (w, h) = (320u32, 180u32);
+        let rolled = Camera { look: Some((Vec3::new(0.0, -0.2, -1.0).normalize(), Vec3::new(0.4, 1.0, -0.2).normalize())), ..Camera::default() };
+        for (camera, below_deg) in [
+            (Camera::default(), -19.5),
+            (Camera { pitch_deg: 0.0, ..Camera::default() }, -19.5),
+            (Camera { pitch_deg: -40.0, yaw_deg: 30.0, ..Camera::default() }, -19.5),
+            (Camera { pitch_deg: 45.0, fov_y_deg: 100.0, ..Camera::default() }, 10.0),
+            (rolled, -5.0),
+            (Camera { pitch_deg: 60.0, ..Camera::default() }, -19.5),
+        ] {
+            let rect = camera.pixels_below_elevation((w, h), below_deg);
+            let (_, clip_from_sky) = camera.matrices(w as f32 / h as f32);
+            let inv = clip_from_sky.inverse();
+            let mut tight: Option<[u32; 4]> = None;
+            for y in 0..h {
+                for x in 0..w {
+                    let ndc = Vec3::new((x as f32 + 0.5) / w as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / h as f32 * 2.0, 0.5);
+                    if inv.project_point3(ndc).normalize().y.asin().to_degrees() >= below_deg {
+                        continue;
+                    }
+                    let [x0, y0, x1, y1] = tight.unwrap_or([x, y, x, y]);
+                    tight = Some([x0.min(x), y0.min(y), x1.max(x), y1.max(y)]);
+                    let Some([rx, ry, rw, rh]) = rect else { panic!("{camera:?}: pixel ({x}, {y}) below {below_deg} but no rectangle") };
+                    assert!(x >= rx && x < rx + rw && y >= ry && y < ry + rh, "{camera:?}: pixel ({x}, {y}) outside {rect:?}");
+                }
+            }
+            match (tight, rect) {
+                // Larger than the tight box by a small part of the frame.
+                (Some([x0, y0, x1, y1]), Some([_, _, rw, rh])) => {
+                    let slack = (rw * rh - (x1 - x0 + 1) * (y1 - y0 + 1)) as f32 / (w * h) as f32;
+                    assert!(slack < 0.15, "{camera:?}: {rect:?} loose around {tight:?}: {slack}");
+                }
+                (None, Some(r)) => assert!(r[2] as f32 * r[3] as f32 <= 0.1 * (w * h) as f32, "{camera:?}: {r:?} where no pixel is below"),
+                _ => {}
+            }
         }
     }
 }

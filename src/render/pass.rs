@@ -282,9 +282,18 @@ pub trait Pass: Any {
     }
 
     /// Whether [`Pass::draw_as_background`] can draw additive item `key` this frame: it covers
-    /// every pixel of the frame. `joined`: the background is the combination of joined runs.
+    /// every pixel of the frame outside [`Pass::background_gap`]. `joined`: the background is the
+    /// combination of joined runs.
     fn can_draw_as_background(&self, _key: usize, _target: Target, _joined: bool) -> bool {
         false
+    }
+
+    /// A rectangle of pixels (x, y, width, height) holding every pixel that item `key`, drawn as
+    /// the background, leaves uncovered this frame (below a dome's lowest row): the background
+    /// run is composited there first, the item's draw overwriting it where it reaches. None: it
+    /// covers the whole frame.
+    fn background_gap(&self, _key: usize) -> Option<[u32; 4]> {
+        None
     }
 
     /// Records additive item `key` as the frame's background, in place of the background run's

@@ -515,6 +515,14 @@ impl SkyRenderer {
                             // The background's buffer: the joined runs' combination, or the first run's.
                             (Some(f), Some(run)) => {
                                 let (i, it) = &sky_list[f];
+                                // Where it does not reach (below a dome), the background's
+                                // composite, onto the cleared frame and confined to those pixels.
+                                if let Some([x, y, gw, gh]) = self.passes[*i].background_gap(it.key) {
+                                    rpass.set_scissor_rect(x, y, gw, gh);
+                                    stats.draw_calls +=
+                                        if joined { layers.draw_joined_background(&mut rpass, kind, false) } else { layers.draw_background(&mut rpass, 0, kind, false) };
+                                    rpass.set_scissor_rect(0, 0, w, h);
+                                }
                                 stats.draw_calls += self.passes[*i].draw_as_background(&mut rpass, it.key, kind, joined, run);
                                 for (i, it) in first.clone().filter(|&k| k != f).map(|k| &sky_list[k]) {
                                     stats.draw_calls +=
@@ -610,6 +618,15 @@ impl SkyRenderer {
     /// GPU time of each phase of a recent frame, ms (empty without timestamp queries).
     pub fn gpu_pass_ms(&self) -> &[(&'static str, f32)] {
         self.timer.as_ref().map_or(&[], |t| &t.last_ms)
+    }
+
+    /// Makes [`Self::gpu_pass_ms`] the last submitted frame's, when its readback has finished
+    /// (after [`Self::after_submit`] and a wait on the device); otherwise the next frame picks it
+    /// up. For measurements that alternate different frames and need each one's own phases.
+    pub fn collect_gpu_timings(&mut self) {
+        if let Some(t) = self.timer.as_mut() {
+            t.collect();
+        }
     }
 
     /// Call after the encoder of [`Self::render`] was submitted: starts asynchronous readbacks.

@@ -303,6 +303,9 @@ pub struct SkyObjectsPass {
     /// The lowest and highest elevations the frame shows, degrees (with a margin for the
     /// dome's chords).
     frame_elevations_deg: (f32, f32),
+    /// This frame's camera and size in pixels.
+    frame_camera: Camera,
+    frame_size: (u32, u32),
 }
 
 /// One draw of this frame: a version of an object, whole or the part of its terms that goes to
@@ -430,6 +433,8 @@ impl SkyObjectsPass {
             parts: Vec::new(),
             keys: HashMap::new(),
             frame_elevations_deg: (-90.0, 90.0),
+            frame_camera: Camera::default(),
+            frame_size: (1, 1),
         })
     }
 
@@ -459,6 +464,15 @@ impl SkyObjectsPass {
     /// Whether draw `e` adds to the frame (its blend, or the fine terms of a split layer).
     fn additive(&self, e: &Visible) -> bool {
         e.on_top || self.draws.current.as_ref().is_some_and(|d| d.objects[e.index][e.version].blend == BlendMode::Additive)
+    }
+
+    /// The lowest elevation of draw `key`'s shape when it is a whole dome, degrees.
+    fn dome_bottom_deg(&self, key: usize) -> Option<f32> {
+        let (Some(draws), Some(e)) = (&self.draws.current, self.visible.get(key)) else { return None };
+        match draws.objects[e.index][e.version].shape {
+            Shape::Dome { bottom_deg } => Some(bottom_deg.get()),
+            _ => None,
+        }
     }
 
     /// Whether draw `key` has a pipeline for `placement` on the frame this frame.
@@ -618,6 +632,7 @@ impl Pass for SkyObjectsPass {
         // The frame's elevations, with a margin for the dome's chords (tests in mesh.rs).
         let (lowest_deg, highest_deg) = cx.camera.elevation_range_deg(cx.size.0 as f32 / cx.size.1.max(1) as f32);
         self.frame_elevations_deg = (lowest_deg, highest_deg);
+        (self.frame_camera, self.frame_size) = (*cx.camera, cx.size);
         let in_view = |shape: &Shape| match *shape {
             Shape::Dome { bottom_deg } => bottom_deg.get() - 0.5 <= highest_deg,
             Shape::DomeBand { bottom_deg, top_deg } => {
@@ -796,14 +811,18 @@ impl Pass for SkyObjectsPass {
     }
 
     fn can_draw_as_background(&self, key: usize, target: Target, joined: bool) -> bool {
-        let (Some(draws), Some(e)) = (&self.draws.current, self.visible.get(key)) else { return false };
-        // The dome's lowest row reaches below the frame's lowest elevation (with the margin of
-        // its chords' sag), and every row in view is drawn.
-        let covers = match draws.objects[e.index][e.version].shape {
-            Shape::Dome { bottom_deg } => bottom_deg.get() + 0.5 <= self.frame_elevations_deg.0,
-            _ => false,
-        };
-        covers && self.can_place(key, target, Placement::background(joined))
+        // A dome covers the frame down to its lowest row (`background_gap`), every row in view
+        // being drawn.
+        self.dome_bottom_deg(key).is_some() && self.can_place(key, target, Placement::background(joined))
+    }
+
+    fn background_gap(&self, key: usize) -> Option<[u32; 4]> {
+        // Below the dome's lowest row, with the margin of its chords' sag.
+        let covered_from_deg = self.dome_bottom_deg(key)? + 0.5;
+        if covered_from_deg <= self.frame_elevations_deg.0 {
+            return None;
+        }
+        self.frame_camera.pixels_below_elevation(self.frame_size, covered_from_deg)
     }
 
     fn draw_as_background(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, joined: bool, run: &wgpu::BindGroup) -> u32 {

@@ -67,6 +67,13 @@ impl GpuTimer {
 
     /// Start of a frame: collects a finished readback and decides whether to record this frame.
     pub fn begin_frame(&mut self) {
+        self.collect();
+        self.recording = self.state.load(Ordering::Acquire) == IDLE;
+        self.written = [false; TIMED];
+    }
+
+    /// Takes in the timings of the last recorded frame if their readback has finished.
+    pub fn collect(&mut self) {
         match self.state.load(Ordering::Acquire) {
             DONE => {
                 if let Ok(view) = self.readback.get_mapped_range(..) {
@@ -82,8 +89,6 @@ impl GpuTimer {
             FAILED => self.state.store(IDLE, Ordering::Release),
             _ => {}
         }
-        self.recording = self.state.load(Ordering::Acquire) == IDLE;
-        self.written = [false; TIMED];
     }
 
     /// Marks span `i` as timed this frame; its (begin, end) query indices, if this frame records.
