@@ -415,22 +415,22 @@ pub fn run_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
 }
 
 impl ReducedLayersPass {
-    /// Draws the combination of the joined runs ([`Self::record_combined`]) as the frame's
-    /// background (see [`Self::draw_background`]). What lies between two of them in the sky
-    /// phase (billboards) is drawn afterwards under what lies above it
-    /// ([`Self::upper_bind_group`]). `over`: composited over additive draws already on the frame,
-    /// which lie under the runs above the first.
-    pub fn draw_joined_background(&self, rpass: &mut wgpu::RenderPass<'_>, target: Target, over: bool) -> u32 {
-        self.draw_as_background(rpass, self.combined.first(), target, if over { JOINED_BACKGROUND_OVER } else { BACKGROUND })
-    }
-
-    /// Draws run `run` as the frame's background, into the scene's pass before the scene: the
-    /// target holds only its clear colour (black) then, so compositing over it is writing the
-    /// run's colour, and the scene drawn next covers what it hides. A full-screen pass without
-    /// blending or depth test costs a software rasteriser about half a blended, tested one.
-    /// `over`: added to additive draws already on the frame, which lie on top of the run.
-    pub fn draw_background(&self, rpass: &mut wgpu::RenderPass<'_>, run: usize, target: Target, over: bool) -> u32 {
-        self.draw_as_background(rpass, self.buffers.get(run), target, if over { BACKGROUND_OVER } else { BACKGROUND })
+    /// Draws the frame's background, into the scene's pass before the scene: the first run or,
+    /// `joined`, the combination of the joined runs ([`Self::record_combined`]). The target holds
+    /// only its clear colour (black) then, so compositing over it is writing the run's colour,
+    /// and the scene drawn next covers what it hides. A full-screen pass without blending or depth
+    /// test costs a software rasteriser about half a blended, tested one. What lies between two
+    /// joined runs in the sky phase (billboards) is drawn afterwards under what lies above it
+    /// ([`Self::upper_bind_group`]). `over`: added to additive draws already on the frame, which
+    /// lie on top of the first run or, joined, under the runs above the first.
+    pub fn draw_background(&self, rpass: &mut wgpu::RenderPass<'_>, target: Target, joined: bool, over: bool) -> u32 {
+        let (buffer, pipeline) = match (joined, over) {
+            (true, true) => (self.combined.first(), JOINED_BACKGROUND_OVER),
+            (true, false) => (self.combined.first(), BACKGROUND),
+            (false, true) => (self.buffers.first(), BACKGROUND_OVER),
+            (false, false) => (self.buffers.first(), BACKGROUND),
+        };
+        self.draw_as_background(rpass, buffer, target, pipeline)
     }
 
     /// Writes `buffer`'s colour over the frame with background pipeline `pipeline`; 0 draws

@@ -519,8 +519,7 @@ impl SkyRenderer {
                                 // composite, onto the cleared frame and confined to those pixels.
                                 if let Some([x, y, gw, gh]) = self.passes[*i].background_gap(it.key) {
                                     rpass.set_scissor_rect(x, y, gw, gh);
-                                    stats.draw_calls +=
-                                        if joined { layers.draw_joined_background(&mut rpass, kind, false) } else { layers.draw_background(&mut rpass, 0, kind, false) };
+                                    stats.draw_calls += layers.draw_background(&mut rpass, kind, joined, false);
                                     rpass.set_scissor_rect(0, 0, w, h);
                                 }
                                 stats.draw_calls += self.passes[*i].draw_as_background(&mut rpass, it.key, kind, joined, run);
@@ -534,7 +533,7 @@ impl SkyRenderer {
                                     stats.draw_calls += self.passes[*i].draw_first(&mut rpass, it.key, kind);
                                 }
                                 let over = !first.is_empty();
-                                stats.draw_calls += if joined { layers.draw_joined_background(&mut rpass, kind, over) } else { layers.draw_background(&mut rpass, 0, kind, over) };
+                                stats.draw_calls += layers.draw_background(&mut rpass, kind, joined, over);
                             }
                         }
                     }
