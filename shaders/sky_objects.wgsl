@@ -184,6 +184,13 @@ fn lighting() -> u32 {
     return draw.misc.y;
 }
 
+// Plate carree coordinates of world direction `dir` in the rotating celestial frame; u wraps
+// from 1 to 0 on the frame's meridian behind -z.
+fn celestial_uv(dir: vec3<f32>) -> vec2<f32> {
+    let c = (globals.celestial_from_world * vec4<f32>(dir, 0.0)).xyz;
+    return vec2<f32>(atan2(c.x, -c.z) / (2.0 * PI) + 0.5, 0.5 - asin(clamp(c.y, -1.0, 1.0)) / PI);
+}
+
 // Stage `i`'s texture coordinates under its mapping `mode`: the mesh's come from the vertex
 // shader, the others from the view direction.
 fn stage_uv(i: u32, mode: u32, in: VertexOut) -> vec2<f32> {
@@ -211,8 +218,7 @@ fn stage_uv(i: u32, mode: u32, in: VertexOut) -> vec2<f32> {
         uv = vec2<f32>(0.5) + along / l * angle / s.params.x;
         return uv;
     } else if mode == UV_CELESTIAL {
-        let c = (globals.celestial_from_world * vec4<f32>(dir, 0.0)).xyz;
-        uv = vec2<f32>(atan2(c.x, -c.z) / (2.0 * PI) + 0.5, 0.5 - asin(clamp(c.y, -1.0, 1.0)) / PI);
+        uv = celestial_uv(dir);
     } else if mode == UV_QUAKE {
         var d = dir;
         d.y = d.y * s.params.x + s.params.y;
@@ -268,6 +274,18 @@ fn fold_stage(acc_in: Terms, i: u32, c_in: vec4<f32>, view: vec3<f32>) -> Terms 
 fn stage_sample(i: u32, t: texture_2d<f32>, smp: sampler, in: VertexOut) -> vec4<f32> {
     if !stage_live(i) { return vec4<f32>(0.0); }
     if view_stage() == i { return vec4<f32>(1.0); }
+    if uv_mode(i) == UV_CELESTIAL {
+        // Differenced across the wrap of u, the derivative spans the whole texture and picks
+        // its smallest level: a dashed line of the texture's mean along the meridian. The same
+        // coordinates turned by half a turn wrap on the far side; per axis the smaller of the two
+        // derivatives is the true one.
+        let c = celestial_uv(normalize(in.world_dir));
+        let uv = scaled(i, c);
+        let turned = scaled(i, vec2<f32>(fract(c.x + 0.5), c.y));
+        let dx = select(dpdx(uv), dpdx(turned), abs(dpdx(turned).x) < abs(dpdx(uv).x));
+        let dy = select(dpdy(uv), dpdy(turned), abs(dpdy(turned).x) < abs(dpdy(uv).x));
+        return textureSampleGrad(t, smp, uv, dx, dy);
+    }
     return textureSample(t, smp, stage_uv(i, uv_mode(i), in));
 }
 

@@ -425,3 +425,34 @@ fn materials_draw_with_specialised_pipelines() {
     h.render(&sky, &FrameInput::new(13.0, 0.5), &camera(), &RenderOptions::default()).unwrap();
     assert!(h.renderer.pass::<skytune::render::sky_objects::SkyObjectsPass>().unwrap().variants_built().0 > 0);
 }
+
+#[test]
+fn the_galaxy_shows_no_seam_where_its_longitude_wraps() {
+    // The galaxy's plate carree coordinates wrap from 1 to 0 on one meridian of the celestial
+    // frame. Differenced across the wrap, the derivative picked the texture's smallest level: a
+    // dashed line of its mean down the sky. The galaxy alone, in four views round the horizon,
+    // one of which the meridian crosses; a line shows as pixels darker than both neighbours.
+    let sky = default_sky();
+    let (w, h) = (640, 360);
+    let mut hl = common::headless(w, h);
+    hl.set_sky(&sky).unwrap();
+    let others = sky.objects.iter().map(|o| o.name.clone()).filter(|n| n != "galaxy").collect();
+    let input = FrameInput { disabled: others, ..FrameInput::new(23.0, 0.0) };
+    let options = RenderOptions { scene: false, glare: false, ..Default::default() };
+    let (mut dips, mut lit) = (0, 0);
+    for yaw_deg in [0.0, 90.0, 180.0, 270.0] {
+        let img = hl.render(&sky, &input, &Camera { yaw_deg, pitch_deg: 10.0, ..Camera::default() }, &options).unwrap();
+        let luma = |x: u32, y: u32| img.get_pixel(x, y).0[..3].iter().map(|&c| i32::from(c)).sum::<i32>();
+        for y in 0..h {
+            for x in 4..w - 4 {
+                lit += i32::from(luma(x, y) > 30);
+                if luma(x - 4, y).min(luma(x + 4, y)) - luma(x, y) > 24 {
+                    dips += 1;
+                }
+            }
+        }
+    }
+    eprintln!("galaxy seam: {dips} dips, {lit} lit pixels");
+    assert!(lit > 10_000, "the galaxy is too faint to show a seam: {lit} pixels lit");
+    assert!(dips < 20, "{dips} pixels darker than both neighbours 4 pixels away by more than 24 levels (summed over rgb)");
+}
