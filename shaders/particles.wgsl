@@ -44,6 +44,6 @@ fn fs_main_under_run(in: ParticleOut) -> @location(0) vec4<f32> {
 @fragment
 fn fs_alpha_under_run(in: ParticleOut) -> @location(0) vec4<f32> {
     let c = sprite_alpha(in);
-    let run = run_at(in.clip.xy);
+    let run = run_alone_at(in.clip.xy);
     return vec4<f32>(c.a * (run.a * c.rgb + run.rgb), c.a);
 }

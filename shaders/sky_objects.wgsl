@@ -9,7 +9,7 @@
 struct Stage {
     scale_offset: vec4<f32>, // uv scale (xy) and offset (zw), repeats
     params: vec4<f32>,       // sun: size_rad; quake: z_scale, z_offset, t_scale, time_scale
-    cfg: vec4<u32>,          // op (0 add, 1 modulate), uv mode, constant index (4 = none), live (0: its term is black this frame, not sampled)
+    cfg: vec4<u32>,          // op (0 add, 1 modulate), uv mode (4: white, folded into the stage before), constant index (4 = none), live (0: its term is black this frame, not sampled)
 };
 
 // Keep in sync with `DrawUniform` in src/render/sky_objects.rs.
@@ -39,6 +39,9 @@ const UV_MESH: u32 = 0u;
 const UV_SUN: u32 = 1u;
 const UV_CELESTIAL: u32 = 2u;
 const UV_QUAKE: u32 = 3u;
+// A stage folded into the one before it at load (src/render/stage_fold.rs): white, not sampled.
+// Keep in sync with `UV_WHITE` in src/render/sky_objects.rs.
+const UV_WHITE: u32 = 4u;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -273,7 +276,7 @@ fn fold_stage(acc_in: Terms, i: u32, c_in: vec4<f32>, view: vec3<f32>) -> Terms 
 // draw of the layer (reads as 0), white when the sky-view map stands in for it.
 fn stage_sample(i: u32, t: texture_2d<f32>, smp: sampler, in: VertexOut) -> vec4<f32> {
     if !stage_live(i) { return vec4<f32>(0.0); }
-    if view_stage() == i { return vec4<f32>(1.0); }
+    if view_stage() == i || uv_mode(i) == UV_WHITE { return vec4<f32>(1.0); }
     if uv_mode(i) == UV_CELESTIAL {
         // Differenced across the wrap of u, the derivative spans the whole texture and picks
         // its smallest level: a dashed line of the texture's mean along the meridian. The same
@@ -380,7 +383,13 @@ fn as_background(color: vec4<f32>, pixel: vec2<f32>) -> vec4<f32> {
 // What a draw writes after the run above it is already in the frame, so that the frame ends as
 // C + T x (this draw over what was there), with the run's colour C and transmittance T here.
 fn under_run(color: vec4<f32>, pixel: vec2<f32>) -> vec4<f32> {
-    let run = run_at(pixel);
+    // Additive draws read only the transmittance, which a seeded buffer holds as it is.
+    var run: vec4<f32>;
+    if BLEND_KIND <= 1u {
+        run = run_alone_at(pixel);
+    } else {
+        run = run_at(pixel);
+    }
     switch BLEND_KIND {
         case 0u: { return vec4<f32>(run.rgb + run.a * color.rgb, color.a); }
         case 1u: { return vec4<f32>(color.a * (run.a * color.rgb + run.rgb), color.a); }

@@ -30,6 +30,8 @@ struct Config {
     additive_first: bool,
     /// [`RenderOptions::fuse_background`] (on unless a configuration measures it).
     fuse_background: bool,
+    /// [`RenderOptions::seed_joined`] (on unless a configuration measures it).
+    seed_joined: bool,
     wall_ms: Vec<f32>,
     scene_ms: Vec<f32>,
     sky_ms: Vec<f32>,
@@ -88,6 +90,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         hour: HOUR,
         additive_first: true,
         fuse_background: true,
+        seed_joined: true,
         wall_ms: Vec::new(),
         scene_ms: Vec::new(),
         sky_ms: Vec::new(),
@@ -125,6 +128,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         Config { hour: NIGHT, ..mk("night, sky fills the screen", up, true, 4) },
         Config { hour: NIGHT, additive_first: false, ..mk("night, sky fills the screen, additive draws in the sky phase (additive_first off)", up, true, 4) },
         Config { hour: NIGHT, fuse_background: false, ..mk("night, sky fills the screen, background composited over the additive draws (fuse_background off)", up, true, 4) },
+        // The joined runs' combination: the second run's buffer seeded with the first, or a pass of its own.
+        Config { seed_joined: false, ..mk("sky fills the screen, joined runs combined in a pass of their own (seed_joined off)", up, true, 4) },
     ];
     let per_round = args.frames.div_ceil(ROUNDS).max(1);
     for round in 0..ROUNDS {
@@ -138,6 +143,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 skips: c.skips,
                 additive_first: c.additive_first,
                 fuse_background: c.fuse_background,
+                seed_joined: c.seed_joined,
                 ..Default::default()
             };
             // Two warm-up frames: pipelines, caches and the timestamp readback of this configuration.
@@ -249,12 +255,14 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         md,
         "- More skips and options, the same way: dome layers and rows of dome triangles out of view not drawn {:.2} ms; stages that no pixel minifies sampled from level 0 {:.2} ms \
          (sky filling the screen); billboards and dome rows behind the scene not drawn {:.2} ms (horizon); the night's additive draws put under the background (`additive_first`) {:.2} ms (night, sky filling the screen, hour {NIGHT}); \
-         the skydome's fine stars drawn as the background (`fuse_background`) {:.2} ms (the same night frame).",
+         the skydome's fine stars drawn as the background (`fuse_background`) {:.2} ms (the same night frame); \
+         the second joined run's buffer seeded with the first instead of a combining pass (`seed_joined`) {:.2} ms (sky filling the screen).",
         saving(16, 2),
         saving(17, 2),
         saving(19, 18),
         saving(21, 20),
-        saving(22, 20)
+        saving(22, 20),
+        saving(23, 2)
     );
     skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
     print!("{md}");

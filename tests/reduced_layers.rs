@@ -170,6 +170,18 @@ fn joined_runs_give_the_same_picture_with_one_composite_less() {
         // The same sums in another order: rounding of the 8-bit target moves a level or two.
         let (d, _) = common::diff(&one, &two, 2);
         assert!(d.differing < 0.001, "{what}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
+        // Two runs: the second's buffer seeded with the first holds their combination, and the
+        // draws between them take the first off again; the same picture as combining them in a
+        // pass of their own. Three runs, or a second run coarser than the first (a physical
+        // model's sky stays at half resolution), are combined in passes.
+        let seeds = runs == 2 && s.reduced_runs[1] <= s.reduced_runs[0];
+        assert_eq!(s.seeded, seeds, "{what}: seeded ({s:?})");
+        if seeds {
+            let combined = h.render(sky, &input, &camera, &RenderOptions { seed_joined: false, ..joined }).expect("rendered");
+            assert!(!h.renderer.stats.seeded, "{what}");
+            let (d, _) = common::diff(&one, &combined, 2);
+            assert!(d.differing < 0.001, "{what}: seeded against combined, {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
+        }
     }
 }
 

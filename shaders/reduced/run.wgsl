@@ -12,8 +12,20 @@ struct Composite {
 @group(2) @binding(0) var<uniform> run_composite: Composite;
 @group(2) @binding(1) var run_layers: texture_2d<f32>;
 @group(2) @binding(2) var run_sampler: sampler;
+// The run below, where this run's buffer was seeded with it (then the buffer holds both runs'
+// combination, ReducedLayersPass::seed in src/render/reduced_layers.rs); else black.
+@group(2) @binding(3) var run_lower: texture_2d<f32>;
 
 // The run at frame pixel `pixel` (a fragment's position), upsampled bilinearly.
 fn run_at(pixel: vec2<f32>) -> vec4<f32> {
     return textureSampleLevel(run_layers, run_sampler, pixel * run_composite.uv_from_pixel.xy, 0.0);
+}
+
+// The run alone at frame pixel `pixel`, for draws that lie under it and read its colour: a seeded
+// buffer holds C + T x (the run below), which this takes off again (nothing where not seeded).
+fn run_alone_at(pixel: vec2<f32>) -> vec4<f32> {
+    let uv = pixel * run_composite.uv_from_pixel.xy;
+    let run = textureSampleLevel(run_layers, run_sampler, uv, 0.0);
+    let lower = textureSampleLevel(run_lower, run_sampler, uv, 0.0).rgb;
+    return vec4<f32>(max(run.rgb - run.a * lower, vec3<f32>(0.0)), run.a);
 }

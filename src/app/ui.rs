@@ -539,6 +539,10 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
             if runs.is_empty() { "none".into() } else { runs.join(", ") }
         ));
         ui.checkbox(&mut c.options.join_runs, format!("join the first runs ({} composites)", s.composites));
+        ui.add_enabled(
+            c.options.join_runs,
+            egui::Checkbox::new(&mut c.options.seed_joined, format!("seed the second run with the first ({})", if s.seeded { "this frame" } else { "not this frame" })),
+        );
         ui.checkbox(&mut c.options.additive_first, format!("additive draws under the background ({})", s.drawn_first));
         ui.add_enabled(
             c.options.additive_first,

@@ -22,6 +22,7 @@ pub mod sky_luts;
 pub mod sky_model;
 pub mod sky_objects;
 pub mod sky_view;
+pub mod stage_fold;
 pub mod stars;
 pub mod textures;
 pub mod timing;

@@ -109,11 +109,24 @@ struct CompositeUniform {
 }
 const _: () = assert!(std::mem::size_of::<CompositeUniform>() == 16);
 
+/// How a frame's joined runs come together in the background's buffer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Joining<'a> {
+    /// Combination j of the joined runs at divisor `[j]`, each in a pass of its own (none: the
+    /// runs are not joined).
+    Combined(&'a [u32]),
+    /// The first two runs, the second's buffer seeded with the first ([`ReducedLayersPass::seed`]).
+    Seeded,
+}
+
 /// One run's buffer, its divisor and the bind group that reads it.
 struct RunBuffer {
     view: wgpu::TextureView,
     bind_group: wgpu::BindGroup,
     divisor: u32,
+    /// Whether `bind_group` reads the buffer of the run below as `run_lower` (the buffer was seeded
+    /// with it: [`ReducedLayersPass::seed`]); else that binding is black.
+    reads_lower: bool,
 }
 
 /// The reduced buffers of a frame size and the composite pipelines.
@@ -126,8 +139,11 @@ pub struct ReducedLayersPass {
     pipelines: Pipelines<[wgpu::RenderPipeline; 4]>,
     /// Combines two runs into one buffer, the upper over the lower (runs joined across the
     /// billboards between them: [`ReducedLayersPass::record_combined`]): the background's
-    /// combination (keeping the upper's transmittance) and one above it (the product).
-    combine: Pipelines<[wgpu::RenderPipeline; 2]>,
+    /// combination (keeping the upper's transmittance) and one above it (the product); and the
+    /// seed of an upper run's buffer with the lower run ([`ReducedLayersPass::seed`]).
+    combine: Pipelines<[wgpu::RenderPipeline; 3]>,
+    /// Bound as `run_lower` where a buffer was not seeded: black, so nothing is taken off.
+    black: wgpu::TextureView,
     /// The composite's uniform (frame pixel to texture coordinates, any divisor).
     uniform: wgpu::Buffer,
     sampler: wgpu::Sampler,
@@ -138,6 +154,9 @@ pub struct ReducedLayersPass {
     /// When the frame joins its first runs: combination j holds runs j and above (up to the
     /// last joined, which needs none), at the finest divisor among them.
     combined: Vec<RunBuffer>,
+    /// This frame joins two runs by seeding the upper's buffer with the lower: the upper's
+    /// buffer ends as their combination, and `combined` is empty.
+    seeded: bool,
 }
 
 impl ReducedLayersPass {
@@ -170,7 +189,9 @@ impl ReducedLayersPass {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        Ok(Self { layout, pipelines, combine, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new(), combined: Vec::new() })
+        // Never written: wgpu clears it to zero.
+        let black = super::textures::unused_view(device, "ReducedLayers::black");
+        Ok(Self { layout, pipelines, combine, black, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new(), combined: Vec::new(), seeded: false })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 4]> {
@@ -186,12 +207,14 @@ impl ReducedLayersPass {
         ])
     }
 
-    fn build_combine(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 2]> {
+    fn build_combine(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 3]> {
         let module = shaders::module(b.device, b.library, "reduced_layers")?;
         let format = reduced_format(b.target);
         Ok([
             shaders::fullscreen_pipeline_of(b.device, &module, "fs_combine", layout, "ReducedLayers::combine_pipeline", format)?,
             shaders::fullscreen_pipeline_of(b.device, &module, "fs_combine_above", layout, "ReducedLayers::combine_above_pipeline", format)?,
+            // The lower run's colour, transmittance 1: what the upper run's layers then go over.
+            shaders::fullscreen_pipeline_of(b.device, &module, "fs_background", layout, "ReducedLayers::seed_pipeline", format)?,
         ])
     }
 
@@ -200,9 +223,13 @@ impl ReducedLayersPass {
         (width.div_ceil(divisor).max(1), height.div_ceil(divisor).max(1))
     }
 
-    /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, and combination `j`
-    /// of the joined runs at `combined[j]`, for the frame size and target.
-    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), target: Target, divisors: &[u32], combined: &[u32]) {
+    /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, and how the joined
+    /// runs are combined (`joining`), for the frame size and target.
+    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), target: Target, divisors: &[u32], joining: Joining<'_>) {
+        let (combined, seeded) = match joining {
+            Joining::Combined(divisors) => (divisors, false),
+            Joining::Seeded => (&[][..], true),
+        };
         if self.made_for != (size, target) {
             self.buffers.clear();
             self.combined.clear();
@@ -213,8 +240,17 @@ impl ReducedLayersPass {
             queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&u));
         }
         let mut buffers = std::mem::take(&mut self.buffers);
-        self.fit(device, &mut buffers, "ReducedLayers::buffer", divisors);
+        let first_changed = self.fit(device, &mut buffers, "ReducedLayers::buffer", divisors);
+        // The second buffer reads the first as `run_lower` when seeded with it (its bind group
+        // made again when either changes), else black.
+        if let [lower, upper, ..] = buffers.as_mut_slice() {
+            if upper.reads_lower != seeded || (seeded && first_changed) {
+                upper.bind_group = self.bind_group(device, "ReducedLayers::buffer 1", &upper.view, seeded.then_some(&lower.view));
+                upper.reads_lower = seeded;
+            }
+        }
         self.buffers = buffers;
+        self.seeded = seeded && self.buffers.len() >= 2;
         // Only the frame's combinations: their count is the chain's length.
         let mut combinations = std::mem::take(&mut self.combined);
         combinations.truncate(combined.len());
@@ -222,12 +258,15 @@ impl ReducedLayersPass {
         self.combined = combinations;
     }
 
-    /// Makes `list[k]` a buffer at `divisors[k]` for every k, keeping those already at theirs.
-    fn fit(&self, device: &wgpu::Device, list: &mut Vec<RunBuffer>, label: &str, divisors: &[u32]) {
+    /// Makes `list[k]` a buffer at `divisors[k]` for every k, keeping those already at theirs;
+    /// returns whether the first was made anew.
+    fn fit(&self, device: &wgpu::Device, list: &mut Vec<RunBuffer>, label: &str, divisors: &[u32]) -> bool {
+        let mut first_changed = false;
         for (k, &divisor) in divisors.iter().enumerate() {
             if list.get(k).is_some_and(|b| b.divisor == divisor) {
                 continue;
             }
+            first_changed |= k == 0;
             let buffer = self.buffer(device, &format!("{label} {k}"), divisor);
             if k < list.len() {
                 list[k] = buffer;
@@ -235,6 +274,7 @@ impl ReducedLayersPass {
                 list.push(buffer);
             }
         }
+        first_changed
     }
 
     /// A buffer of the whole frame at `divisor`, with the bind group that reads it.
@@ -251,16 +291,39 @@ impl ReducedLayersPass {
             view_formats: &[],
         });
         let view = texture.create_view(&Default::default());
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let bind_group = self.bind_group(device, label, &view, None);
+        RunBuffer { view, bind_group, divisor, reads_lower: false }
+    }
+
+    /// The bind group that reads buffer `view` ([`run_layout`]), with the buffer of the run
+    /// below it as `run_lower` where seeded with it (else black).
+    fn bind_group(&self, device: &wgpu::Device, label: &str, view: &wgpu::TextureView, lower: Option<&wgpu::TextureView>) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&format!("{label}::bind_group")),
             layout: &self.layout,
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: self.uniform.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(view) },
                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(lower.unwrap_or(&self.black)) },
             ],
-        });
-        RunBuffer { view, bind_group, divisor }
+        })
+    }
+
+    /// Starts run 1's pass of a seeded frame ([`Self::ensure`]): its buffer takes run 0's colour
+    /// (upsampled where finer), transmittance 1, in place of nothing in front, so that the run's
+    /// layers going over it leave C1 + T1 C0 and T1, the two runs' combination, in one pass less
+    /// than combining them afterwards (which reads both buffers). Draws between the runs, which
+    /// need run 1's own colour, take C0 off again (`run_alone_at` in shaders/reduced/run.wgsl).
+    pub fn seed(&self, rpass: &mut wgpu::RenderPass<'_>, globals: &wgpu::BindGroup, target: Target) -> u32 {
+        let Some(lower) = self.buffers.first().filter(|_| self.seeded) else { return 0 };
+        rpass.set_pipeline(&self.combine.for_target(target)[2]);
+        rpass.set_bind_group(0, globals, &[]);
+        rpass.set_bind_group(1, &lower.bind_group, &[]);
+        // Not read; the layout has the group.
+        rpass.set_bind_group(2, &lower.bind_group, &[]);
+        rpass.draw(0..3, 0..1);
+        1
     }
 
     /// Records the combinations of the joined runs into their buffers ([`Self::ensure`]), from
@@ -274,7 +337,7 @@ impl ReducedLayersPass {
         target: Target,
         mut timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> u32 {
-        let [background, above] = self.combine.for_target(target);
+        let [background, above, _] = self.combine.for_target(target);
         let mut draws = 0;
         for (j, out) in self.combined.iter().enumerate().rev() {
             let (Some(lower), Some(upper)) = (self.buffers.get(j), self.upper_bind_group(j + 1)) else { return draws };
@@ -293,6 +356,11 @@ impl ReducedLayersPass {
     /// What lies above the draws between joined runs j - 1 and j: combination j, or run j's
     /// buffer when it is the last joined ([`run_layout`]). Draws there go under it.
     pub fn upper_bind_group(&self, j: usize) -> Option<&wgpu::BindGroup> {
+        // Seeded, run 1's buffer holds the combination (for the background) and reads run 0 to
+        // take it off (for the draws between them).
+        if self.seeded {
+            return self.buffers.get(1).filter(|_| j <= 1).map(|b| &b.bind_group);
+        }
         match self.combined.get(j) {
             Some(c) => Some(&c.bind_group),
             None if j == self.combined.len() => self.buffers.get(j).map(|b| &b.bind_group),
@@ -353,6 +421,7 @@ impl Pass for ReducedLayersPass {
     }
 
     fn prepare(&mut self, cx: &FrameContext<'_>) {
+        self.seeded = false;
         // Buffers of another size are of no further use.
         if self.made_for.0 != cx.size {
             self.buffers.clear();
@@ -405,12 +474,13 @@ fn full_screen_pipeline(
     })
 }
 
-/// The bind group layout of one run's buffer (composite uniform, buffer, sampler): the composite
+/// The bind group layout of one run's buffer (composite uniform, buffer, sampler, and the buffer
+/// of the run below where it was seeded with it, else black): the composite
 /// reads it, and so do sky objects drawn under a run ([`super::sky_objects`]).
 pub fn run_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some(label),
-        entries: &[super::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), super::texture_entry(1), super::sampler_entry(2)],
+        entries: &[super::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), super::texture_entry(1), super::sampler_entry(2), super::texture_entry(3)],
     })
 }
 
@@ -424,9 +494,10 @@ impl ReducedLayersPass {
     /// ([`Self::upper_bind_group`]). `over`: added to additive draws already on the frame, which
     /// lie on top of the first run or, joined, under the runs above the first.
     pub fn draw_background(&self, rpass: &mut wgpu::RenderPass<'_>, target: Target, joined: bool, over: bool) -> u32 {
+        let combination = if self.seeded { self.buffers.get(1) } else { self.combined.first() };
         let (buffer, pipeline) = match (joined, over) {
-            (true, true) => (self.combined.first(), JOINED_BACKGROUND_OVER),
-            (true, false) => (self.combined.first(), BACKGROUND),
+            (true, true) => (combination, JOINED_BACKGROUND_OVER),
+            (true, false) => (combination, BACKGROUND),
             (false, true) => (self.buffers.first(), BACKGROUND_OVER),
             (false, false) => (self.buffers.first(), BACKGROUND),
         };

@@ -7,7 +7,7 @@ use super::error::RenderResult;
 use super::globals::{Globals, GlobalsBinding};
 use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SharedResources, SkyUpload, Target, PASSES};
 use super::reduced_layers::DomeResolution;
-use super::reduced_layers::ReducedLayersPass;
+use super::reduced_layers::{Joining, ReducedLayersPass};
 use super::shaders::{self, ShaderLibrary};
 use super::textures::TextureCache;
 use super::timing::GpuTimer;
@@ -54,6 +54,11 @@ pub struct RenderOptions {
     /// depth-tested, in place of that draw and the background's blended composite. Off: the
     /// background is composited over them.
     pub fuse_background: bool,
+    /// With the first two runs joined: the second run's buffer starts as the first run's colour
+    /// instead of nothing, so that its layers leave the two runs' combination there (one pass at
+    /// reduced resolution less: no combining pass reading both buffers). Off, or where the first
+    /// run is the finer one, or with more runs joined: combined in passes of their own.
+    pub seed_joined: bool,
 }
 
 impl Default for RenderOptions {
@@ -68,6 +73,7 @@ impl Default for RenderOptions {
             join_runs: true,
             additive_first: true,
             fuse_background: true,
+            seed_joined: true,
         }
     }
 }
@@ -138,6 +144,9 @@ pub struct FrameStats {
     /// One of them (the skydome's fine stars) covered the frame and was drawn as the background
     /// itself, its run's colour plus its term: no separate composite of the background.
     pub background_fused: bool,
+    /// The first two runs were joined by seeding the second's buffer with the first
+    /// ([`RenderOptions::seed_joined`]): no combining pass.
+    pub seeded: bool,
     /// The star field was not drawn: transparent this frame.
     pub stars_skipped: bool,
     /// The `lut` tables were not rebuilt: nothing they depend on moved.
@@ -390,9 +399,12 @@ impl SkyRenderer {
         }
         let joined = chain >= 2;
         stats.composites = (runs.len() + 1).saturating_sub(chain.max(1)) as u32;
-        // Joined runs are combined from the top down, each combination at the finer resolution
-        // of its run and the combination above it.
-        let combined = combined_divisors(&divisors[..chain]);
+        // Two joined runs, the second at least as fine: the second's buffer is seeded with the
+        // first and ends as their combination. Otherwise joined runs are combined from the top
+        // down, each combination at the finer resolution of its run and the combination above it.
+        let seeded = options.seed_joined && chain == 2 && divisors[1] <= divisors[0];
+        stats.seeded = seeded;
+        let combined = if seeded { Vec::new() } else { combined_divisors(&divisors[..chain]) };
         // The additive draws right after the background go under it, first onto the cleared
         // frame: items `first` of the sky phase. Not where the scene covers part of the frame:
         // they would pay for its pixels, which the depth test spares them in the sky phase.
@@ -428,7 +440,8 @@ impl SkyRenderer {
             });
         stats.background_fused = fused.is_some();
         if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
-            layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors, &combined);
+            let joining = if seeded { Joining::Seeded } else { Joining::Combined(&combined) };
+            layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors, joining);
         }
 
         if let Some(t) = self.timer.as_mut() {
@@ -482,14 +495,17 @@ impl SkyRenderer {
                         let sky_list = &items[Phase::Sky.index()];
                         let layers = (self.passes[rp].as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>();
                         for (r, &(start, end)) in runs.iter().enumerate() {
-                            let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(r == 0, r + 1 == runs.len() && !joined));
+                            let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(r == 0, r + 1 == runs.len() && (!joined || seeded)));
                             let Some(mut rpass) = layers.and_then(|l| l.begin(encoder, r, run_writes)) else { continue };
+                            if let (1, true, Some(l)) = (r, seeded, layers) {
+                                stats.draw_calls += l.seed(&mut rpass, &self.globals.bind_group, kind);
+                            }
                             rpass.set_bind_group(0, &self.globals.bind_group, &[]);
                             for (i, it) in &sky_list[start..end] {
                                 stats.draw_calls += self.passes[*i].draw_reduced(&mut rpass, it.key, kind);
                             }
                         }
-                        if let (true, Some(l)) = (joined, layers) {
+                        if let (true, false, Some(l)) = (joined, seeded, layers) {
                             let writes = self.timer.as_mut().and_then(|t| t.reduced_writes(false, true));
                             stats.draw_calls += l.record_combined(encoder, &self.globals.bind_group, kind, writes);
                         }

@@ -12,6 +12,7 @@ use super::mesh::{shape_key, shape_mesh, GpuMesh, SkyVertex};
 use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
 use super::renderer::FrameStats;
 use super::shaders;
+use super::stage_fold;
 use super::textures::{self, TextureCache};
 use crate::sky::eval::{FrameSky, VersionFrame};
 use crate::sky::resolved::{BlendMode, Lighting, Shape, Sky, StageOp, UvSource, Version, MAX_STAGES};
@@ -50,6 +51,10 @@ const _: () = assert!(std::mem::size_of::<DrawUniform>() == 64 + 16 + 64 + 4 * 4
 
 /// "No stage" in stage-index fields shared with the shader.
 const NO_STAGE: u32 = 4;
+
+/// UV mode of a stage folded into the one before it ([`super::stage_fold`]): reads as white,
+/// not sampled. Keep in sync with `UV_WHITE` in shaders/sky_objects.wgsl.
+const UV_WHITE: u32 = 4;
 
 /// UV mode numbers shared with the shader.
 fn uv_mode(uv: &UvSource) -> (u32, [f32; 4]) {
@@ -409,6 +414,7 @@ impl SkyObjectsPass {
                     wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
                     wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&b.shared.sky_view_sampler) },
+                    wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&view) },
                 ],
             })
         };
@@ -933,8 +939,13 @@ impl StageMap {
     /// None for a stage without a texture of its own (the gradient: one texel wide, no levels).
     fn of(stage: &crate::sky::resolved::Stage, shape: &Shape) -> Option<Self> {
         let t = stage.texture.as_ref()?;
-        let mut map = Self { uv: stage.uv, texels: (t.width as f32 * stage.uv_scale[0].abs(), t.height as f32 * stage.uv_scale[1].abs()), ring_peaks: Vec::new() };
-        if let (UvSource::Mesh | UvSource::Quake { .. }, Some((top_deg, bottom_deg, rings, _))) = (stage.uv, super::mesh::dome_grid(shape)) {
+        Some(Self::with_texels(stage.uv, (t.width as f32 * stage.uv_scale[0].abs(), t.height as f32 * stage.uv_scale[1].abs()), shape))
+    }
+
+    /// A texture `texels` across one repeat of mapping `uv` on `shape`.
+    fn with_texels(uv: UvSource, texels: (f32, f32), shape: &Shape) -> Self {
+        let mut map = Self { uv, texels, ring_peaks: Vec::new() };
+        if let (UvSource::Mesh | UvSource::Quake { .. }, Some((top_deg, bottom_deg, rings, _))) = (uv, super::mesh::dome_grid(shape)) {
             map.ring_peaks = (0..rings)
                 .map(|r| {
                     let (a, b) = (top_deg + (bottom_deg - top_deg) * r as f32 / rings as f32, top_deg + (bottom_deg - top_deg) * (r + 1) as f32 / rings as f32);
@@ -943,7 +954,7 @@ impl StageMap {
                 })
                 .collect();
         }
-        Some(map)
+        map
     }
 
     /// [`Self::peak_texels_per_deg`] over ring `ring` of a dome's triangles (all of it, where the
@@ -1119,18 +1130,27 @@ impl SkyObjectDraws {
                             (textures::upload(device, queue, &format!("{label}::gradient"), 1, h, &vec![255; (h * 4) as usize]), h)
                         });
                         let gradient_view = gradient.as_ref().map(|(t, _)| t.create_view(&Default::default()));
+                        // Static products of two stages sample one folded texture.
+                        let folds = stage_fold::folds(v);
+                        let fold_at = |k: usize| folds.iter().find(|f| f.stage == k);
+                        let folded_away = |k: usize| k > 0 && fold_at(k - 1).is_some();
                         let mut views = Vec::new();
                         let mut samplers = Vec::new();
                         let mut level0_samplers = Vec::new();
                         for k in 0..MAX_STAGES {
                             let stage = v.stages.get(k);
-                            let view = match (stage.and_then(|s| s.texture.as_ref()), &gradient_view) {
-                                (Some(img), _) => cache.get(device, queue, img),
-                                (None, Some(gv)) if v.gradients.as_ref().is_some_and(|g| g.stage == k) => gv.clone(),
+                            let view = match (fold_at(k), stage.and_then(|s| s.texture.as_ref()), &gradient_view) {
+                                _ if folded_away(k) => cache.white.clone(),
+                                (Some(f), _, _) => {
+                                    let (key, content) = stage_fold::identity(v, f);
+                                    cache.derived(device, queue, &key, content, || stage_fold::bake(v, f, &key))
+                                }
+                                (None, Some(img), _) => cache.get(device, queue, img),
+                                (None, None, Some(gv)) if v.gradients.as_ref().is_some_and(|g| g.stage == k) => gv.clone(),
                                 _ => cache.white.clone(),
                             };
                             views.push(view);
-                            let clamp = stage.is_some_and(|s| s.clamp);
+                            let clamp = fold_at(k).map_or(stage.is_some_and(|s| s.clamp), |f| f.clamp);
                             samplers.push(if clamp { cache.clamp.clone() } else { cache.repeat.clone() });
                             level0_samplers.push(if clamp { cache.clamp_level0.clone() } else { cache.repeat_level0.clone() });
                         }
@@ -1140,7 +1160,11 @@ impl SkyObjectDraws {
                             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                             mapped_at_creation: false,
                         });
-                        let maps: [Option<StageMap>; MAX_STAGES] = std::array::from_fn(|k| v.stages.get(k).and_then(|s| StageMap::of(s, &v.shape)));
+                        let maps: [Option<StageMap>; MAX_STAGES] = std::array::from_fn(|k| match fold_at(k) {
+                            _ if folded_away(k) => None,
+                            Some(f) => Some(StageMap::with_texels(UvSource::Mesh, (f.size.0 as f32, f.size.1 as f32), &v.shape)),
+                            None => v.stages.get(k).and_then(|s| StageMap::of(s, &v.shape)),
+                        });
                         let level0_able = (0..MAX_STAGES).filter(|&k| maps[k].is_some()).fold(0u8, |m, k| m | 1 << k);
                         // One bind group per subset of those stages, indexed by the subset's mask (a
                         // mask that is no subset is never indexed, and gets its subset's), so that
@@ -1167,19 +1191,22 @@ impl SkyObjectDraws {
                             let oversampling = s.texture.as_ref().map_or(1.0, |t| *oversampling.entry(t.key.clone()).or_insert_with(|| texture_oversampling(t)));
                             texels_per_deg[k] = stage_texels_per_deg(s, &v.shape) / oversampling;
                         }
-                        VersionDraw {
-                            uniform,
-                            bind_groups,
-                            level0_able,
-                            maps,
-                            mesh,
-                            gradient,
-                            gradient_stage,
-                            blend: v.blend,
-                            shape: v.shape,
-                            base: DrawUniform::from(v),
-                            texels_per_deg,
+                        // A folded texture carries the finer detail of its two stages.
+                        for f in &folds {
+                            texels_per_deg[f.stage] = texels_per_deg[f.stage].max(texels_per_deg[f.stage + 1]);
+                            texels_per_deg[f.stage + 1] = 0.0;
                         }
+                        let mut base = DrawUniform::from(v);
+                        for f in &folds {
+                            let (first, second) = (f.stage, f.stage + 1);
+                            base.stages[first].scale_offset = [1.0, 1.0, 0.0, 0.0];
+                            if base.stages[first].cfg[2] == NO_STAGE {
+                                base.stages[first].cfg[2] = base.stages[second].cfg[2];
+                            }
+                            base.stages[second].cfg[1] = UV_WHITE;
+                            base.stages[second].cfg[2] = NO_STAGE;
+                        }
+                        VersionDraw { uniform, bind_groups, level0_able, maps, mesh, gradient, gradient_stage, blend: v.blend, shape: v.shape, base, texels_per_deg }
                     })
                     .collect()
             })

@@ -189,13 +189,37 @@ impl TextureCache {
         entry.view
     }
 
+    /// The view of a texture derived from others (`content` identifies what it is made of): the
+    /// one already uploaded for the same key and content, else `make`'s, uploaded with its mips.
+    /// Deriving costs CPU time at load; a reload that keeps the sources keeps the result.
+    pub fn derived(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, key: &str, content: u64, make: impl FnOnce() -> TextureImage) -> wgpu::TextureView {
+        if let Some(e) = self.views.get(key).filter(|e| e.content == content) {
+            return e.view.clone();
+        }
+        let entry = match self.previous.remove(key).filter(|e| e.content == content) {
+            Some(e) => {
+                self.reused += 1;
+                e
+            }
+            None => {
+                self.uploaded += 1;
+                let image = make();
+                let view = upload_mipmapped(device, queue, &format!("texture {key}"), image.width, image.height, &image.rgba8).create_view(&Default::default());
+                Entry { content, view }
+            }
+        };
+        self.views.insert(key.to_string(), entry.clone());
+        entry.view
+    }
+
     /// Drops the textures of the previous sky that the new one did not take over.
     pub fn forget_previous(&mut self) {
         self.previous.clear();
     }
 }
 
-fn content_hash(image: &TextureImage) -> u64 {
+/// What identifies an image's content in the cache.
+pub fn content_hash(image: &TextureImage) -> u64 {
     let mut h = std::collections::hash_map::DefaultHasher::new();
     (image.width, image.height).hash(&mut h);
     image.rgba8.hash(&mut h);
