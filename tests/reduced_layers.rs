@@ -140,7 +140,10 @@ fn joined_runs_give_the_same_picture_with_one_composite_less() {
         e.rate = 200.0;
         e.max_particles = 40;
     }
-    let horizon = Camera { yaw_deg: 30.0, pitch_deg: 12.0, ..Camera::default() };
+    // Towards the sun, so that the billboards between the skydome and the clouds are in the
+    // frame (out of it they are not drawn, and the two runs become one).
+    let (sun_yaw_deg, _) = skytune::sky::eval::azimuth_elevation(sky.evaluate(&FrameInput::new(15.0, 1.0)).towards_sun);
+    let horizon = Camera { yaw_deg: sun_yaw_deg, pitch_deg: 12.0, ..Camera::default() };
     // The storm's clouds resolve into a reduced buffer at the full size only.
     let mut big = common::headless(1280, 720);
     for (what, sky, input, camera, runs) in [

@@ -63,6 +63,42 @@ fn skips_change_no_pixel_and_are_counted() {
     }
 }
 
+/// Billboards and quads wholly outside the frame are not drawn: round the compass, looking at
+/// the horizon and up, at dusk and at night, not a pixel moves, and most views leave some out.
+/// At full resolution and in reduced buffers without joined runs (leaving a billboard out can
+/// let runs join, which rounds a level differently: tests/reduced_layers.rs bounds that).
+#[test]
+fn billboards_out_of_the_frame_are_skipped_and_change_no_pixel() {
+    let sky = default_sky();
+    let mut h = common::headless(160, 90);
+    h.set_sky(&sky).expect("uploaded");
+    let mut skipped = 0;
+    let mut frames = 0;
+    for input in [FrameInput::new(18.5, 0.3), FrameInput::new(23.0, 0.0), FrameInput::new(5.5, 0.2)] {
+        for pitch_deg in [5.0, 40.0] {
+            for k in 0..16 {
+                let camera = Camera { yaw_deg: k as f32 * 22.5, pitch_deg, ..Camera::default() };
+                for resolution in [DomeResolution::Full, DomeResolution::Auto] {
+                    let on = RenderOptions { glare: false, scene: false, dome_resolution: resolution, join_runs: false, ..Default::default() };
+                    let with = h.render(&sky, &input, &camera, &on).expect("rendered");
+                    let count = h.renderer.stats.objects_off_screen;
+                    skipped += count;
+                    frames += usize::from(count > 0);
+                    let without = h.render(&sky, &input, &camera, &RenderOptions { skips: Skips { off_screen: false, ..on.skips }, ..on }).expect("rendered");
+                    assert_eq!(h.renderer.stats.objects_off_screen, 0);
+                    let (d, _) = common::diff(&with, &without, 0);
+                    assert_eq!(
+                        d.differing, 0.0,
+                        "{camera:?}, {resolution:?}: skipping {count} objects out of the frame moved {:.4} of the pixels (largest {})",
+                        d.differing, d.max
+                    );
+                }
+            }
+        }
+    }
+    assert!(frames > 100 && skipped > 200, "the skip applies: {skipped} objects over {frames} of 192 frames");
+}
+
 /// Stages that no pixel of a draw minifies are sampled from level 0 alone: the bound on their
 /// texel density must hold wherever they are drawn, or a pixel would move. By day, at dusk, at
 /// night and in a storm, at the horizon, the zenith and straight at the sun, at full and at

@@ -91,6 +91,22 @@ impl Camera {
         (lo, hi)
     }
 
+    /// Whether a frame of `aspect` may show a direction within `radius_deg` of unit direction
+    /// `dir`: false only when that cone lies wholly outside one of the frame's four sides (a
+    /// cone near a corner, outside two sides but inside each, counts as shown).
+    pub fn sees_cone(&self, aspect: f32, dir: Vec3, radius_deg: f32) -> bool {
+        if radius_deg >= 90.0 {
+            return true;
+        }
+        let (_, clip_from_sky) = self.matrices(aspect);
+        let row = |i: usize| Vec3::new(clip_from_sky.x_axis[i], clip_from_sky.y_axis[i], clip_from_sky.z_axis[i]);
+        let (x, y, w) = (row(0), row(1), row(3));
+        // The sides are the planes |x| = w and |y| = w of clip space, through the eye: a
+        // direction shows where it lies on the inner side of all four.
+        let reach = radius_deg.max(0.0).to_radians().sin();
+        [w + x, w - x, w + y, w - y].iter().all(|side| side.try_normalize().is_none_or(|n| n.dot(dir) >= -reach))
+    }
+
     /// A rectangle of a `size` frame's pixels (x, y, width, height; y down) that holds every
     /// pixel whose view direction lies below `elevation_deg`, or None when none does. A little
     /// larger than the tightest such rectangle: elevations are sampled on a grid, and the grid's
@@ -150,6 +166,44 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cones_in_view_are_seen_and_those_behind_are_not() {
+        let mut rng = fastrand::Rng::with_seed(11);
+        let mut unseen = 0;
+        for (camera, aspect) in [
+            (Camera::default(), 16.0 / 9.0),
+            (Camera { yaw_deg: 120.0, pitch_deg: 70.0, ..Camera::default() }, 1.0),
+            (Camera { pitch_deg: -40.0, fov_y_deg: 100.0, ..Camera::default() }, 2.0),
+            (Camera { look: Some((Vec3::new(0.3, 0.2, -1.0).normalize(), Vec3::new(0.4, 1.0, 0.0).normalize())), ..Camera::default() }, 16.0 / 9.0),
+        ] {
+            let (_, clip_from_sky) = camera.matrices(aspect);
+            let shown = |d: Vec3| {
+                let c = clip_from_sky * d.extend(1.0);
+                c.w > 0.0 && c.x.abs() <= c.w && c.y.abs() <= c.w
+            };
+            assert!(camera.sees_cone(aspect, camera.forward(), 0.1));
+            assert!(!camera.sees_cone(aspect, -camera.forward(), 5.0));
+            for _ in 0..2000 {
+                let dir = Vec3::new(rng.f32() * 2.0 - 1.0, rng.f32() * 2.0 - 1.0, rng.f32() * 2.0 - 1.0).normalize_or(Vec3::Y);
+                let radius_deg = rng.f32() * 10.0;
+                if camera.sees_cone(aspect, dir, radius_deg) {
+                    continue;
+                }
+                unseen += 1;
+                // Not seen: no direction of the cone shows (its centre and rings of its edge).
+                let side = dir.any_orthonormal_vector();
+                for ring in [0.0, 0.5, 1.0] {
+                    for k in 0..32 {
+                        let about = glam::Quat::from_axis_angle(dir, k as f32 / 32.0 * std::f32::consts::TAU);
+                        let d = glam::Quat::from_axis_angle(about * side, radius_deg.to_radians() * ring) * dir;
+                        assert!(!shown(d), "{camera:?}: {d:?} of the cone round {dir:?} ({radius_deg} degrees) shows");
+                    }
+                }
+            }
+        }
+        assert!(unseen > 1000, "most random cones lie out of view ({unseen})");
+    }
 
     #[test]
     fn elevation_range_holds_every_pixel_and_is_tight() {

@@ -92,8 +92,8 @@ pub struct Skips {
     /// are drawn by rows with `unneeded_mips`): the scene covers that part of the sky.
     pub below_horizon: bool,
     /// Dome layers whose band of elevations the frame does not show (a fog band under a view
-    /// of the zenith) are not drawn, nor composited; nor are the parts of the main-scene
-    /// stand-in wholly outside the view.
+    /// of the zenith) are not drawn, nor composited; nor are billboards and quads wholly
+    /// outside the frame, nor the parts of the main-scene stand-in wholly outside the view.
     pub off_screen: bool,
     /// Texture stages that no pixel of a draw minifies are sampled from level 0 alone (the same
     /// texels; lavapipe then skips computing the level of detail).
@@ -127,7 +127,8 @@ pub struct FrameStats {
     pub objects_ref_hidden: u32,
     /// Sky objects not drawn because they are below the horizon, behind the main scene.
     pub objects_below_horizon: u32,
-    /// Dome layers not drawn because the frame does not show their elevations.
+    /// Dome layers not drawn because the frame does not show their elevations, and billboards
+    /// and quads not drawn because they lie wholly outside the frame.
     pub objects_off_screen: u32,
     /// Texture stages sampled from level 0 alone (no pixel minifies them), over every draw.
     pub stages_level0: u32,
@@ -377,7 +378,7 @@ impl SkyRenderer {
         if reduce {
             join_additive_runs(sky_items);
         }
-        let runs = if reduce { reduced_runs(sky_items) } else { Vec::new() };
+        let runs = if reduce { reduced_runs(sky_items, options.join_runs && options.seed_joined) } else { Vec::new() };
         // A run's buffer is as fine as its finest layer needs.
         let divisors: Vec<u32> = runs.iter().map(|&(start, end)| sky_items[start..end].iter().map(|(_, it)| it.divisor.max(1) as u32).min().unwrap_or(1)).collect();
         stats.reduced_runs.clone_from(&divisors);
@@ -699,7 +700,11 @@ fn combined_divisors(divisors: &[u32]) -> Vec<u32> {
 }
 
 /// The runs of consecutive items marked `reduced` in a sorted phase list: (start, end) indices.
-fn reduced_runs(list: &[(usize, DrawItem)]) -> Vec<(usize, usize)> {
+/// `split_first`: a lone run at the start of the list whose layers get finer part-way (the
+/// skydome's at a quarter of the resolution, the clouds' at half, when the billboards between
+/// them lie out of the frame) is two runs, the coarse layers in their own buffer seeding the
+/// finer one ([`RenderOptions::seed_joined`]), rather than every layer at the finer resolution.
+fn reduced_runs(list: &[(usize, DrawItem)], split_first: bool) -> Vec<(usize, usize)> {
     let mut runs = Vec::new();
     let mut k = 0;
     while k < list.len() {
@@ -711,6 +716,12 @@ fn reduced_runs(list: &[(usize, DrawItem)]) -> Vec<(usize, usize)> {
             runs.push((start, k));
         } else {
             k += 1;
+        }
+    }
+    if let (true, [(0, end)]) = (split_first, runs.as_slice()) {
+        let divisor = |k: usize| list[k].1.divisor;
+        if let Some(k) = (1..*end).find(|&k| (0..k).all(|j| divisor(k) < divisor(j))) {
+            return vec![(0, k), (k, *end)];
         }
     }
     runs
@@ -762,13 +773,31 @@ mod tests {
         let keys: Vec<usize> = joined.iter().map(|(_, it)| it.key).collect();
         // The stars go past the galaxy; the sun stays before the alpha-blended clouds.
         assert_eq!(keys, [0, 2, 1, 3, 4, 5]);
-        assert_eq!(reduced_runs(&list), [(0, 1), (2, 3), (4, 6)]);
-        assert_eq!(reduced_runs(&joined), [(0, 2), (4, 6)]);
+        assert_eq!(reduced_runs(&list, true), [(0, 1), (2, 3), (4, 6)]);
+        assert_eq!(reduced_runs(&joined, true), [(0, 2), (4, 6)]);
         // Nothing to join: unchanged.
         let plain = [item(0, true, false), item(1, false, false), item(2, true, true)];
         let mut unchanged = plain;
         join_additive_runs(&mut unchanged);
         assert_eq!(unchanged, plain);
+    }
+
+    #[test]
+    fn a_lone_first_run_that_gets_finer_is_split_where_it_does() {
+        let at = |key: usize, divisor: u8| (0, DrawItem { reduced: true, divisor, ..DrawItem::new(0, key) });
+        // Skydome and galaxy at a quarter, clouds at half, fog at a quarter: the billboards
+        // between the skydome and the clouds out of the frame.
+        let lone = [at(0, 4), at(1, 4), at(2, 2), at(3, 4)];
+        assert_eq!(reduced_runs(&lone, true), [(0, 2), (2, 4)]);
+        assert_eq!(reduced_runs(&lone, false), [(0, 4)]);
+        // Finer first, or all alike: one run.
+        assert_eq!(reduced_runs(&[at(0, 2), at(1, 4)], true), [(0, 2)]);
+        assert_eq!(reduced_runs(&[at(0, 4), at(1, 4)], true), [(0, 2)]);
+        // Not at the start of the list, or not alone: as they are.
+        let after = [item(0, false, false), at(1, 4), at(2, 2)];
+        assert_eq!(reduced_runs(&after, true), [(1, 3)]);
+        let two = [at(0, 4), at(1, 2), item(2, false, false), at(3, 2)];
+        assert_eq!(reduced_runs(&two, true), [(0, 2), (3, 4)]);
     }
 
     #[test]

@@ -659,6 +659,20 @@ impl Pass for SkyObjectsPass {
                 _ => false,
             })
         };
+        // Billboards and quads wholly outside the frame: lavapipe charges a draw that leaves no
+        // pixel about a millisecond at 1280x720 all the same (docs/architecture.md).
+        let aspect = cx.size.0 as f32 / cx.size.1.max(1) as f32;
+        let out_of_frame = |of: &crate::sky::ObjectFrame, versions: &[crate::sky::VersionFrame]| {
+            let Some((dir, _)) = of.placement.filter(|_| cull) else { return false };
+            versions.iter().all(|v| match draws.objects[of.index][v.version].shape {
+                // The square's half diagonal, flat at its distance, and half a degree of margin.
+                Shape::Billboard { size_deg } | Shape::Quad { size_deg } => {
+                    let half_diagonal_deg = ((size_deg.get() * 0.5).to_radians().tan() * std::f32::consts::SQRT_2).atan().to_degrees();
+                    size_deg.get() < 170.0 && !cx.camera.sees_cone(aspect, dir, half_diagonal_deg + 0.5)
+                }
+                _ => false,
+            })
+        };
         let (finest, coarsest) = cx.options.dome_resolution.divisors();
         let reduce_domes = finest > 1;
         // A reduced buffer's pixels per degree of view at the centre of the frame.
@@ -670,7 +684,7 @@ impl Pass for SkyObjectsPass {
                     self.hidden += 1;
                     self.below_horizon += 1;
                 }
-                Ok(versions) if cull && versions.iter().all(|v| !in_view(&draws.objects[of.index][v.version].shape)) => {
+                Ok(versions) if cull && (versions.iter().all(|v| !in_view(&draws.objects[of.index][v.version].shape)) || out_of_frame(of, versions)) => {
                     self.hidden += 1;
                     self.off_screen += 1;
                 }
