@@ -317,7 +317,8 @@ impl ReducedLayersPass {
     /// need run 1's own colour, take C0 off again (`run_alone_at` in shaders/reduced/run.wgsl).
     pub fn seed(&self, rpass: &mut wgpu::RenderPass<'_>, globals: &wgpu::BindGroup, target: Target) -> u32 {
         let Some(lower) = self.buffers.first().filter(|_| self.seeded) else { return 0 };
-        rpass.set_pipeline(&self.combine.for_target(target)[2]);
+        let [_, _, seed] = self.combine.for_target(target);
+        rpass.set_pipeline(seed);
         rpass.set_bind_group(0, globals, &[]);
         rpass.set_bind_group(1, &lower.bind_group, &[]);
         // Not read; the layout has the group.

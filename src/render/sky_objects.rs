@@ -659,8 +659,8 @@ impl Pass for SkyObjectsPass {
                 _ => false,
             })
         };
-        // Billboards and quads wholly outside the frame: lavapipe charges a draw that leaves no
-        // pixel about a millisecond at 1280x720 all the same (docs/architecture.md).
+        // Billboards and quads wholly outside the frame: a draw that shows nothing still costs
+        // its vertices and its state (a small saving: docs/architecture.md).
         let aspect = cx.size.0 as f32 / cx.size.1.max(1) as f32;
         let out_of_frame = |of: &crate::sky::ObjectFrame, versions: &[crate::sky::VersionFrame]| {
             let Some((dir, _)) = of.placement.filter(|_| cull) else { return false };
@@ -1205,14 +1205,12 @@ impl SkyObjectDraws {
                             let oversampling = s.texture.as_ref().map_or(1.0, |t| *oversampling.entry(t.key.clone()).or_insert_with(|| texture_oversampling(t)));
                             texels_per_deg[k] = stage_texels_per_deg(s, &v.shape) / oversampling;
                         }
-                        // A folded texture carries the finer detail of its two stages.
-                        for f in &folds {
-                            texels_per_deg[f.stage] = texels_per_deg[f.stage].max(texels_per_deg[f.stage + 1]);
-                            texels_per_deg[f.stage + 1] = 0.0;
-                        }
                         let mut base = DrawUniform::from(v);
                         for f in &folds {
                             let (first, second) = (f.stage, f.stage + 1);
+                            // A folded texture carries the finer detail of its two stages.
+                            texels_per_deg[first] = texels_per_deg[first].max(texels_per_deg[second]);
+                            texels_per_deg[second] = 0.0;
                             base.stages[first].scale_offset = [1.0, 1.0, 0.0, 0.0];
                             if base.stages[first].cfg[2] == NO_STAGE {
                                 base.stages[first].cfg[2] = base.stages[second].cfg[2];

@@ -170,29 +170,22 @@ impl TextureCache {
 
     /// The view of an image: the one already uploaded for the same file and content, else a new upload.
     pub fn get(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, image: &TextureImage) -> wgpu::TextureView {
-        let content = content_hash(image);
-        if let Some(e) = self.views.get(&image.key).filter(|e| e.content == content) {
-            return e.view.clone();
-        }
-        let entry = match self.previous.remove(&image.key).filter(|e| e.content == content) {
-            Some(e) => {
-                self.reused += 1;
-                e
-            }
-            None => {
-                self.uploaded += 1;
-                let view = upload_mipmapped(device, queue, &format!("texture {}", image.key), image.width, image.height, &image.rgba8).create_view(&Default::default());
-                Entry { content, view }
-            }
-        };
-        self.views.insert(image.key.clone(), entry.clone());
-        entry.view
+        self.view_of(&image.key, content_hash(image), |label| upload_mipmapped(device, queue, label, image.width, image.height, &image.rgba8))
     }
 
     /// The view of a texture derived from others (`content` identifies what it is made of): the
     /// one already uploaded for the same key and content, else `make`'s, uploaded with its mips.
     /// Deriving costs CPU time at load; a reload that keeps the sources keeps the result.
     pub fn derived(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, key: &str, content: u64, make: impl FnOnce() -> TextureImage) -> wgpu::TextureView {
+        self.view_of(key, content, |label| {
+            let image = make();
+            upload_mipmapped(device, queue, label, image.width, image.height, &image.rgba8)
+        })
+    }
+
+    /// The view held for `key` with `content`, this sky's or taken over from the previous one;
+    /// else `upload`'s texture (given its label).
+    fn view_of(&mut self, key: &str, content: u64, upload: impl FnOnce(&str) -> wgpu::Texture) -> wgpu::TextureView {
         if let Some(e) = self.views.get(key).filter(|e| e.content == content) {
             return e.view.clone();
         }
@@ -203,9 +196,7 @@ impl TextureCache {
             }
             None => {
                 self.uploaded += 1;
-                let image = make();
-                let view = upload_mipmapped(device, queue, &format!("texture {key}"), image.width, image.height, &image.rgba8).create_view(&Default::default());
-                Entry { content, view }
+                Entry { content, view: upload(&format!("texture {key}")).create_view(&Default::default()) }
             }
         };
         self.views.insert(key.to_string(), entry.clone());
