@@ -42,6 +42,10 @@ const UV_QUAKE: u32 = 3u;
 // A stage folded into the one before it at load (src/render/stage_fold.rs): white, not sampled.
 // Keep in sync with `UV_WHITE` in src/render/sky_objects.rs.
 const UV_WHITE: u32 = 4u;
+// The celestial mapping where no pixel of the draw minifies its texture this frame (a variant
+// only, set by src/render/sky_objects.rs): level 0, without the derivatives below. Keep in sync
+// with `UV_CELESTIAL_LEVEL0` in src/render/sky_objects.rs.
+const UV_CELESTIAL_LEVEL0: u32 = 5u;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -277,11 +281,15 @@ fn fold_stage(acc_in: Terms, i: u32, c_in: vec4<f32>, view: vec3<f32>) -> Terms 
 fn stage_sample(i: u32, t: texture_2d<f32>, smp: sampler, in: VertexOut) -> vec4<f32> {
     if !stage_live(i) { return vec4<f32>(0.0); }
     if view_stage() == i || uv_mode(i) == UV_WHITE { return vec4<f32>(1.0); }
+    if uv_mode(i) == UV_CELESTIAL_LEVEL0 {
+        return textureSampleLevel(t, smp, scaled(i, celestial_uv(normalize(in.world_dir))), 0.0);
+    }
     if uv_mode(i) == UV_CELESTIAL {
         // Differenced across the wrap of u, the derivative spans the whole texture and picks
         // its smallest level: a dashed line of the texture's mean along the meridian. The same
         // coordinates turned by half a turn wrap on the far side; per axis the smaller of the two
-        // derivatives is the true one.
+        // derivatives is the true one. (Taking u back by a turn in the 2x2 quads that straddle
+        // the wrap, for implicit derivatives, left the line on lavapipe.)
         let c = celestial_uv(normalize(in.world_dir));
         let uv = scaled(i, c);
         let turned = scaled(i, vec2<f32>(fract(c.x + 0.5), c.y));

@@ -133,3 +133,51 @@ fn level0_samplers_change_no_pixel() {
     }
     assert!(level0 > 20, "the skip applies ({level0} stages over every frame)");
 }
+
+/// The celestial mapping is sampled from level 0 without derivatives where the frame keeps far
+/// enough from the poles of its texture, round which the texture's columns crowd: a galaxy of
+/// noise (detail everywhere, the poles included, unlike the built-in band) seen at several
+/// angles from a pole, at full and reduced resolution, moves no pixel against mipmapped sampling
+/// (a bound on the texture's density half as large, or a pole twice as far, moves some).
+#[test]
+fn the_celestial_mapping_from_level_0_changes_no_pixel() {
+    let mut sky = default_sky();
+    let (w, h) = (256u32, 128u32);
+    let mut rng = fastrand::Rng::with_seed(5);
+    let rgba8 = (0..w * h).flat_map(|_| [rng.u8(..), rng.u8(..), rng.u8(..), 255]).collect();
+    let noise = std::sync::Arc::new(skytune::sky::resolved::TextureImage { key: "test: noise galaxy".into(), width: w, height: h, rgba8 });
+    let galaxy = sky.objects.iter_mut().find(|o| o.name == "galaxy").expect("the built-in galaxy");
+    galaxy.standard.stages[0].texture = Some(noise);
+    let others: Vec<String> = sky.objects.iter().map(|o| o.name.clone()).filter(|n| n != "galaxy").collect();
+    let input = FrameInput { disabled: others, ..FrameInput::new(23.0, 0.0) };
+    let north = sky.evaluate(&input).celestial_from_world.inverse() * glam::Vec3::Y;
+    let mut h = common::headless(320, 180);
+    h.set_sky(&sky).expect("uploaded");
+    let (mut level0, mut mipmapped) = (0, 0);
+    // A narrow field of view has about as many pixels per degree at its edges as at its centre
+    // (the bound takes the centre's): the frame's nearest pixels 1 to 20 degrees from the pole.
+    let views = [(70.0, 0.0), (70.0, 35.0), (70.0, 65.0), (70.0, 90.0), (20.0, 21.0), (20.0, 23.0), (20.0, 26.0), (20.0, 30.0), (20.0, 40.0)];
+    for (fov_y_deg, from_pole_deg) in views {
+        for resolution in [DomeResolution::Full, DomeResolution::Auto] {
+            let side = north.any_orthonormal_vector();
+            let forward = glam::Quat::from_axis_angle(side, f32::to_radians(from_pole_deg)) * north;
+            let up = if forward.y.abs() > 0.99 { glam::Vec3::Z } else { glam::Vec3::Y };
+            let camera = Camera { look: Some((forward, up)), fov_y_deg, ..Camera::default() };
+            let on = RenderOptions { glare: false, scene: false, dome_resolution: resolution, ..Default::default() };
+            let with = h.render(&sky, &input, &camera, &on).expect("rendered");
+            if h.renderer.stats.stages_level0 > 0 {
+                level0 += 1;
+            } else {
+                mipmapped += 1;
+            }
+            let without = h.render(&sky, &input, &camera, &RenderOptions { skips: Skips { unneeded_mips: false, ..on.skips }, ..on }).expect("rendered");
+            let (d, _) = common::diff(&with, &without, 0);
+            assert_eq!(
+                d.differing, 0.0,
+                "{from_pole_deg} degrees from the pole, {fov_y_deg} degrees of view, {resolution:?}: level-0 sampling moved {:.4} of the pixels (largest {})",
+                d.differing, d.max
+            );
+        }
+    }
+    assert!(level0 >= 2 && mipmapped >= 2, "both ways taken: {level0} frames from level 0, {mipmapped} mipmapped");
+}

@@ -56,12 +56,21 @@ const NO_STAGE: u32 = 4;
 /// not sampled. Keep in sync with `UV_WHITE` in shaders/sky_objects.wgsl.
 const UV_WHITE: u32 = 4;
 
+/// UV mode of the celestial mapping.
+const UV_CELESTIAL: u32 = 2;
+
+/// UV mode of a celestial stage that no pixel of its draw minifies this frame: sampled from
+/// level 0 without the derivatives the celestial mapping otherwise computes per pixel (a variant
+/// of the mapping, never in a uniform). Keep in sync with `UV_CELESTIAL_LEVEL0` in
+/// shaders/sky_objects.wgsl.
+const UV_CELESTIAL_LEVEL0: u32 = 5;
+
 /// UV mode numbers shared with the shader.
 fn uv_mode(uv: &UvSource) -> (u32, [f32; 4]) {
     match *uv {
         UvSource::Mesh => (0, [0.0; 4]),
         UvSource::Sun { size_deg } => (1, [size_deg.get().to_radians(), 0.0, 0.0, 0.0]),
-        UvSource::Celestial => (2, [0.0; 4]),
+        UvSource::Celestial => (UV_CELESTIAL, [0.0; 4]),
         UvSource::Quake { z_scale, z_offset, t_scale, time_scale } => (3, [z_scale.get(), z_offset.get(), t_scale.get(), time_scale.get()]),
     }
 }
@@ -464,7 +473,11 @@ impl SkyObjectsPass {
         let view_stage = if (k.view_stage as usize) < 4 && !e.part[k.view_stage as usize] { NO_STAGE } else { k.view_stage };
         let blend = if e.on_top { BLEND_ADD } else { k.blend };
         let placement = if e.reduced { Placement::Plain } else { placement };
-        Some(VariantKey { live, view_stage, blend, reduced: e.reduced, placement, ..*k })
+        // A celestial stage's level-0 bit is the same in every part of a draw (its bound does not
+        // depend on the dome's rings), so one pipeline serves them all.
+        let level0 = if e.parts.1 > 0 { self.parts.get(e.parts.0 as usize).map_or(0, |p| p.1) } else { 0 };
+        let modes = std::array::from_fn(|s| if k.modes[s] == UV_CELESTIAL && level0 & (1 << s) != 0 { UV_CELESTIAL_LEVEL0 } else { k.modes[s] });
+        Some(VariantKey { live, view_stage, blend, reduced: e.reduced, placement, modes, ..*k })
     }
 
     /// Whether draw `e` adds to the frame (its blend, or the fine terms of a split layer).
@@ -742,7 +755,7 @@ impl Pass for SkyObjectsPass {
         self.level0_stages = 0;
         self.parts.clear();
         if cx.options.skips.unneeded_mips {
-            let view = FrameView::new(cx.camera, cx.aspect(), (lowest_deg, highest_deg), cx.frame.towards_sun);
+            let view = FrameView::new(cx.camera, cx.aspect(), (lowest_deg, highest_deg), cx.frame.towards_sun, cx.frame.celestial_from_world);
             // Drawn or not, the scene's pixels there are the scene's (reduced buffers keep their
             // clear colour there, too far below the scene's edge for the upsampling to reach).
             let covered_below_deg = if cx.options.scene && cx.options.skips.below_horizon { -super::renderer::SCENE_COVERS_BELOW_DEG } else { f32::NEG_INFINITY };
@@ -920,15 +933,35 @@ struct FrameView {
     sun_max_deg: f32,
     /// Half the frame's vertical field of view, radians.
     half_fov_y: f32,
+    /// A lower bound of the angle between the frame and the nearer pole of the celestial
+    /// mapping's texture (where its columns converge), degrees.
+    celestial_pole_deg: f32,
 }
 
 impl FrameView {
-    fn new(camera: &Camera, aspect: f32, elevation_deg: (f32, f32), towards_sun: Vec3) -> Self {
+    fn new(camera: &Camera, aspect: f32, elevation_deg: (f32, f32), towards_sun: Vec3, celestial_from_world: Quat) -> Self {
         let half_fov_y = (camera.fov_y_deg.to_radians() * 0.5).min(1.55);
         let t = half_fov_y.tan();
         let half_diagonal = (t * t * (1.0 + aspect * aspect)).sqrt().atan();
         let to_sun = camera.forward().dot(towards_sun.normalize_or_zero()).clamp(-1.0, 1.0).acos();
-        Self { elevation_deg, sun_max_deg: (to_sun + half_diagonal).to_degrees().min(180.0), half_fov_y }
+        // The mapping's latitude is that of the celestial frame's y axis (shaders/sky_objects.wgsl,
+        // `celestial_uv`). The largest cone round each pole that the frame does not show, by
+        // bisection: `sees_cone` only errs towards showing.
+        let north = celestial_from_world.inverse() * Vec3::Y;
+        let unseen = |r: f32| !camera.sees_cone(aspect, north, r) && !camera.sees_cone(aspect, -north, r);
+        let mut celestial_pole_deg = 0.0;
+        if unseen(0.0) {
+            let mut above = 90.0;
+            for _ in 0..12 {
+                let mid = 0.5 * (celestial_pole_deg + above);
+                if unseen(mid) {
+                    celestial_pole_deg = mid;
+                } else {
+                    above = mid;
+                }
+            }
+        }
+        Self { elevation_deg, sun_max_deg: (to_sun + half_diagonal).to_degrees().min(180.0), half_fov_y, celestial_pole_deg }
     }
 
     /// Pixels per degree of view direction at the frame's centre for a frame `height_px` high.
@@ -964,7 +997,7 @@ impl StageMap {
                 .map(|r| {
                     let (a, b) = (top_deg + (bottom_deg - top_deg) * r as f32 / rings as f32, top_deg + (bottom_deg - top_deg) * (r + 1) as f32 / rings as f32);
                     // A view of just this ring (neither mapping looks at the sun or the frame).
-                    map.peak_texels_per_deg(shape, &FrameView { elevation_deg: (a.min(b), a.max(b)), sun_max_deg: 180.0, half_fov_y: 0.0 })
+                    map.peak_texels_per_deg(shape, &FrameView { elevation_deg: (a.min(b), a.max(b)), sun_max_deg: 180.0, half_fov_y: 0.0, celestial_pole_deg: 0.0 })
                 })
                 .collect();
         }
@@ -1031,7 +1064,15 @@ impl StageMap {
                 let stretch = if angle > 1e-3 { (angle / angle.sin()).max(1.0) } else { 1.0 };
                 w.max(h) / size_deg.get().abs().max(1e-3) * stretch
             }
-            UvSource::Celestial => f32::INFINITY,
+            // Plate carree: along a circle of latitude a degree of view crosses 1 / cos(latitude)
+            // degrees of longitude, most near a pole.
+            UvSource::Celestial => {
+                let from_pole = view.celestial_pole_deg.to_radians().sin();
+                if from_pole < 1e-3 {
+                    return f32::INFINITY;
+                }
+                (w / 360.0 / from_pole).max(h / 180.0)
+            }
             UvSource::Quake { z_scale, z_offset, t_scale, .. } => {
                 let (shape_lo, shape_hi) = match *shape {
                     Shape::Dome { bottom_deg } => (bottom_deg.get(), 90.0),
@@ -1265,6 +1306,49 @@ impl SkyObjectDraws {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_celestial_poles_lie_at_least_the_bound_away_from_every_pixel() {
+        // Every pixel's direction (a grid over the frame, corners included) lies at least
+        // `celestial_pole_deg` from both poles of the mapping, and the bound is not idle: a frame
+        // facing away from both poles gets one, a frame holding a pole gets 0.
+        let mut away = 0;
+        for (camera, aspect) in [
+            (Camera::default(), 16.0 / 9.0),
+            (Camera { yaw_deg: 180.0, pitch_deg: 10.0, ..Camera::default() }, 16.0 / 9.0),
+            (Camera { yaw_deg: 60.0, pitch_deg: 75.0, ..Camera::default() }, 1.0),
+            (Camera { pitch_deg: -30.0, fov_y_deg: 100.0, ..Camera::default() }, 2.0),
+        ] {
+            for hour in [0.0f32, 5.5, 12.0, 18.5] {
+                let celestial_from_world = Quat::from_axis_angle(crate::sky::eval::direction(0.0, 45.0), std::f32::consts::TAU * hour / 24.0);
+                let view = FrameView::new(&camera, aspect, (-90.0, 90.0), Vec3::Y, celestial_from_world);
+                let north = celestial_from_world.inverse() * Vec3::Y;
+                let sky_from_clip = camera.matrices(aspect).1.inverse();
+                let mut nearest_deg = f32::INFINITY;
+                for (i, j) in (0..=32).flat_map(|i| (0..=32).map(move |j| (i, j))) {
+                    let ndc = glam::Vec4::new(i as f32 / 16.0 - 1.0, j as f32 / 16.0 - 1.0, 0.5, 1.0);
+                    let p = sky_from_clip * ndc;
+                    let dir = (p.truncate() / p.w).normalize();
+                    let deg = north.dot(dir).abs().min(1.0).acos().to_degrees();
+                    nearest_deg = nearest_deg.min(deg);
+                }
+                assert!(view.celestial_pole_deg <= nearest_deg + 1e-3, "{camera:?} at {hour} h: bound {} past the nearest pixel {nearest_deg}", view.celestial_pole_deg);
+                if nearest_deg > 20.0 {
+                    assert!(view.celestial_pole_deg > 0.25 * nearest_deg, "{camera:?} at {hour} h: bound {} for a pole {nearest_deg} degrees away", view.celestial_pole_deg);
+                    away += 1;
+                }
+                if nearest_deg < 0.5 {
+                    assert_eq!(view.celestial_pole_deg, 0.0);
+                }
+                // Round the poles the texture's columns crowd: the density bound grows without limit.
+                let map = StageMap { uv: UvSource::Celestial, texels: (256.0, 128.0), ring_peaks: Vec::new() };
+                let peak = map.peak_texels_per_deg(&Shape::Dome { bottom_deg: crate::sky::model::Elevation(-20.0) }, &view);
+                let expected = 256.0 / 360.0 / view.celestial_pole_deg.to_radians().sin();
+                assert!(peak >= expected.max(128.0 / 180.0) * 0.999 || peak.is_infinite(), "{peak} {expected}");
+            }
+        }
+        assert!(away >= 4, "frames away from the poles ({away})");
+    }
 
     fn uniform(ops: &[(u32, u32)]) -> DrawUniform {
         let mut u = DrawUniform::zeroed();
