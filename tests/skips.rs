@@ -3,10 +3,29 @@
 
 mod common;
 
-use skytune::render::{Camera, DomeResolution, RenderOptions, Skips};
+use skytune::render::{Camera, DomeResolution, FrameStats, Headless, RenderOptions, Skips};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
-use skytune::sky::FrameInput;
+use skytune::sky::{FrameInput, Sky};
+
+/// Renders one frame with the skips `on` and again with `off`, asserts that no pixel differs by
+/// more than `tolerance`, and returns both frames' counters. `what` names the frame for the
+/// failure message, from the counters of the frame with the skips on.
+fn same_pixels(
+    h: &mut Headless,
+    (sky, input, camera): (&Sky, &FrameInput, &Camera),
+    (on, off): (&RenderOptions, &RenderOptions),
+    tolerance: u8,
+    what: impl FnOnce(&FrameStats) -> String,
+) -> (FrameStats, FrameStats) {
+    let with = h.render(sky, input, camera, on).expect("rendered");
+    let with_stats = h.renderer.stats.clone();
+    let without = h.render(sky, input, camera, off).expect("rendered");
+    let without_stats = h.renderer.stats.clone();
+    let (d, _) = common::diff(&with, &without, tolerance);
+    assert_eq!(d.differing, 0.0, "{} moved {:.4} of the pixels (largest {})", what(&with_stats), d.differing, d.max);
+    (with_stats, without_stats)
+}
 
 #[test]
 fn skips_change_no_pixel_and_are_counted() {
@@ -53,13 +72,10 @@ fn skips_change_no_pixel_and_are_counted() {
     let zenith = Camera::preset("zenith").expect("zenith view");
     for resolution in [DomeResolution::Full, DomeResolution::Auto] {
         let on = RenderOptions { dome_resolution: resolution, join_runs: false, ..on };
-        let with = h.render(&sky, &night, &zenith, &on).expect("rendered");
-        let s = h.renderer.stats.clone();
+        let off = RenderOptions { skips: Skips { off_screen: false, ..on.skips }, ..on };
+        let (s, without) = same_pixels(&mut h, (&sky, &night, &zenith), (&on, &off), 1, |_| format!("{resolution:?}: skipping dome layers out of view"));
         assert!(s.objects_off_screen > 0, "{resolution:?}: {s:?}");
-        let without = h.render(&sky, &night, &zenith, &RenderOptions { skips: Skips { off_screen: false, ..on.skips }, ..on }).expect("rendered");
-        assert_eq!(h.renderer.stats.objects_off_screen, 0);
-        let (d, _) = common::diff(&with, &without, 1);
-        assert_eq!(d.differing, 0.0, "{resolution:?}: skipping dome layers out of view changed {:.4} of the pixels (largest {})", d.differing, d.max);
+        assert_eq!(without.objects_off_screen, 0);
     }
 }
 
@@ -80,18 +96,13 @@ fn billboards_out_of_the_frame_are_skipped_and_change_no_pixel() {
                 let camera = Camera { yaw_deg: k as f32 * 22.5, pitch_deg, ..Camera::default() };
                 for resolution in [DomeResolution::Full, DomeResolution::Auto] {
                     let on = RenderOptions { glare: false, scene: false, dome_resolution: resolution, join_runs: false, ..Default::default() };
-                    let with = h.render(&sky, &input, &camera, &on).expect("rendered");
-                    let count = h.renderer.stats.objects_off_screen;
-                    skipped += count;
-                    frames += usize::from(count > 0);
-                    let without = h.render(&sky, &input, &camera, &RenderOptions { skips: Skips { off_screen: false, ..on.skips }, ..on }).expect("rendered");
-                    assert_eq!(h.renderer.stats.objects_off_screen, 0);
-                    let (d, _) = common::diff(&with, &without, 0);
-                    assert_eq!(
-                        d.differing, 0.0,
-                        "{camera:?}, {resolution:?}: skipping {count} objects out of the frame moved {:.4} of the pixels (largest {})",
-                        d.differing, d.max
-                    );
+                    let off = RenderOptions { skips: Skips { off_screen: false, ..on.skips }, ..on };
+                    let (with, without) = same_pixels(&mut h, (&sky, &input, &camera), (&on, &off), 0, |s| {
+                        format!("{camera:?}, {resolution:?}: skipping {} objects out of the frame", s.objects_off_screen)
+                    });
+                    skipped += with.objects_off_screen;
+                    frames += usize::from(with.objects_off_screen > 0);
+                    assert_eq!(without.objects_off_screen, 0);
                 }
             }
         }
@@ -117,16 +128,11 @@ fn level0_samplers_change_no_pixel() {
             for camera in [Camera::default(), Camera::preset("zenith").expect("zenith view"), at_sun] {
                 for resolution in [DomeResolution::Full, DomeResolution::Auto] {
                     let on = RenderOptions { glare: false, dome_resolution: resolution, ..Default::default() };
-                    let with = h.render(&sky, &input, &camera, &on).expect("rendered");
-                    level0 += h.renderer.stats.stages_level0;
-                    let without = h.render(&sky, &input, &camera, &RenderOptions { skips: Skips { unneeded_mips: false, ..on.skips }, ..on }).expect("rendered");
-                    assert_eq!(h.renderer.stats.stages_level0, 0);
-                    let (d, _) = common::diff(&with, &without, 0);
-                    assert_eq!(
-                        d.differing, 0.0,
-                        "{hour} h, weather {weather}, {camera:?}, {resolution:?}: level-0 sampling moved {:.4} of the pixels (largest {})",
-                        d.differing, d.max
-                    );
+                    let off = RenderOptions { skips: Skips { unneeded_mips: false, ..on.skips }, ..on };
+                    let (with, without) =
+                        same_pixels(&mut h, (&sky, &input, &camera), (&on, &off), 0, |_| format!("{hour} h, weather {weather}, {camera:?}, {resolution:?}: level-0 sampling"));
+                    level0 += with.stages_level0;
+                    assert_eq!(without.stages_level0, 0);
                 }
             }
         }
@@ -164,19 +170,15 @@ fn the_celestial_mapping_from_level_0_changes_no_pixel() {
             let up = if forward.y.abs() > 0.99 { glam::Vec3::Z } else { glam::Vec3::Y };
             let camera = Camera { look: Some((forward, up)), fov_y_deg, ..Camera::default() };
             let on = RenderOptions { glare: false, scene: false, dome_resolution: resolution, ..Default::default() };
-            let with = h.render(&sky, &input, &camera, &on).expect("rendered");
-            if h.renderer.stats.stages_level0 > 0 {
+            let off = RenderOptions { skips: Skips { unneeded_mips: false, ..on.skips }, ..on };
+            let (with, _) = same_pixels(&mut h, (&sky, &input, &camera), (&on, &off), 0, |_| {
+                format!("{from_pole_deg} degrees from the pole, {fov_y_deg} degrees of view, {resolution:?}: level-0 sampling")
+            });
+            if with.stages_level0 > 0 {
                 level0 += 1;
             } else {
                 mipmapped += 1;
             }
-            let without = h.render(&sky, &input, &camera, &RenderOptions { skips: Skips { unneeded_mips: false, ..on.skips }, ..on }).expect("rendered");
-            let (d, _) = common::diff(&with, &without, 0);
-            assert_eq!(
-                d.differing, 0.0,
-                "{from_pole_deg} degrees from the pole, {fov_y_deg} degrees of view, {resolution:?}: level-0 sampling moved {:.4} of the pixels (largest {})",
-                d.differing, d.max
-            );
         }
     }
     assert!(level0 >= 2 && mipmapped >= 2, "both ways taken: {level0} frames from level 0, {mipmapped} mipmapped");
