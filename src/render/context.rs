@@ -50,7 +50,7 @@ impl GpuContext {
     pub fn new(instance: wgpu::Instance, choice: AdapterChoice, surface: Option<&wgpu::Surface<'_>>) -> RenderResult<Self> {
         let adapter = Self::pick_adapter(&instance, choice, surface)?;
         let info = adapter.get_info();
-        log::info!("adapter: {} ({:?}, {:?}, driver {} {})", info.name, info.device_type, info.backend, info.driver, info.driver_info);
+        log::info!("adapter: {} (driver {})", describe(&info), info.driver);
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let mut features = wgpu::Features::empty();
         if timestamps {
@@ -122,14 +122,7 @@ impl GpuContext {
 
     /// One line naming the adapter, for logs and the UI.
     pub fn adapter_line(&self) -> String {
-        let i = self.adapter.get_info();
-        // The driver's version (Mesa's, for lavapipe) matters as much as the adapter: the same
-        // llvmpipe runs the sky's frames about a quarter faster in Mesa 25 than in Mesa 22.
-        if i.driver_info.is_empty() {
-            format!("{} ({:?}, {:?})", i.name, i.device_type, i.backend)
-        } else {
-            format!("{} ({:?}, {:?}; {})", i.name, i.device_type, i.backend, i.driver_info)
-        }
+        describe(&self.adapter.get_info())
     }
 
     /// Waits for submitted work, with a generous timeout for software rasterisers.
@@ -144,4 +137,15 @@ pub fn new_instance() -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = wgpu::Backends::VULKAN;
     wgpu::Instance::new(desc)
+}
+
+/// An adapter's name, kind, backend and driver version in one line. The driver's version (Mesa's,
+/// for lavapipe) matters as much as the adapter: the same llvmpipe runs the sky's frames about a
+/// quarter faster in Mesa 25 than in Mesa 22.
+fn describe(i: &wgpu::AdapterInfo) -> String {
+    if i.driver_info.is_empty() {
+        format!("{} ({:?}, {:?})", i.name, i.device_type, i.backend)
+    } else {
+        format!("{} ({:?}, {:?}; {})", i.name, i.device_type, i.backend, i.driver_info)
+    }
 }
