@@ -273,31 +273,36 @@ fn lightning_flash_adds_its_colour_over_the_sky() {
         })
         .find(|(_, f)| *f > 0.3)
         .expect("a flash within 400 s of storm");
-    let mut h = common::headless(160, 90);
+    let mut h = common::headless(1280, 720);
     h.set_sky(&sky).expect("uploaded");
     let camera = Camera::preset("zenith").expect("zenith view");
-    let options = RenderOptions { glare: false, scene: false, ..Default::default() };
     let lit = sky.evaluate(&input);
     // The same frame (bolts, light lifted by the evaluation) without the flash's own draw.
     let mut unlit = lit.clone();
     unlit.particles.flash = 0.0;
-    let mut draw = |frame: &skytune::sky::FrameSky| {
-        let mut encoder = h.ctx.device.create_command_encoder(&Default::default());
-        h.renderer.render(&h.ctx, &mut encoder, &h.target.target(), frame, &camera, &options);
-        h.ctx.queue.submit([encoder.finish()]);
-        h.renderer.after_submit();
-        h.target.read(&h.ctx).expect("read back")
-    };
-    let (a, b) = (draw(&lit), draw(&unlit));
-    // The flash is an additive cold white, (0.55, 0.6, 0.7) x its strength, over every pixel of
-    // the sky (display target: added as it is, clamped at white).
-    let f = flash.min(1.0);
-    for (c, k) in [0.55f32, 0.6, 0.7].into_iter().enumerate() {
-        let mut lifts: Vec<i32> = a.pixels().zip(b.pixels()).filter(|(_, q)| q[c] < 150).map(|(p, q)| p[c] as i32 - q[c] as i32).collect();
-        assert!(lifts.len() > 1000, "channel {c}: the storm sky is dark enough to see the flash");
-        lifts.sort_unstable();
-        let median = lifts[lifts.len() / 2];
-        let expected = (k * f * 255.0).round() as i32;
-        assert!((median - expected).abs() <= 2, "channel {c}: the flash lifts the sky by {median} levels, expected {expected} (flash {f})");
+    // Drawn over the frame, and added to the run of reduced dome layers before it.
+    for in_run in [false, true] {
+        let options = RenderOptions { glare: false, scene: false, flash_in_run: in_run, ..Default::default() };
+        let mut draw = |frame: &skytune::sky::FrameSky| {
+            let mut encoder = h.ctx.device.create_command_encoder(&Default::default());
+            h.renderer.render(&h.ctx, &mut encoder, &h.target.target(), frame, &camera, &options);
+            h.ctx.queue.submit([encoder.finish()]);
+            h.renderer.after_submit();
+            (h.target.read(&h.ctx).expect("read back"), h.renderer.stats.clone())
+        };
+        let (a, s) = draw(&lit);
+        assert_eq!(s.joined_runs_only, u32::from(in_run), "flash in a run: {in_run} ({s:?})");
+        let (b, _) = draw(&unlit);
+        // The flash is an additive cold white, (0.55, 0.6, 0.7) x its strength, over every pixel
+        // of the sky (display target: added as it is, clamped at white).
+        let f = flash.min(1.0);
+        for (c, k) in [0.55f32, 0.6, 0.7].into_iter().enumerate() {
+            let mut lifts: Vec<i32> = a.pixels().zip(b.pixels()).filter(|(_, q)| q[c] < 150).map(|(p, q)| p[c] as i32 - q[c] as i32).collect();
+            assert!(lifts.len() > 1000, "channel {c}: the storm sky is dark enough to see the flash");
+            lifts.sort_unstable();
+            let median = lifts[lifts.len() / 2];
+            let expected = (k * f * 255.0).round() as i32;
+            assert!((median - expected).abs() <= 2, "channel {c}, in a run {in_run}: the flash lifts the sky by {median} levels, expected {expected} (flash {f})");
+        }
     }
 }

@@ -6,6 +6,7 @@ mod common;
 
 use skytune::render::{Camera, DomeResolution, RenderOptions};
 use skytune::sky::builtin::default_sky;
+use skytune::sky::particles::ParticleClock;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
 use skytune::sky::FrameInput;
 
@@ -263,5 +264,34 @@ fn additive_draws_under_the_background_give_the_same_picture() {
                 );
             }
         }
+    }
+}
+
+#[test]
+fn the_lightning_flash_added_to_the_run_before_it_gives_the_same_picture() {
+    let sky = default_sky();
+    // A storm moment with a bright flash (the built-in sky's lightning, in the storm clouds).
+    let at = |i: u32| FrameInput { particle_clock: Some(ParticleClock { time_s: f64::from(i) * 0.05, hours_per_s: 0.0 }), ..FrameInput::new(15.0, 1.0) };
+    let input = (0..8000).map(at).find(|input| sky.evaluate(input).particles.flash > 0.3).expect("a flash within 400 s of storm");
+    // The storm's clouds resolve into a reduced buffer at the full size only.
+    let mut h = common::headless(1280, 720);
+    h.set_sky(&sky).expect("uploaded");
+    let lut = FrameInput { sky_model: Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model }), ..input.clone() };
+    for (what, input, camera, scene) in [
+        ("horizon", &input, Camera { pitch_deg: 10.0, ..Camera::default() }, false),
+        ("horizon, scene", &input, Camera { pitch_deg: 5.0, ..Camera::default() }, true),
+        ("zenith", &input, Camera::preset("zenith").expect("zenith view"), false),
+        ("lut on the HDR target", &lut, Camera { yaw_deg: 250.0, pitch_deg: 15.0, ..Camera::default() }, false),
+    ] {
+        let in_run = RenderOptions { glare: false, scene, ..Default::default() };
+        let over = RenderOptions { flash_in_run: false, ..in_run };
+        let one = h.render(&sky, input, &camera, &in_run).expect("rendered");
+        let s = h.renderer.stats.clone();
+        assert_eq!(s.joined_runs_only, 1, "{what}: the flash joins a run ({s:?})");
+        let two = h.render(&sky, input, &camera, &over).expect("rendered");
+        assert_eq!(h.renderer.stats.joined_runs_only, 0, "{what}");
+        // The same sum in another order: rounding of the 8-bit buffers moves a level or two.
+        let (d, _) = common::diff(&one, &two, 2);
+        assert!(d.differing < 0.001, "{what}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
     }
 }

@@ -124,21 +124,23 @@ pub fn build_pipelines(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, name: &
         name,
         label,
         [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", super::ADDITIVE_ALPHA, "additive")],
-        wgpu::CompareFunction::Less,
+        Some(wgpu::CompareFunction::Less),
     )?;
     Ok([alpha, additive])
 }
 
-/// One pipeline per (fragment entry point, blend, label suffix) of a particle shader (`name`).
+/// One pipeline per (fragment entry point, blend, label suffix) of a particle shader (`name`),
+/// depth-tested with `compare`; None: for a reduced buffer of dome layers (its format, no depth).
 fn build_entries<const N: usize>(
     b: &PassBuild<'_>,
     layout: &wgpu::PipelineLayout,
     name: &str,
     label: &str,
     entries: [(&str, wgpu::BlendState, &str); N],
-    compare: wgpu::CompareFunction,
+    compare: Option<wgpu::CompareFunction>,
 ) -> RenderResult<[wgpu::RenderPipeline; N]> {
-    let (device, format) = (b.device, b.color_format);
+    let device = b.device;
+    let format = if compare.is_some() { b.color_format } else { super::reduced_layers::reduced_format(b.target) };
     let module = shaders::module(device, b.library, name)?;
     let constants = b.target_constants();
     let options = wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: true };
@@ -159,7 +161,7 @@ fn build_entries<const N: usize>(
                     compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
-                depth_stencil: super::depth_state(false, compare),
+                depth_stencil: compare.and_then(|c| super::depth_state(false, c)),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
@@ -200,6 +202,8 @@ pub struct ParticlesPass {
     under_run: Pipelines<[wgpu::RenderPipeline; 2]>,
     /// Additive, drawn first under the background, not depth-tested ([`Pass::draw_first`]).
     first: Pipelines<[wgpu::RenderPipeline; 1]>,
+    /// The flash into a reduced buffer ([`Pass::draw_reduced`]).
+    reduced: Pipelines<[wgpu::RenderPipeline; 1]>,
     set: Staged<Option<EmitterSet>>,
     /// The flash's one instance.
     flash: EmitterGpu,
@@ -225,11 +229,15 @@ impl ParticlesPass {
                 "particles",
                 "Particles::pipeline",
                 [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", super::ADDITIVE_ALPHA, "additive"), ("fs_flash", super::ADDITIVE_ALPHA, "flash")],
-                wgpu::CompareFunction::Less,
+                Some(wgpu::CompareFunction::Less),
             )
         })?;
+        // The flash added to a run of reduced dome layers ([`RenderOptions::flash_in_run`]).
+        let reduced = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| {
+            build_entries(b, l, "particles", "Particles::reduced_pipeline", [("fs_flash", super::reduced_layers::REDUCED_BLENDS[2], "flash")], None)
+        })?;
         let first = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| {
-            build_entries(b, l, "particles", "Particles::first_pipeline", [("fs_main", super::ADDITIVE_ALPHA, "additive")], wgpu::CompareFunction::Always)
+            build_entries(b, l, "particles", "Particles::first_pipeline", [("fs_main", super::ADDITIVE_ALPHA, "additive")], Some(wgpu::CompareFunction::Always))
         })?;
         let run_layout = super::reduced_layers::run_layout(b.device, "Particles::run_layout");
         let under_layout = b.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -241,7 +249,7 @@ impl ParticlesPass {
             // Premultiplied by the shader (fs_alpha_under_run).
             let over = wgpu::BlendState { color: wgpu::BlendComponent::OVER, alpha: wgpu::BlendComponent::OVER };
             let entries = [("fs_alpha_under_run", over, "alpha"), ("fs_main_under_run", super::ADDITIVE_ALPHA, "additive")];
-            build_entries(b, l, "particles", "Particles::under_run_pipeline", entries, wgpu::CompareFunction::Less)
+            build_entries(b, l, "particles", "Particles::under_run_pipeline", entries, Some(wgpu::CompareFunction::Less))
         })?;
         let sampler = sampler(b.device, "Particles::sampler");
         // The flash's bind group: its texture is never sampled (fs_flash).
@@ -255,7 +263,7 @@ impl ParticlesPass {
             ],
         });
         let flash = EmitterGpu { name: "flash".into(), bind_group, additive: true, buffer: None, count: 0, camera: false, priority: 63 };
-        Ok(Self { bind_layout, sampler, pipeline, under_run, first, set: Staged::new(None), flash, alive: 0 })
+        Ok(Self { bind_layout, sampler, pipeline, under_run, first, reduced, set: Staged::new(None), flash, alive: 0 })
     }
 }
 
@@ -271,13 +279,15 @@ impl Pass for ParticlesPass {
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
         self.pipeline.stage(b)?;
         self.under_run.stage(b)?;
-        self.first.stage(b)
+        self.first.stage(b)?;
+        self.reduced.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipeline.commit(accept);
         self.under_run.commit(accept);
         self.first.commit(accept);
+        self.reduced.commit(accept);
     }
 
     fn stage_sky(&mut self, up: &mut SkyUpload<'_>) {
@@ -304,14 +314,18 @@ impl Pass for ParticlesPass {
         write_instances(cx.device, cx.queue, &mut self.flash, &flash);
     }
 
-    fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
+    fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         if let Some(set) = &self.set.current {
             for (key, g) in set.emitters.iter().enumerate().filter(|(_, g)| !g.camera && g.count > 0) {
                 out.push(DrawItem { additive: g.additive, ..DrawItem::new(g.priority, key) });
             }
         }
         if self.flash.count > 0 {
-            out.push(DrawItem { additive: true, ..DrawItem::new(63, FLASH_KEY) });
+            // One constant colour: it needs no resolution, so it joins the run of dome layers
+            // before it, if there is one, at whatever resolution that run has.
+            let (finest, coarsest) = cx.options.dome_resolution.divisors();
+            let reduced = cx.options.flash_in_run && finest > 1;
+            out.push(DrawItem { additive: true, reduced, joins_only: true, divisor: if reduced { coarsest as u8 } else { 1 }, ..DrawItem::new(63, FLASH_KEY) });
         }
     }
 
@@ -321,6 +335,15 @@ impl Pass for ParticlesPass {
             return draw_emitter(rpass, [flash, flash], &self.flash);
         }
         self.set.current.as_ref().and_then(|s| s.emitters.get(key)).map_or(0, |g| draw_emitter(rpass, [alpha, additive], g))
+    }
+
+    fn draw_reduced(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
+        let [flash] = self.reduced.for_target(target);
+        if key == FLASH_KEY {
+            draw_emitter(rpass, [flash, flash], &self.flash)
+        } else {
+            0
+        }
     }
 
     fn can_draw_under_run(&self, key: usize, _target: Target) -> bool {

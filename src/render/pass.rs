@@ -198,12 +198,16 @@ pub struct DrawItem {
     /// Frame pixels per buffer pixel along each side where `reduced` (the coarsest buffer that
     /// still resolves the layer); 1 otherwise.
     pub divisor: u8,
+    /// A `reduced` item that goes to a reduced buffer only to join a run of other layers: alone,
+    /// its run's full-resolution composite would cost what drawing it at full resolution does
+    /// (the lightning flash: one constant colour over the sky).
+    pub joins_only: bool,
 }
 
 impl DrawItem {
     /// A plain full-resolution draw: not reduced, not known to commute.
     pub fn new(priority: u8, key: usize) -> Self {
-        Self { priority, key, reduced: false, additive: false, divisor: 1 }
+        Self { priority, key, reduced: false, additive: false, divisor: 1, joins_only: false }
     }
 }
 

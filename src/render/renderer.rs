@@ -59,6 +59,12 @@ pub struct RenderOptions {
     /// reduced resolution less: no combining pass reading both buffers). Off, or where the first
     /// run is the finer one, or with more runs joined: combined in passes of their own.
     pub seed_joined: bool,
+    /// With dome layers in reduced buffers: the lightning flash (one additive colour over the
+    /// sky, above every layer) is added to the run of layers before it, at that run's
+    /// resolution, instead of over the whole frame at full resolution (the same sum; one
+    /// full-screen blended pass less while a flash lasts). Off, or with no run before it: drawn
+    /// over the frame.
+    pub flash_in_run: bool,
 }
 
 impl Default for RenderOptions {
@@ -74,6 +80,7 @@ impl Default for RenderOptions {
             additive_first: true,
             fuse_background: true,
             seed_joined: true,
+            flash_in_run: true,
         }
     }
 }
@@ -148,6 +155,9 @@ pub struct FrameStats {
     /// The first two runs were joined by seeding the second's buffer with the first
     /// ([`RenderOptions::seed_joined`]): no combining pass.
     pub seeded: bool,
+    /// Draws added to a run of reduced layers only because the run was there
+    /// ([`DrawItem::joins_only`]: the lightning flash, [`RenderOptions::flash_in_run`]).
+    pub joined_runs_only: u32,
     /// The star field was not drawn: transparent this frame.
     pub stars_skipped: bool,
     /// The `lut` tables were not rebuilt: nothing they depend on moved.
@@ -377,11 +387,13 @@ impl SkyRenderer {
         let reduce = options.dome_resolution.divisors().0 > 1;
         if reduce {
             join_additive_runs(sky_items);
+            leave_lone_joiners(sky_items);
         }
         let runs = if reduce { reduced_runs(sky_items, options.join_runs && options.seed_joined) } else { Vec::new() };
         // A run's buffer is as fine as its finest layer needs.
         let divisors: Vec<u32> = runs.iter().map(|&(start, end)| sky_items[start..end].iter().map(|(_, it)| it.divisor.max(1) as u32).min().unwrap_or(1)).collect();
         stats.reduced_runs.clone_from(&divisors);
+        stats.joined_runs_only = sky_items.iter().filter(|(_, it)| it.reduced && it.joins_only).count() as u32;
         let reduced_pass = self.passes.iter().position(|p| (p.as_ref() as &dyn std::any::Any).is::<ReducedLayersPass>()).filter(|_| !runs.is_empty());
         // The first run, when the sky phase draws nothing before it, is the frame's background:
         // drawn first in the scene's pass, over the clear colour.
@@ -691,6 +703,25 @@ fn join_additive_runs(list: &mut [(usize, DrawItem)]) {
     }
 }
 
+/// Items that go to a reduced buffer only in company ([`DrawItem::joins_only`]) and found none
+/// (a run of nothing else) are drawn at full resolution.
+fn leave_lone_joiners(list: &mut [(usize, DrawItem)]) {
+    let mut k = 0;
+    while k < list.len() {
+        let start = k;
+        while k < list.len() && list[k].1.reduced {
+            k += 1;
+        }
+        if k > start && list[start..k].iter().all(|(_, it)| it.joins_only) {
+            for (_, it) in &mut list[start..k] {
+                it.reduced = false;
+                it.divisor = 1;
+            }
+        }
+        k = k.max(start + 1);
+    }
+}
+
 /// Divisors of the combinations of a chain of joined runs (their buffers' `divisors`, lowest
 /// first): combination j holds runs j.. and is as fine as the finest of them. The last run
 /// needs none (its own buffer); fewer than two runs, none at all.
@@ -780,6 +811,25 @@ mod tests {
         let mut unchanged = plain;
         join_additive_runs(&mut unchanged);
         assert_eq!(unchanged, plain);
+    }
+
+    #[test]
+    fn items_that_only_join_runs_stay_at_full_resolution_alone() {
+        let joiner = |key: usize| (0, DrawItem { reduced: true, additive: true, divisor: 4, joins_only: true, ..DrawItem::new(0, key) });
+        // The flash after the fog's run joins it, the bolts before it moving past it; after an
+        // alpha-blended billboard, or first, it is alone.
+        let mut after_bolts = [item(0, true, false), item(1, false, true), joiner(2)];
+        join_additive_runs(&mut after_bolts);
+        leave_lone_joiners(&mut after_bolts);
+        assert_eq!(reduced_runs(&after_bolts, true), [(0, 2)]);
+        assert_eq!(after_bolts[1].1.divisor, 4);
+        let mut after_moon = [item(0, true, false), item(1, false, false), joiner(2)];
+        join_additive_runs(&mut after_moon);
+        leave_lone_joiners(&mut after_moon);
+        assert_eq!(reduced_runs(&after_moon, true), [(0, 1)]);
+        let mut alone = [joiner(0), item(1, false, false), joiner(2), joiner(3)];
+        leave_lone_joiners(&mut alone);
+        assert!(alone.iter().all(|(_, it)| !it.reduced && it.divisor == 1), "{alone:?}");
     }
 
     #[test]

@@ -811,7 +811,12 @@ impl Pass for SkyObjectsPass {
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
-        out.extend(self.visible.iter().enumerate().map(|(key, e)| DrawItem { priority: e.priority, key, reduced: e.reduced, additive: self.additive(e), divisor: e.divisor }));
+        out.extend(self.visible.iter().enumerate().map(|(key, e)| DrawItem {
+            reduced: e.reduced,
+            additive: self.additive(e),
+            divisor: e.divisor,
+            ..DrawItem::new(e.priority, key)
+        }));
     }
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
