@@ -85,6 +85,12 @@ impl GpuContext {
         Ok(Self { instance, adapter, device, queue, timestamps, lost, uncaptured })
     }
 
+    /// The same device for renderers that record no GPU timestamps: what a frame costs without
+    /// measuring it (lavapipe charges a sky frame's phase timestamps about 3% of its time).
+    pub fn without_timestamps(&self) -> Self {
+        Self { timestamps: false, ..self.clone() }
+    }
+
     /// Why the device was lost, if it was: everything made from it is dead, and a new context
     /// (and renderer) must replace it.
     pub fn lost_reason(&self) -> Option<String> {
