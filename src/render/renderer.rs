@@ -706,19 +706,13 @@ fn join_additive_runs(list: &mut [(usize, DrawItem)]) {
 /// Items that go to a reduced buffer only in company ([`DrawItem::joins_only`]) and found none
 /// (a run of nothing else) are drawn at full resolution.
 fn leave_lone_joiners(list: &mut [(usize, DrawItem)]) {
-    let mut k = 0;
-    while k < list.len() {
-        let start = k;
-        while k < list.len() && list[k].1.reduced {
-            k += 1;
-        }
-        if k > start && list[start..k].iter().all(|(_, it)| it.joins_only) {
-            for (_, it) in &mut list[start..k] {
+    for (start, end) in reduced_runs(list, false) {
+        if list[start..end].iter().all(|(_, it)| it.joins_only) {
+            for (_, it) in &mut list[start..end] {
                 it.reduced = false;
                 it.divisor = 1;
             }
         }
-        k = k.max(start + 1);
     }
 }
 
