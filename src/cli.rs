@@ -260,8 +260,9 @@ pub struct FrameArgs {
     /// Hide the main-scene stand-in (sky only).
     #[arg(long)]
     pub no_scene: bool,
-    /// Resolution of the dome layers: full, half, quarter, or auto (each run of layers at quarter
-    /// where its textures allow, else half). Layers with finer texture detail than a
+    /// Resolution of the dome layers: full, half, quarter, or auto (each run of layers in the
+    /// coarsest buffer, from half the width and height to an eighth in steps of a quarter pixel,
+    /// that still resolves its textures). Layers with finer texture detail than a
     /// half-resolution buffer stay at full resolution.
     #[arg(long, default_value = "auto", value_parser = parse_dome_resolution)]
     pub dome_resolution: skytune::render::DomeResolution,

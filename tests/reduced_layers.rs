@@ -4,7 +4,7 @@
 
 mod common;
 
-use skytune::render::{Camera, DomeResolution, RenderOptions};
+use skytune::render::{Camera, Divisor, DomeResolution, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::particles::ParticleClock;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
@@ -67,7 +67,7 @@ fn fine_layers_and_billboards_stay_at_full_resolution() {
 }
 
 #[test]
-fn runs_join_across_additive_draws_and_coarse_runs_go_to_quarter() {
+fn runs_join_across_additive_draws_and_coarse_runs_go_to_coarser_buffers() {
     let sky = default_sky();
     let mut h = common::headless(640, 360);
     h.set_sky(&sky).expect("uploaded");
@@ -80,16 +80,16 @@ fn runs_join_across_additive_draws_and_coarse_runs_go_to_quarter() {
     // it: the galaxy joins the skydome's run, and the fog (alpha blended, after the billboards)
     // makes the second run. Without the join there would be three.
     let s = h.renderer.stats.clone();
-    assert_eq!((s.objects_reduced, s.reduced_runs.as_slice()), (3, &[2, 2][..]), "{s:?}");
-    // Gradient, halo, galaxy and fog band are coarse enough for a quarter-resolution buffer.
+    assert_eq!((s.objects_reduced, s.reduced_runs.as_slice()), (3, &[Divisor::HALF; 2][..]), "{s:?}");
+    // Gradient, halo, galaxy and fog band are coarse enough for a buffer an eighth of the size.
     let auto = RenderOptions { dome_resolution: DomeResolution::Auto, ..half };
     h.render(&sky, &night, &camera, &auto).expect("rendered");
-    assert_eq!(h.renderer.stats.reduced_runs, [4, 4], "{:?}", h.renderer.stats);
+    assert_eq!(h.renderer.stats.reduced_runs, [Divisor::whole(8); 2], "{:?}", h.renderer.stats);
     // A physical sky model's stage keeps its layer's run at half resolution (the sun's aureole).
     let mut lut = FrameInput::new(10.0, 0.3);
     lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
     h.render(&sky, &lut, &camera, &auto).expect("rendered");
-    assert_eq!(h.renderer.stats.reduced_runs.first(), Some(&2), "{:?}", h.renderer.stats);
+    assert_eq!(h.renderer.stats.reduced_runs.first(), Some(&Divisor::HALF), "{:?}", h.renderer.stats);
 }
 
 #[test]

@@ -33,7 +33,7 @@ pub use context::{AdapterChoice, GpuContext};
 pub use error::{RenderError, RenderResult};
 pub use headless::{Headless, Offscreen};
 pub use pass::{Pass, Phase, PASSES};
-pub use reduced_layers::DomeResolution;
+pub use reduced_layers::{Divisor, DomeResolution};
 pub use renderer::{release_freed_memory, FrameStats, RenderOptions, RenderTarget, Skips, SkyRenderer, UploadStats, SCENE_DEPTH, SKY_DEPTH};
 pub use shaders::ShaderLibrary;
 

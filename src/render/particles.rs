@@ -6,6 +6,7 @@
 
 use super::error::RenderResult;
 use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
+use super::reduced_layers::Divisor;
 use super::renderer::FrameStats;
 use super::shaders;
 use super::textures::TextureCache;
@@ -324,8 +325,8 @@ impl Pass for ParticlesPass {
             // One constant colour: it needs no resolution, so it joins the run of dome layers
             // before it, if there is one, at whatever resolution that run has.
             let (finest, coarsest) = cx.options.dome_resolution.divisors();
-            let reduced = cx.options.flash_in_run && finest > 1;
-            out.push(DrawItem { additive: true, reduced, joins_only: true, divisor: if reduced { coarsest as u8 } else { 1 }, ..DrawItem::new(63, FLASH_KEY) });
+            let reduced = cx.options.flash_in_run && finest > Divisor::FULL;
+            out.push(DrawItem { additive: true, reduced, joins_only: true, divisor: if reduced { coarsest } else { Divisor::FULL }, ..DrawItem::new(63, FLASH_KEY) });
         }
     }
 

@@ -11,6 +11,7 @@ use std::any::Any;
 
 use super::camera::Camera;
 use super::error::RenderResult;
+use super::reduced_layers::Divisor;
 use super::renderer::{FrameStats, RenderOptions};
 use super::shaders::ShaderLibrary;
 use super::textures::TextureCache;
@@ -196,8 +197,8 @@ pub struct DrawItem {
     /// every other such draw, so the sky phase may reorder them (to join reduced runs).
     pub additive: bool,
     /// Frame pixels per buffer pixel along each side where `reduced` (the coarsest buffer that
-    /// still resolves the layer); 1 otherwise.
-    pub divisor: u8,
+    /// still resolves the layer); [`Divisor::FULL`] otherwise.
+    pub divisor: Divisor,
     /// A `reduced` item that goes to a reduced buffer only to join a run of other layers: alone,
     /// its run's full-resolution composite would cost what drawing it at full resolution does
     /// (the lightning flash: one constant colour over the sky).
@@ -207,7 +208,7 @@ pub struct DrawItem {
 impl DrawItem {
     /// A plain full-resolution draw: not reduced, not known to commute.
     pub fn new(priority: u8, key: usize) -> Self {
-        Self { priority, key, reduced: false, additive: false, divisor: 1, joins_only: false }
+        Self { priority, key, reduced: false, additive: false, divisor: Divisor::FULL, joins_only: false }
     }
 }
 

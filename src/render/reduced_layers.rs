@@ -1,6 +1,6 @@
 //! Dome layers at reduced resolution (trueSKY's mixed-resolution rendering, see
 //! ../shared/references/truesky-rendering-techniques.txt): a run of consecutive dome draws of the
-//! sky phase is drawn into a buffer `divisor` times smaller on each side, holding premultiplied
+//! sky phase is drawn into a buffer [`Divisor`] times smaller on each side, holding premultiplied
 //! colour and the run's transmittance, and composited over the frame in the run's place with one
 //! full-screen triangle (`shaders/reduced_layers.wgsl`). Billboards, stars and particles stay at
 //! full resolution. Dome layers are smooth gradients and soft clouds: on a software rasteriser
@@ -23,6 +23,56 @@ pub fn reduced_format(target: Target) -> wgpu::TextureFormat {
     }
 }
 
+/// Frame pixels per reduced-buffer pixel along each side, in steps of a quarter: a run's buffer
+/// can be just as coarse as its layers' textures allow (the built-in clouds resolve at 2.5,
+/// where a half-resolution buffer would draw 1.6 times their pixels).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Divisor(u8);
+
+impl Divisor {
+    /// The frame's own resolution.
+    pub const FULL: Divisor = Divisor(4);
+    /// Half the width and height.
+    pub const HALF: Divisor = Divisor(8);
+    /// A quarter of the width and height.
+    pub const QUARTER: Divisor = Divisor(16);
+    /// An eighth of the width and height: the coarsest `Auto` goes.
+    pub const EIGHTH: Divisor = Divisor(32);
+    /// Quarter steps of one divisor.
+    const STEPS: f32 = 4.0;
+
+    /// `n` frame pixels per buffer pixel.
+    pub const fn whole(n: u8) -> Divisor {
+        Divisor(n * 4)
+    }
+
+    /// Frame pixels per buffer pixel.
+    pub fn get(self) -> f32 {
+        f32::from(self.0) / Self::STEPS
+    }
+
+    /// The coarsest step at most `factor`, within `[finest, coarsest]` (`finest` where `factor`
+    /// is not a number).
+    pub fn at_most(factor: f32, finest: Divisor, coarsest: Divisor) -> Divisor {
+        let steps = (factor * Self::STEPS).floor();
+        if steps.is_nan() {
+            return finest;
+        }
+        Divisor(steps.clamp(f32::from(finest.0), f32::from(coarsest.0)) as u8)
+    }
+
+    /// Buffer pixels covering `frame_px` frame pixels (rounded up: the buffer holds the whole frame).
+    pub fn buffer_len(self, frame_px: u32) -> u32 {
+        (frame_px * u32::from(Self::STEPS as u8)).div_ceil(u32::from(self.0.max(1))).max(1)
+    }
+}
+
+impl std::fmt::Display for Divisor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.get())
+    }
+}
+
 /// How finely dome layers are drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum DomeResolution {
@@ -32,9 +82,9 @@ pub enum DomeResolution {
     Half,
     /// A quarter of the width and height, composited.
     Quarter,
-    /// Each run of layers at a quarter of the width and height when the buffer still resolves
-    /// the textures of all its layers, else at half: the default. Layers go to a buffer only
-    /// when a half-resolution one resolves them.
+    /// Each run of layers in the coarsest buffer, in quarter steps from half the width and
+    /// height to an eighth, that still resolves the textures of all its layers: the default.
+    /// Layers go to a buffer only when a half-resolution one resolves them.
     #[default]
     Auto,
 }
@@ -45,12 +95,12 @@ impl DomeResolution {
 
     /// Frame pixels per buffer pixel along each side: the finest buffer a layer may go to, and
     /// the coarsest (1: layers stay on the frame).
-    pub fn divisors(self) -> (u32, u32) {
+    pub fn divisors(self) -> (Divisor, Divisor) {
         match self {
-            DomeResolution::Full => (1, 1),
-            DomeResolution::Half => (2, 2),
-            DomeResolution::Quarter => (4, 4),
-            DomeResolution::Auto => (2, 4),
+            DomeResolution::Full => (Divisor::FULL, Divisor::FULL),
+            DomeResolution::Half => (Divisor::HALF, Divisor::HALF),
+            DomeResolution::Quarter => (Divisor::QUARTER, Divisor::QUARTER),
+            DomeResolution::Auto => (Divisor::HALF, Divisor::EIGHTH),
         }
     }
 
@@ -114,7 +164,7 @@ const _: () = assert!(std::mem::size_of::<CompositeUniform>() == 16);
 pub enum Joining<'a> {
     /// Combination j of the joined runs at divisor `[j]`, each in a pass of its own (none: the
     /// runs are not joined).
-    Combined(&'a [u32]),
+    Combined(&'a [Divisor]),
     /// The first two runs, the second's buffer seeded with the first ([`ReducedLayersPass::seed`]).
     Seeded,
 }
@@ -123,7 +173,7 @@ pub enum Joining<'a> {
 struct RunBuffer {
     view: wgpu::TextureView,
     bind_group: wgpu::BindGroup,
-    divisor: u32,
+    divisor: Divisor,
     /// Whether `bind_group` reads the buffer of the run below as `run_lower` (the buffer was seeded
     /// with it: [`ReducedLayersPass::seed`]); else that binding is black.
     reads_lower: bool,
@@ -219,13 +269,13 @@ impl ReducedLayersPass {
     }
 
     /// Size of the reduced buffers for a frame size and divisor, pixels.
-    pub fn buffer_size((width, height): (u32, u32), divisor: u32) -> (u32, u32) {
-        (width.div_ceil(divisor).max(1), height.div_ceil(divisor).max(1))
+    pub fn buffer_size((width, height): (u32, u32), divisor: Divisor) -> (u32, u32) {
+        (divisor.buffer_len(width), divisor.buffer_len(height))
     }
 
     /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, and how the joined
     /// runs are combined (`joining`), for the frame size and target.
-    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), target: Target, divisors: &[u32], joining: Joining<'_>) {
+    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), target: Target, divisors: &[Divisor], joining: Joining<'_>) {
         let (combined, seeded) = match joining {
             Joining::Combined(divisors) => (divisors, false),
             Joining::Seeded => (&[][..], true),
@@ -260,7 +310,7 @@ impl ReducedLayersPass {
 
     /// Makes `list[k]` a buffer at `divisors[k]` for every k, keeping those already at theirs;
     /// returns whether the first was made anew.
-    fn fit(&self, device: &wgpu::Device, list: &mut Vec<RunBuffer>, label: &str, divisors: &[u32]) -> bool {
+    fn fit(&self, device: &wgpu::Device, list: &mut Vec<RunBuffer>, label: &str, divisors: &[Divisor]) -> bool {
         let mut first_changed = false;
         for (k, &divisor) in divisors.iter().enumerate() {
             if list.get(k).is_some_and(|b| b.divisor == divisor) {
@@ -278,7 +328,7 @@ impl ReducedLayersPass {
     }
 
     /// A buffer of the whole frame at `divisor`, with the bind group that reads it.
-    fn buffer(&self, device: &wgpu::Device, label: &str, divisor: u32) -> RunBuffer {
+    fn buffer(&self, device: &wgpu::Device, label: &str, divisor: Divisor) -> RunBuffer {
         let (width, height) = Self::buffer_size(self.made_for.0, divisor);
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
@@ -513,5 +563,27 @@ impl ReducedLayersPass {
         rpass.set_bind_group(1, &buffer.bind_group, &[]);
         rpass.draw(0..3, 0..1);
         1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn divisors_step_by_quarters_within_their_bounds() {
+        let (half, quarter) = (Divisor::HALF, Divisor::QUARTER);
+        // The built-in clouds: 10.3 frame pixels per degree, 4.04 texels per degree.
+        assert_eq!(Divisor::at_most(10.29 / 4.04, half, quarter).get(), 2.5);
+        assert_eq!(Divisor::at_most(3.99, half, quarter).get(), 3.75);
+        assert_eq!(Divisor::at_most(1.2, half, quarter), half);
+        assert_eq!(Divisor::at_most(f32::INFINITY, half, quarter), quarter);
+        assert_eq!(Divisor::at_most(f32::NAN, half, quarter), half);
+        assert_eq!(Divisor::whole(3).to_string(), "3");
+        assert_eq!(Divisor::at_most(2.5, half, quarter).to_string(), "2.5");
+        // Buffers cover the whole frame, rounding up.
+        assert_eq!(ReducedLayersPass::buffer_size((1280, 720), Divisor::at_most(2.5, half, quarter)), (512, 288));
+        assert_eq!(ReducedLayersPass::buffer_size((322, 181), Divisor::whole(4)), (81, 46));
+        assert_eq!(ReducedLayersPass::buffer_size((1, 1), quarter), (1, 1));
     }
 }

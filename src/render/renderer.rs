@@ -6,7 +6,7 @@ use super::camera::Camera;
 use super::error::RenderResult;
 use super::globals::{Globals, GlobalsBinding};
 use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SharedResources, SkyUpload, Target, PASSES};
-use super::reduced_layers::DomeResolution;
+use super::reduced_layers::{Divisor, DomeResolution};
 use super::reduced_layers::{Joining, ReducedLayersPass};
 use super::shaders::{self, ShaderLibrary};
 use super::textures::TextureCache;
@@ -142,8 +142,8 @@ pub struct FrameStats {
     /// Sky objects drawn into a reduced-resolution buffer ([`RenderOptions::dome_resolution`]).
     pub objects_reduced: u32,
     /// Each run of reduced layers this frame, in draw order: its buffer's divisor (2: half the
-    /// frame's width and height, 4: a quarter). One composite each.
-    pub reduced_runs: Vec<u32>,
+    /// frame's width and height, 2.5: two fifths, 4: a quarter). One composite each.
+    pub reduced_runs: Vec<Divisor>,
     /// Full-screen composites of those runs (the background included): one for all the runs
     /// joined ([`RenderOptions::join_runs`]).
     pub composites: u32,
@@ -384,14 +384,14 @@ impl SkyRenderer {
         sky_items.sort_by_key(|(_, it)| it.priority);
         // Runs of consecutive dome layers drawn at reduced resolution, each into its own buffer
         // before the scene; the sky pass composites each in its run's place.
-        let reduce = options.dome_resolution.divisors().0 > 1;
+        let reduce = options.dome_resolution.divisors().0 > Divisor::FULL;
         if reduce {
             join_additive_runs(sky_items);
             leave_lone_joiners(sky_items);
         }
         let runs = if reduce { reduced_runs(sky_items, options.join_runs && options.seed_joined) } else { Vec::new() };
         // A run's buffer is as fine as its finest layer needs.
-        let divisors: Vec<u32> = runs.iter().map(|&(start, end)| sky_items[start..end].iter().map(|(_, it)| it.divisor.max(1) as u32).min().unwrap_or(1)).collect();
+        let divisors: Vec<Divisor> = runs.iter().map(|&(start, end)| sky_items[start..end].iter().map(|(_, it)| it.divisor).min().unwrap_or(Divisor::FULL)).collect();
         stats.reduced_runs.clone_from(&divisors);
         stats.joined_runs_only = sky_items.iter().filter(|(_, it)| it.reduced && it.joins_only).count() as u32;
         let reduced_pass = self.passes.iter().position(|p| (p.as_ref() as &dyn std::any::Any).is::<ReducedLayersPass>()).filter(|_| !runs.is_empty());
@@ -710,7 +710,7 @@ fn leave_lone_joiners(list: &mut [(usize, DrawItem)]) {
         if list[start..end].iter().all(|(_, it)| it.joins_only) {
             for (_, it) in &mut list[start..end] {
                 it.reduced = false;
-                it.divisor = 1;
+                it.divisor = Divisor::FULL;
             }
         }
     }
@@ -719,9 +719,9 @@ fn leave_lone_joiners(list: &mut [(usize, DrawItem)]) {
 /// Divisors of the combinations of a chain of joined runs (their buffers' `divisors`, lowest
 /// first): combination j holds runs j.. and is as fine as the finest of them. The last run
 /// needs none (its own buffer); fewer than two runs, none at all.
-fn combined_divisors(divisors: &[u32]) -> Vec<u32> {
+fn combined_divisors(divisors: &[Divisor]) -> Vec<Divisor> {
     let n = divisors.len();
-    (0..n.saturating_sub(1)).map(|j| divisors[j..].iter().copied().min().unwrap_or(1)).collect()
+    (0..n.saturating_sub(1)).map(|j| divisors[j..].iter().copied().min().unwrap_or(Divisor::FULL)).collect()
 }
 
 /// The runs of consecutive items marked `reduced` in a sorted phase list: (start, end) indices.
@@ -785,7 +785,7 @@ mod tests {
     use super::*;
 
     fn item(key: usize, reduced: bool, additive: bool) -> (usize, DrawItem) {
-        (0, DrawItem { reduced, additive, divisor: if reduced { 2 } else { 1 }, ..DrawItem::new(0, key) })
+        (0, DrawItem { reduced, additive, divisor: if reduced { Divisor::HALF } else { Divisor::FULL }, ..DrawItem::new(0, key) })
     }
 
     #[test]
@@ -809,26 +809,26 @@ mod tests {
 
     #[test]
     fn items_that_only_join_runs_stay_at_full_resolution_alone() {
-        let joiner = |key: usize| (0, DrawItem { reduced: true, additive: true, divisor: 4, joins_only: true, ..DrawItem::new(0, key) });
+        let joiner = |key: usize| (0, DrawItem { reduced: true, additive: true, divisor: Divisor::QUARTER, joins_only: true, ..DrawItem::new(0, key) });
         // The flash after the fog's run joins it, the bolts before it moving past it; after an
         // alpha-blended billboard, or first, it is alone.
         let mut after_bolts = [item(0, true, false), item(1, false, true), joiner(2)];
         join_additive_runs(&mut after_bolts);
         leave_lone_joiners(&mut after_bolts);
         assert_eq!(reduced_runs(&after_bolts, true), [(0, 2)]);
-        assert_eq!(after_bolts[1].1.divisor, 4);
+        assert_eq!(after_bolts[1].1.divisor, Divisor::QUARTER);
         let mut after_moon = [item(0, true, false), item(1, false, false), joiner(2)];
         join_additive_runs(&mut after_moon);
         leave_lone_joiners(&mut after_moon);
         assert_eq!(reduced_runs(&after_moon, true), [(0, 1)]);
         let mut alone = [joiner(0), item(1, false, false), joiner(2), joiner(3)];
         leave_lone_joiners(&mut alone);
-        assert!(alone.iter().all(|(_, it)| !it.reduced && it.divisor == 1), "{alone:?}");
+        assert!(alone.iter().all(|(_, it)| !it.reduced && it.divisor == Divisor::FULL), "{alone:?}");
     }
 
     #[test]
     fn a_lone_first_run_that_gets_finer_is_split_where_it_does() {
-        let at = |key: usize, divisor: u8| (0, DrawItem { reduced: true, divisor, ..DrawItem::new(0, key) });
+        let at = |key: usize, divisor: u8| (0, DrawItem { reduced: true, divisor: Divisor::whole(divisor), ..DrawItem::new(0, key) });
         // Skydome and galaxy at a quarter, clouds at half, fog at a quarter: the billboards
         // between the skydome and the clouds out of the frame.
         let lone = [at(0, 4), at(1, 4), at(2, 2), at(3, 4)];
@@ -848,10 +848,12 @@ mod tests {
     fn each_combination_is_as_fine_as_its_finest_run() {
         // Skydome at a quarter, clouds at half, fog at a quarter: combination 0 holds all three,
         // combination 1 the clouds and the fog; the fog's own buffer stands for itself.
-        assert_eq!(combined_divisors(&[4, 2, 4]), [2, 2]);
-        assert_eq!(combined_divisors(&[4, 4, 2]), [2, 2]);
-        assert_eq!(combined_divisors(&[2, 4]), [2]);
-        assert_eq!(combined_divisors(&[4]), Vec::<u32>::new());
-        assert_eq!(combined_divisors(&[]), Vec::<u32>::new());
+        let [half, quarter] = [Divisor::HALF, Divisor::QUARTER];
+        assert_eq!(combined_divisors(&[quarter, half, quarter]), [half, half]);
+        assert_eq!(combined_divisors(&[quarter, quarter, half]), [half, half]);
+        assert_eq!(combined_divisors(&[half, quarter]), [half]);
+        assert_eq!(combined_divisors(&[Divisor::whole(3), Divisor::whole(3), Divisor::at_most(2.6, half, quarter)]), [Divisor::at_most(2.5, half, quarter); 2]);
+        assert_eq!(combined_divisors(&[quarter]), Vec::<Divisor>::new());
+        assert_eq!(combined_divisors(&[]), Vec::<Divisor>::new());
     }
 }

@@ -10,6 +10,7 @@ use super::camera::Camera;
 use super::error::RenderResult;
 use super::mesh::{shape_key, shape_mesh, GpuMesh, SkyVertex};
 use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
+use super::reduced_layers::Divisor;
 use super::renderer::FrameStats;
 use super::shaders;
 use super::stage_fold;
@@ -334,7 +335,7 @@ struct Visible {
     reduced: bool,
     /// Where reduced: frame pixels per buffer pixel along each side, the coarsest buffer the
     /// options allow that still resolves its textures.
-    divisor: u8,
+    divisor: Divisor,
     /// The stages this draw samples (the other terms are left out): every stage when whole.
     part: [bool; 4],
     /// The fine terms of a split opaque layer: added on top of its reduced part.
@@ -687,10 +688,10 @@ impl Pass for SkyObjectsPass {
             })
         };
         let (finest, coarsest) = cx.options.dome_resolution.divisors();
-        let reduce_domes = finest > 1;
-        // A reduced buffer's pixels per degree of view at the centre of the frame.
-        let px_per_deg = |divisor: u32| cx.size.1 as f32 / cx.camera.fov_y_deg.max(1.0) / divisor as f32;
-        let reduced_px_per_deg = px_per_deg(finest);
+        let reduce_domes = finest > Divisor::FULL;
+        // The frame's pixels per degree of view at its centre.
+        let frame_px_per_deg = cx.size.1 as f32 / cx.camera.fov_y_deg.max(1.0);
+        let reduced_px_per_deg = frame_px_per_deg / finest.get();
         for of in &cx.frame.objects {
             match &of.versions {
                 Ok(versions) if behind_scene(of, versions) => {
@@ -704,8 +705,16 @@ impl Pass for SkyObjectsPass {
                 Ok(versions) => {
                     for v in versions {
                         let d = &draws.objects[of.index][v.version];
-                        let entry =
-                            Visible { index: of.index, priority: of.priority, version: v.version, reduced: false, divisor: 1, part: [true; 4], on_top: false, parts: (0, 0) };
+                        let entry = Visible {
+                            index: of.index,
+                            priority: of.priority,
+                            version: v.version,
+                            reduced: false,
+                            divisor: Divisor::FULL,
+                            part: [true; 4],
+                            on_top: false,
+                            parts: (0, 0),
+                        };
                         let dome = matches!(d.shape, Shape::Dome { .. } | Shape::DomeBand { .. });
                         let Some(key) = self.keys.get(&(of.index, v.version)).filter(|_| reduce_domes && dome) else {
                             self.visible.push(entry);
@@ -720,11 +729,11 @@ impl Pass for SkyObjectsPass {
                         let coarse: [bool; 4] = std::array::from_fn(|k| k < count && !fine[k]);
                         let any_fine = (0..count).any(|k| fine[k] && key.live[k]);
                         let any_coarse = (0..count).any(|k| coarse[k] && key.live[k]);
-                        // The coarsest buffer allowed that resolves every coarse stage sampled. A
-                        // physical sky model's stage stays at the finest: its map has no texel
-                        // size here, and the sun's aureole is sharp.
-                        let coarse_enough = (0..count).all(|k| !(coarse[k] && key.live[k]) || d.texels_per_deg[k] <= px_per_deg(coarsest));
-                        let divisor = if coarse_enough && (key.view_stage as usize) >= MAX_STAGES { coarsest } else { finest } as u8;
+                        // The coarsest buffer allowed that resolves every coarse stage sampled (no
+                        // stage sampled: the coarsest). A physical sky model's stage stays at the
+                        // finest: its map has no texel size here, and the sun's aureole is sharp.
+                        let densest = (0..count).filter(|&k| coarse[k] && key.live[k]).map(|k| d.texels_per_deg[k]).fold(0.0, f32::max);
+                        let divisor = if (key.view_stage as usize) < MAX_STAGES { finest } else { Divisor::at_most(frame_px_per_deg / densest, finest, coarsest) };
                         let reduced = Visible { reduced: true, divisor, ..entry };
                         match (any_fine, any_coarse, d.blend) {
                             (false, _, _) => self.visible.push(reduced),
@@ -763,7 +772,7 @@ impl Pass for SkyObjectsPass {
                 let d = &draws.objects[e.index][e.version];
                 // Frame pixels per degree at the frame's centre (the fewest: a perspective frame
                 // has more per degree towards its edges), in this draw's buffer.
-                let px_per_deg = view.centre_px_per_deg(cx.size.1) / e.divisor as f32;
+                let px_per_deg = view.centre_px_per_deg(cx.size.1) / e.divisor.get();
                 let level0 = |ring: Option<usize>| {
                     (0..MAX_STAGES)
                         .filter(|&k| d.maps[k].as_ref().is_some_and(|m| m.peak(&d.shape, ring, &view) * LOD_MARGIN <= px_per_deg * std::f32::consts::SQRT_2))
