@@ -183,3 +183,38 @@ fn the_celestial_mapping_from_level_0_changes_no_pixel() {
     }
     assert!(level0 >= 2 && mipmapped >= 2, "both ways taken: {level0} frames from level 0, {mipmapped} mipmapped");
 }
+
+#[test]
+fn stars_too_faint_to_add_half_a_level_are_not_drawn_and_change_no_pixel() {
+    let forest = skytune::sky::load_sky_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("skies/forest/sky.toml")).expect("forest sky");
+    let mut h = common::headless(320, 180);
+    h.set_sky(&forest).expect("uploaded");
+    let on = RenderOptions { glare: false, ..Default::default() };
+    let off = RenderOptions { skips: Skips { invisible_stars: false, ..Skips::default() }, ..on };
+    let mut lut = FrameInput::new(18.5, 0.3);
+    lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..forest.model });
+    let mut partly = 0;
+    // Dusk and dawn, where the brighter stars show and the fainter ones add nothing; night, where
+    // every star of the field shows; looking up and towards the horizon.
+    for (what, input, tolerance) in [
+        ("dusk", FrameInput::new(18.5, 0.3), 0),
+        ("dawn", FrameInput::new(6.0, 0.0), 0),
+        ("night", FrameInput::new(23.0, 0.0), 0),
+        // On the HDR target every star is drawn (the tone map's toe can lift half a level by more).
+        ("dusk, lut on the HDR target", lut, 0),
+    ] {
+        for pitch_deg in [10.0, 60.0] {
+            let camera = Camera { pitch_deg, ..Camera::default() };
+            let (with, without) = same_pixels(&mut h, (&forest, &input, &camera), (&on, &off), tolerance, |s| {
+                format!("{what}, pitch {pitch_deg}: leaving out {} of {} stars", s.stars - s.stars_drawn, s.stars)
+            });
+            assert_eq!(without.stars_drawn, without.stars, "{what}: every star drawn with the skip off ({without:?})");
+            assert!(with.stars_drawn <= with.stars, "{with:?}");
+            partly += u32::from(with.stars_drawn > 0 && with.stars_drawn < with.stars);
+            if what == "night" || what.contains("HDR") {
+                assert_eq!(with.stars_drawn, with.stars, "{what}: every star of the field drawn ({with:?})");
+            }
+        }
+    }
+    assert!(partly >= 4, "some frames draw some of the stars and leave out others ({partly})");
+}

@@ -447,7 +447,7 @@ fn stats(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     }
     section(ui, "CPU time per frame section:", info.cpu_ms);
     let s = info.stats;
-    ui.label(format!("draw calls {}, objects drawn {}, hidden {}, stars {}", s.draw_calls, s.objects_drawn, s.objects_hidden, s.stars));
+    ui.label(format!("draw calls {}, objects drawn {}, hidden {}, stars {} of {}", s.draw_calls, s.objects_drawn, s.objects_hidden, s.stars_drawn, s.stars));
     ui.label(format!("texture stages skipped (black this frame): {}", s.stages_skipped));
     skips(ui, c, info);
     if let Some(g) = info.glare {

@@ -90,7 +90,8 @@ impl Default for RenderOptions {
 pub struct Skips {
     /// Texture stages whose term is black this frame are not sampled.
     pub dark_stages: bool,
-    /// The star field is not drawn while its colour is transparent (daylight).
+    /// The star field is not drawn while its colour is transparent (daylight), nor its stars
+    /// too faint this frame to add half a level of 255 (dusk).
     pub invisible_stars: bool,
     /// The `lut` tables and the sky-view map are not recomputed while nothing they depend on moved.
     pub unchanged_tables: bool,
@@ -128,6 +129,9 @@ pub struct FrameStats {
     pub objects_hidden: u32,
     /// Stars in the field after the magnitude cutoff.
     pub stars: u32,
+    /// Of those, the stars drawn this frame: bright enough to add half a level of 255 somewhere
+    /// ([`Skips::invisible_stars`]).
+    pub stars_drawn: u32,
     /// Texture stages of sky objects not sampled because their term is black this frame.
     pub stages_skipped: u32,
     /// Sky objects not drawn because their ref colour's alpha is 0 this frame.

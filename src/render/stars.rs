@@ -109,7 +109,7 @@ impl StarsPass {
         rpass.set_pipeline(pipeline);
         rpass.set_bind_group(1, &field.bind_group, &[]);
         rpass.set_vertex_buffer(0, field.instances.slice(..));
-        rpass.draw(0..4, 0..field.count);
+        rpass.draw(0..4, 0..field.drawn);
         1
     }
 }
@@ -145,9 +145,11 @@ impl Pass for StarsPass {
     }
 
     fn prepare(&mut self, cx: &FrameContext<'_>) {
-        (self.visible, self.skipped) = match (&self.field.current, cx.frame.stars) {
+        (self.visible, self.skipped) = match (&mut self.field.current, cx.frame.stars) {
             (Some(field), Some(s)) => {
-                let visible = field.prepare(cx.queue, s.color);
+                // On the HDR target the tone map's toe can lift half a level by more: every star.
+                let faint_skipped = cx.options.skips.invisible_stars && cx.target == Target::Display;
+                let visible = field.prepare(cx.queue, s.color, faint_skipped);
                 (visible || (!cx.options.skips.invisible_stars && field.count > 0), !visible)
             }
             _ => (false, false),
@@ -183,14 +185,20 @@ impl Pass for StarsPass {
 
     fn stats(&self, stats: &mut FrameStats) {
         stats.stars = self.field.current.as_ref().map_or(0, |f| f.count);
+        stats.stars_drawn = self.field.current.as_ref().filter(|_| self.visible).map_or(0, |f| f.drawn);
         stats.stars_skipped = self.skipped && !self.visible;
     }
 }
 
 /// GPU resources of a sky's star field.
 pub struct StarField {
+    /// Brightest first, so that the stars bright enough to show this frame are a prefix.
     instances: wgpu::Buffer,
     count: u32,
+    /// Each instance's brightness as the shader caps it (`min(brightness, 1.5)`), descending.
+    capped_brightness: Vec<f32>,
+    /// Instances drawn this frame: those whose brightest pixel adds at least half a level.
+    drawn: u32,
     uniform: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     size_px: f32,
@@ -200,7 +208,10 @@ impl StarField {
     /// Generates and uploads the stars of a sky.
     pub fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, stars: &Stars) -> Self {
         let generated = starfield::generate(stars);
-        let data: Vec<StarInstance> = generated.iter().map(|s| StarInstance { direction: s.direction.to_array(), brightness: s.brightness() }).collect();
+        let mut data: Vec<StarInstance> = generated.iter().map(|s| StarInstance { direction: s.direction.to_array(), brightness: s.brightness() }).collect();
+        // Additive draws commute (clamped sums of non-negative terms), so the order is free.
+        data.sort_by(|a, b| b.brightness.total_cmp(&a.brightness));
+        let capped_brightness = data.iter().map(|s| s.brightness.min(MAX_BRIGHTNESS)).collect();
         let placeholder = [StarInstance::zeroed()];
         let instances = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("Stars::instances"),
@@ -219,7 +230,8 @@ impl StarField {
             layout,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
         });
-        Self { instances, count: data.len() as u32, uniform, bind_group, size_px: stars.size_px }
+        let count = data.len() as u32;
+        Self { instances, count, capped_brightness, drawn: count, uniform, bind_group, size_px: stars.size_px }
     }
 
     /// Number of stars kept after the magnitude cutoff.
@@ -227,9 +239,45 @@ impl StarField {
         self.count
     }
 
-    /// Writes this frame's colour. Returns whether the stars are visible at all.
-    pub fn prepare(&self, queue: &wgpu::Queue, color: Rgba) -> bool {
+    /// Writes this frame's colour and picks the stars to draw: with `faint_skipped`, those whose
+    /// brightest pixel adds at least half a level of 255 in some channel (fainter ones round to
+    /// nothing on an 8-bit display target: at dusk all but 2 of the lakes sky's 1068), else all.
+    /// Returns whether any star is visible at all.
+    pub fn prepare(&mut self, queue: &wgpu::Queue, color: Rgba, faint_skipped: bool) -> bool {
         queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&StarsUniform { color, size: [self.size_px, 0.0, 0.0, 0.0] }));
+        self.drawn = if faint_skipped { visible_stars(&self.capped_brightness, color) } else { self.count };
         color[3] > 0.5 / 255.0 && self.count > 0
+    }
+}
+
+/// Brightness past which shaders/stars.wgsl draws a star no brighter. Keep in sync with `vs_main` there.
+const MAX_BRIGHTNESS: f32 = 1.5;
+
+/// How many of the stars (capped brightness, descending) add at least half a level of 255 at
+/// their brightest pixel under tint and visibility `color`: shaders/stars.wgsl writes
+/// tint x min(falloff x brightness x extinction x visibility, 1) in display values, falloff and
+/// extinction at most 1.
+fn visible_stars(capped_brightness: &[f32], color: Rgba) -> u32 {
+    let peak_tint = color[0].max(color[1]).max(color[2]);
+    let half_level = 0.5 / 255.0;
+    capped_brightness.partition_point(|&b| peak_tint * (b * color[3]).min(1.0) >= half_level) as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stars_adding_less_than_half_a_level_are_left_out() {
+        let capped = [1.5, 1.0, 0.01, 0.001];
+        // 0.001 x 1 is under half a level of 255 (0.00196), 0.01 is not.
+        assert_eq!(visible_stars(&capped, [1.0, 1.0, 1.0, 1.0]), 3);
+        // The tint's brightest channel counts; visibility scales every star.
+        assert_eq!(visible_stars(&capped, [0.0, 0.0, 0.1, 1.0]), 2);
+        assert_eq!(visible_stars(&capped, [1.0, 1.0, 1.0, 0.01]), 2);
+        // The shader clamps a star's weight to 1 before the tint.
+        assert_eq!(visible_stars(&capped, [0.0015, 0.0, 0.0, 100.0]), 0);
+        assert_eq!(visible_stars(&capped, [1.0, 1.0, 1.0, 0.0]), 0);
+        assert_eq!(visible_stars(&[], [1.0; 4]), 0);
     }
 }
