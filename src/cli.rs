@@ -263,7 +263,8 @@ pub struct FrameArgs {
     /// Resolution of the dome layers: full, half, quarter, or auto (each run of layers in the
     /// coarsest buffer, from half the width and height to an eighth in steps of a quarter pixel,
     /// that still resolves its textures). Layers with finer texture detail than a
-    /// half-resolution buffer stay at full resolution.
+    /// half-resolution buffer stay at full resolution (with auto, alpha-blended ones go whole to
+    /// a buffer from 1.5 to 2 where one resolves them).
     #[arg(long, default_value = "auto", value_parser = parse_dome_resolution)]
     pub dome_resolution: skytune::render::DomeResolution,
     /// Render what the environment map sees (objects with visible_in_env_map).

@@ -84,7 +84,8 @@ pub enum DomeResolution {
     Quarter,
     /// Each run of layers in the coarsest buffer, in quarter steps from half the width and
     /// height to an eighth, that still resolves the textures of all its layers: the default.
-    /// Layers go to a buffer only when a half-resolution one resolves them.
+    /// Layers go to a buffer only when a half-resolution one resolves them, or, alpha-blended
+    /// ones whose terms cannot be split, one at 1.5 ([`DomeResolution::finest_whole`]).
     #[default]
     Auto,
 }
@@ -101,6 +102,18 @@ impl DomeResolution {
             DomeResolution::Half => (Divisor::HALF, Divisor::HALF),
             DomeResolution::Quarter => (Divisor::QUARTER, Divisor::QUARTER),
             DomeResolution::Auto => (Divisor::HALF, Divisor::EIGHTH),
+        }
+    }
+
+    /// The finest buffer an alpha-blended layer goes to whole when some texture it samples is
+    /// too fine for the finest of [`Self::divisors`] (its terms cannot be split as an opaque
+    /// layer's are): with `Auto`, 1.5 (such a layer drawn on the frame costs lavapipe its full
+    /// resolution, blended and depth-tested; below 1.5 the buffer's composite costs more than its
+    /// pixels save); the finest of [`Self::divisors`] otherwise.
+    pub fn finest_whole(self) -> Divisor {
+        match self {
+            DomeResolution::Auto => Divisor(6),
+            other => other.divisors().0,
         }
     }
 

@@ -688,6 +688,7 @@ impl Pass for SkyObjectsPass {
             })
         };
         let (finest, coarsest) = cx.options.dome_resolution.divisors();
+        let finest_whole = cx.options.dome_resolution.finest_whole();
         let reduce_domes = finest > Divisor::FULL;
         // The frame's pixels per degree of view at its centre.
         let frame_px_per_deg = cx.size.1 as f32 / cx.camera.fov_y_deg.max(1.0);
@@ -733,7 +734,8 @@ impl Pass for SkyObjectsPass {
                         // stage sampled: the coarsest). A physical sky model's stage stays at the
                         // finest: its map has no texel size here, and the sun's aureole is sharp.
                         let densest = (0..count).filter(|&k| coarse[k] && key.live[k]).map(|k| d.texels_per_deg[k]).fold(0.0, f32::max);
-                        let divisor = if (key.view_stage as usize) < MAX_STAGES { finest } else { Divisor::at_most(frame_px_per_deg / densest, finest, coarsest) };
+                        let physical = (key.view_stage as usize) < MAX_STAGES;
+                        let divisor = if physical { finest } else { Divisor::at_most(frame_px_per_deg / densest, finest, coarsest) };
                         let reduced = Visible { reduced: true, divisor, ..entry };
                         match (any_fine, any_coarse, d.blend) {
                             (false, _, _) => self.visible.push(reduced),
@@ -743,6 +745,17 @@ impl Pass for SkyObjectsPass {
                             (true, true, BlendMode::Opaque) => {
                                 self.visible.push(Visible { part: coarse, ..reduced });
                                 self.visible.push(Visible { part: fine, on_top: true, ..entry });
+                            }
+                            // Whole, in a buffer between `finest_whole` and the finest where one
+                            // resolves every texture it samples (a cloud layer with a fine texture).
+                            (true, _, BlendMode::Alpha) if !physical => {
+                                let densest = (0..count).filter(|&k| key.live[k]).map(|k| d.texels_per_deg[k]).fold(0.0, f32::max);
+                                let factor = frame_px_per_deg / densest;
+                                if factor >= finest_whole.get() {
+                                    self.visible.push(Visible { reduced: true, divisor: Divisor::at_most(factor, finest_whole, finest), ..entry });
+                                } else {
+                                    self.visible.push(entry);
+                                }
                             }
                             _ => self.visible.push(entry),
                         }
