@@ -121,6 +121,9 @@ override BLEND_KIND: u32 = 0u;
 // 1: the background is one run, which lies under the draw; 2: it is the joined runs' combination,
 // whose transmittance (the runs above the draw) weighs the term.
 override BACKGROUND: u32 = 0u;
+// The first layer of a seeded reduced buffer drawn over the lower run itself (group 2), replacing
+// the buffer's clear colour, unblended (src/render/sky_objects.rs, `Placement::OverSeed`).
+override OVER_SEED: bool = false;
 
 fn stage_count() -> u32 {
     if SPECIALISED {
@@ -368,7 +371,22 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     if BACKGROUND != 0u {
         color = as_background(color, in.clip.xy);
     }
+    if OVER_SEED {
+        color = over_seed(color, in.clip.xy);
+    }
     return color;
+}
+
+// What the layer's blend into a reduced buffer (`REDUCED_BLENDS` in src/render/reduced_layers.rs)
+// would leave over the seed, the lower run's colour with transmittance 1: premultiplied colour
+// and the transmittance left.
+fn over_seed(color: vec4<f32>, pixel: vec2<f32>) -> vec4<f32> {
+    let seed = run_at_seeded(pixel).rgb;
+    switch BLEND_KIND {
+        case 0u: { return vec4<f32>(color.rgb, 0.0); }
+        case 1u: { return vec4<f32>(color.a * color.rgb + (1.0 - color.a) * seed, 1.0 - color.a); }
+        default: { return vec4<f32>(seed + color.a * color.rgb, 1.0); }
+    }
 }
 
 // What an additive draw writes as the frame's background (`BACKGROUND`): the run's colour C plus

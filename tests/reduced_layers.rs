@@ -220,6 +220,38 @@ fn joined_runs_give_the_same_picture_with_one_composite_less() {
 }
 
 #[test]
+fn the_seeded_buffers_first_layer_drawn_over_the_seed_gives_the_same_picture() {
+    // The skydome's run seeds the clouds' buffer; the clouds' first layer is drawn over the seed
+    // itself (`fold_seed`) instead of over a seeding pass's output. At the horizon without the
+    // scene the frame reaches below the clouds' dome (-5 degrees), where the seeding pass still
+    // runs, confined to those rows; looking up it does not run at all. (On the HDR target a
+    // physical model's sky stays at half resolution, and the built-in clouds, coarser, are not
+    // seeded with it but combined.)
+    let sky = default_sky();
+    let mut h = common::headless(1280, 720);
+    h.set_sky(&sky).expect("uploaded");
+    let horizon = Camera { pitch_deg: 5.0, ..Camera::default() };
+    let up = Camera { pitch_deg: 80.0, ..Camera::default() };
+    let folded = RenderOptions { glare: false, ..Default::default() };
+    let alone = RenderOptions { scene: false, ..folded };
+    for (what, input, camera, options) in [
+        ("noon at the horizon, no scene", FrameInput::new(12.0, 0.3), horizon, alone),
+        ("noon at the horizon", FrameInput::new(12.0, 0.3), horizon, folded),
+        ("dusk looking up", FrameInput::new(18.5, 0.4), up, alone),
+        ("night at the horizon, no scene", FrameInput::new(23.0, 0.2), horizon, alone),
+    ] {
+        let one = h.render(&sky, &input, &camera, &options).expect("rendered");
+        let s = h.renderer.stats.clone();
+        let two = h.render(&sky, &input, &camera, &RenderOptions { fold_seed: false, ..options }).expect("rendered");
+        let t = h.renderer.stats.clone();
+        assert!(s.seeded && s.seed_folded, "{what}: folded ({s:?})");
+        assert!(t.seeded && !t.seed_folded, "{what}: not folded ({t:?})");
+        let (d, _) = common::diff(&one, &two, 2);
+        assert!(d.differing < 0.001, "{what}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
+    }
+}
+
+#[test]
 fn additive_draws_under_the_background_give_the_same_picture() {
     // The skydome's fine stars, the shooting stars and the star field right after the
     // background: drawn first onto the cleared frame, the background composited over them,

@@ -5,7 +5,8 @@
 
 // Keep in sync with `CompositeUniform` in src/render/reduced_layers.rs.
 struct Composite {
-    // Frame pixel to texture coordinates (1 / frame size): every buffer holds the whole frame.
+    // Pixel to texture coordinates (every buffer holds the whole frame): xy of a frame pixel
+    // (1 / frame size), zw of a pixel of the seeded buffer (1 / its size).
     uv_from_pixel: vec4<f32>,
 };
 
@@ -19,6 +20,11 @@ struct Composite {
 // The run at frame pixel `pixel` (a fragment's position), upsampled bilinearly.
 fn run_at(pixel: vec2<f32>) -> vec4<f32> {
     return textureSampleLevel(run_layers, run_sampler, pixel * run_composite.uv_from_pixel.xy, 0.0);
+}
+
+// The run at pixel `pixel` of the buffer it seeds (a fragment's position there).
+fn run_at_seeded(pixel: vec2<f32>) -> vec4<f32> {
+    return textureSampleLevel(run_layers, run_sampler, pixel * run_composite.uv_from_pixel.zw, 0.0);
 }
 
 // The run alone at frame pixel `pixel`, for draws that lie under it and read its colour: a seeded

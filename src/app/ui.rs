@@ -548,6 +548,10 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
             c.options.additive_first,
             egui::Checkbox::new(&mut c.options.fuse_background, format!("one of them as the background ({})", if s.background_fused { "this frame" } else { "not this frame" })),
         );
+        ui.add_enabled(
+            c.options.join_runs && c.options.seed_joined,
+            egui::Checkbox::new(&mut c.options.fold_seed, format!("its first layer over the seed ({})", if s.seed_folded { "this frame" } else { "not this frame" })),
+        );
         ui.checkbox(&mut c.options.flash_in_run, format!("lightning flash in a run ({})", if s.joined_runs_only > 0 { "this frame" } else { "not this frame" }));
     });
     let median = |v: &VecDeque<f32>| {

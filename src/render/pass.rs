@@ -286,6 +286,20 @@ pub trait Pass: Any {
         0
     }
 
+    /// Whether [`Pass::draw_over_seed`] can draw reduced item `key` this frame: it covers every
+    /// pixel of its buffer outside [`Pass::background_gap`].
+    fn can_draw_over_seed(&self, _key: usize, _target: Target) -> bool {
+        false
+    }
+
+    /// Records reduced item `key` as the first layer of a seeded buffer
+    /// ([`super::RenderOptions::fold_seed`]): over the lower run's colour (`seed`, that run's
+    /// bind group, as group 2), replacing the clear colour, unblended: what its blend would
+    /// leave over the seed.
+    fn draw_over_seed(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target, _seed: &wgpu::BindGroup) -> u32 {
+        0
+    }
+
     /// Whether [`Pass::draw_as_background`] can draw additive item `key` this frame: it covers
     /// every pixel of the frame outside [`Pass::background_gap`]. `joined`: the background is the
     /// combination of joined runs.

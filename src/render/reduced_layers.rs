@@ -167,7 +167,9 @@ const JOINED_BACKGROUND_OVER: usize = 3;
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 struct CompositeUniform {
-    /// Frame pixel to texture coordinates (xy: 1 / frame size; every buffer holds the whole frame); zw unused.
+    /// Pixel to texture coordinates (every buffer holds the whole frame): xy, of a frame pixel
+    /// (1 / frame size); zw, of a pixel of the seeded buffer (1 / its size), for its first layer
+    /// drawn over the seed (`Pass::draw_over_seed`).
     uv_from_pixel: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<CompositeUniform>() == 16);
@@ -220,6 +222,8 @@ pub struct ReducedLayersPass {
     /// This frame joins two runs by seeding the upper's buffer with the lower: the upper's
     /// buffer ends as their combination, and `combined` is empty.
     seeded: bool,
+    /// What the composite uniform holds.
+    uniform_written: CompositeUniform,
 }
 
 impl ReducedLayersPass {
@@ -254,7 +258,19 @@ impl ReducedLayersPass {
         });
         // Never written: wgpu clears it to zero.
         let black = super::textures::unused_view(device, "ReducedLayers::black");
-        Ok(Self { layout, pipelines, combine, black, uniform, sampler, made_for: ((0, 0), Target::Display), buffers: Vec::new(), combined: Vec::new(), seeded: false })
+        Ok(Self {
+            layout,
+            pipelines,
+            combine,
+            black,
+            uniform,
+            sampler,
+            made_for: ((0, 0), Target::Display),
+            buffers: Vec::new(),
+            combined: Vec::new(),
+            seeded: false,
+            uniform_written: CompositeUniform { uv_from_pixel: [0.0; 4] },
+        })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 4]> {
@@ -297,10 +313,14 @@ impl ReducedLayersPass {
             self.buffers.clear();
             self.combined.clear();
             self.made_for = (size, target);
-            // Each buffer holds the whole frame (its viewport is the whole buffer, even where the
-            // frame's size is not a multiple of the divisor): texture coordinates are the frame's.
-            let u = CompositeUniform { uv_from_pixel: [1.0 / size.0.max(1) as f32, 1.0 / size.1.max(1) as f32, 0.0, 0.0] };
+        }
+        // Each buffer holds the whole frame (its viewport is the whole buffer, even where the
+        // frame's size is not a multiple of the divisor): texture coordinates are the frame's.
+        let seeded_size = divisors.get(1).filter(|_| seeded).map_or((1, 1), |&d| Self::buffer_size(size, d));
+        let u = CompositeUniform { uv_from_pixel: [1.0 / size.0.max(1) as f32, 1.0 / size.1.max(1) as f32, 1.0 / seeded_size.0 as f32, 1.0 / seeded_size.1 as f32] };
+        if u.uv_from_pixel != self.uniform_written.uv_from_pixel {
             queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&u));
+            self.uniform_written = u;
         }
         let mut buffers = std::mem::take(&mut self.buffers);
         let first_changed = self.fit(device, &mut buffers, "ReducedLayers::buffer", divisors);
@@ -388,6 +408,32 @@ impl ReducedLayersPass {
         rpass.set_bind_group(2, &lower.bind_group, &[]);
         rpass.draw(0..3, 0..1);
         1
+    }
+
+    /// The lower run's bind group, which a seeded buffer's first layer reads as group 2 when it
+    /// is drawn over the seed itself ([`super::pass::Pass::draw_over_seed`]); None unless seeded.
+    pub fn seed_source(&self) -> Option<&wgpu::BindGroup> {
+        self.buffers.first().filter(|_| self.seeded).map(|b| &b.bind_group)
+    }
+
+    /// [`Self::seed`] confined to the buffer pixels under frame pixels `[x, y, width, height]`
+    /// (rounded outwards): where the first layer drawn over the seed does not reach.
+    pub fn seed_within(&self, rpass: &mut wgpu::RenderPass<'_>, globals: &wgpu::BindGroup, target: Target, [x, y, w, h]: [u32; 4]) -> u32 {
+        let Some(upper) = self.buffers.get(1) else { return 0 };
+        let (bw, bh) = Self::buffer_size(self.made_for.0, upper.divisor);
+        let (fw, fh) = self.made_for.0;
+        // Buffer pixel b covers frame pixels [b fw / bw, (b + 1) fw / bw).
+        let lo = |p: u32, frame: u32, buffer: u32| (u64::from(p) * u64::from(buffer) / u64::from(frame.max(1))) as u32;
+        let hi = |p: u32, frame: u32, buffer: u32| (u64::from(p) * u64::from(buffer)).div_ceil(u64::from(frame.max(1))) as u32;
+        let (x0, y0) = (lo(x, fw, bw).min(bw), lo(y, fh, bh).min(bh));
+        let (x1, y1) = (hi(x + w, fw, bw).min(bw), hi(y + h, fh, bh).min(bh));
+        if x1 <= x0 || y1 <= y0 {
+            return 0;
+        }
+        rpass.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
+        let n = self.seed(rpass, globals, target);
+        rpass.set_scissor_rect(0, 0, bw, bh);
+        n
     }
 
     /// Records the combinations of the joined runs into their buffers ([`Self::ensure`]), from

@@ -59,6 +59,11 @@ pub struct RenderOptions {
     /// reduced resolution less: no combining pass reading both buffers). Off, or where the first
     /// run is the finer one, or with more runs joined: combined in passes of their own.
     pub seed_joined: bool,
+    /// With a seeded buffer: its first layer, when a dome that can, is drawn over the lower run's
+    /// colour itself, replacing the clear colour (`Pass::draw_over_seed`), and the seeding pass
+    /// only fills the rows below that dome. One reduced-resolution pass less, for one sample of
+    /// the lower run in the layer.
+    pub fold_seed: bool,
     /// With dome layers in reduced buffers: the lightning flash (one additive colour over the
     /// sky, above every layer) is added to the run of layers before it, at that run's
     /// resolution, instead of over the whole frame at full resolution (the same sum; one
@@ -80,6 +85,7 @@ impl Default for RenderOptions {
             additive_first: true,
             fuse_background: true,
             seed_joined: true,
+            fold_seed: true,
             flash_in_run: true,
         }
     }
@@ -159,6 +165,8 @@ pub struct FrameStats {
     /// The first two runs were joined by seeding the second's buffer with the first
     /// ([`RenderOptions::seed_joined`]): no combining pass.
     pub seeded: bool,
+    /// The seeded buffer's first layer was drawn over the lower run itself ([`RenderOptions::fold_seed`]).
+    pub seed_folded: bool,
     /// Draws added to a run of reduced layers only because the run was there
     /// ([`DrawItem::joins_only`]: the lightning flash, [`RenderOptions::flash_in_run`]).
     pub joined_runs_only: u32,
@@ -514,11 +522,26 @@ impl SkyRenderer {
                         for (r, &(start, end)) in runs.iter().enumerate() {
                             let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(r == 0, r + 1 == runs.len() && (!joined || seeded)));
                             let Some(mut rpass) = layers.and_then(|l| l.begin(encoder, r, run_writes)) else { continue };
+                            let mut first = start;
                             if let (1, true, Some(l)) = (r, seeded, layers) {
-                                stats.draw_calls += l.seed(&mut rpass, &self.globals.bind_group, kind);
+                                let (i, it) = &sky_list[start];
+                                match l.seed_source().filter(|_| options.fold_seed && self.passes[*i].can_draw_over_seed(it.key, kind)) {
+                                    // The first layer goes over the seed itself; the seeding pass
+                                    // fills what it does not reach (below its dome), first.
+                                    Some(seed) => {
+                                        if let Some(gap) = self.passes[*i].background_gap(it.key) {
+                                            stats.draw_calls += l.seed_within(&mut rpass, &self.globals.bind_group, kind, gap);
+                                        }
+                                        rpass.set_bind_group(0, &self.globals.bind_group, &[]);
+                                        stats.draw_calls += self.passes[*i].draw_over_seed(&mut rpass, it.key, kind, seed);
+                                        stats.seed_folded = true;
+                                        first += 1;
+                                    }
+                                    None => stats.draw_calls += l.seed(&mut rpass, &self.globals.bind_group, kind),
+                                }
                             }
                             rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-                            for (i, it) in &sky_list[start..end] {
+                            for (i, it) in &sky_list[first..end] {
                                 stats.draw_calls += self.passes[*i].draw_reduced(&mut rpass, it.key, kind);
                             }
                         }

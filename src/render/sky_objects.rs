@@ -211,6 +211,9 @@ enum Placement {
     Background,
     /// As `Background` over joined runs, the term weighed by the runs above it (`BACKGROUND`: 2).
     JoinedBackground,
+    /// Into a seeded reduced buffer as its first layer, over the lower run's colour itself and
+    /// replacing what the buffer holds (`OVER_SEED` in the shader; `Pass::draw_over_seed`).
+    OverSeed,
 }
 
 impl Placement {
@@ -263,6 +266,7 @@ impl VariantKey {
             ("TONE_KIND", f64::from(self.tone)),
             ("UNDER_RUN", f64::from(u8::from(self.placement == Placement::UnderRun))),
             ("BLEND_KIND", self.blend as f64),
+            ("OVER_SEED", f64::from(u8::from(self.placement == Placement::OverSeed))),
             (
                 "BACKGROUND",
                 match self.placement {
@@ -473,7 +477,12 @@ impl SkyObjectsPass {
         let live = std::array::from_fn(|s| k.live[s] && e.part[s]);
         let view_stage = if (k.view_stage as usize) < 4 && !e.part[k.view_stage as usize] { NO_STAGE } else { k.view_stage };
         let blend = if e.on_top { BLEND_ADD } else { k.blend };
-        let placement = if e.reduced { Placement::Plain } else { placement };
+        let placement = match (e.reduced, placement) {
+            (true, Placement::OverSeed) if !e.on_top => Placement::OverSeed,
+            (true, _) => Placement::Plain,
+            (false, Placement::OverSeed) => return None,
+            (false, p) => p,
+        };
         // A celestial stage's level-0 bit is the same in every part of a draw (its bound does not
         // depend on the dome's rings), so one pipeline serves them all.
         let level0 = if e.parts.1 > 0 { self.parts.get(e.parts.0 as usize).map_or(0, |p| p.1) } else { 0 };
@@ -484,6 +493,11 @@ impl SkyObjectsPass {
     /// Whether draw `e` adds to the frame (its blend, or the fine terms of a split layer).
     fn additive(&self, e: &Visible) -> bool {
         e.on_top || self.draws.current.as_ref().is_some_and(|d| d.objects[e.index][e.version].blend == BlendMode::Additive)
+    }
+
+    /// Whether draw `e`'s shape is a whole dome (down to its lowest row, every row).
+    fn dome_of(&self, e: &Visible) -> bool {
+        self.draws.current.as_ref().is_some_and(|d| matches!(d.objects[e.index][e.version].shape, Shape::Dome { .. }))
     }
 
     /// The lowest elevation of draw `key`'s shape when it is a whole dome, degrees.
@@ -544,6 +558,8 @@ impl SkyObjectsPass {
                 placed(Placement::First, runs && self.additive(e)),
                 placed(Placement::Background, background),
                 placed(Placement::JoinedBackground, background),
+                // The first layer of a seeded buffer: any whole dome layer reduced.
+                placed(Placement::OverSeed, runs && e.reduced && self.dome_of(e)),
             ];
             for key in wanted.into_iter().flatten() {
                 if self.variants.contains_key(&key) {
@@ -556,10 +572,12 @@ impl SkyObjectsPass {
                     (false, Target::Display) => self.display_format,
                 };
                 let blend = match (key.reduced, key.placement) {
+                    (true, Placement::OverSeed) => None,
                     (true, _) => Some(super::reduced_layers::REDUCED_BLENDS[key.blend]),
                     (false, Placement::UnderRun) => UNDER_RUN_BLENDS[key.blend],
                     (false, Placement::Plain | Placement::First) => BLENDS[key.blend],
-                    (false, Placement::Background | Placement::JoinedBackground) => None,
+                    // Not made (`entry_key`): reduced only.
+                    (false, Placement::Background | Placement::JoinedBackground | Placement::OverSeed) => None,
                 };
                 // Reduced buffers have no depth: the composite is depth-tested instead. Draws
                 // under the background come before the scene, which covers what they hide.
@@ -874,6 +892,15 @@ impl Pass for SkyObjectsPass {
         // A dome covers the frame down to its lowest row (`background_gap`), every row in view
         // being drawn.
         self.dome_bottom_deg(key).is_some() && self.can_place(key, target, Placement::background(joined))
+    }
+
+    fn can_draw_over_seed(&self, key: usize, target: Target) -> bool {
+        // A dome covers its buffer down to its lowest row (`background_gap`).
+        self.visible.get(key).is_some_and(|e| e.reduced && !e.on_top) && self.dome_bottom_deg(key).is_some() && self.can_place(key, target, Placement::OverSeed)
+    }
+
+    fn draw_over_seed(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, seed: &wgpu::BindGroup) -> u32 {
+        self.record(rpass, key, target, true, (Placement::OverSeed, Some(seed)))
     }
 
     fn background_gap(&self, key: usize) -> Option<[u32; 4]> {
