@@ -224,9 +224,7 @@ fn the_seeded_buffers_first_layer_drawn_over_the_seed_gives_the_same_picture() {
     // The skydome's run seeds the clouds' buffer; the clouds' first layer is drawn over the seed
     // itself (`fold_seed`) instead of over a seeding pass's output. At the horizon without the
     // scene the frame reaches below the clouds' dome (-5 degrees), where the seeding pass still
-    // runs, confined to those rows; looking up it does not run at all. (On the HDR target a
-    // physical model's sky stays at half resolution, and the built-in clouds, coarser, are not
-    // seeded with it but combined.)
+    // runs, confined to those rows; looking up it does not run at all.
     let sky = default_sky();
     let mut h = common::headless(1280, 720);
     h.set_sky(&sky).expect("uploaded");
@@ -240,15 +238,31 @@ fn the_seeded_buffers_first_layer_drawn_over_the_seed_gives_the_same_picture() {
         ("dusk looking up", FrameInput::new(18.5, 0.4), up, alone),
         ("night at the horizon, no scene", FrameInput::new(23.0, 0.2), horizon, alone),
     ] {
-        let one = h.render(&sky, &input, &camera, &options).expect("rendered");
-        let s = h.renderer.stats.clone();
-        let two = h.render(&sky, &input, &camera, &RenderOptions { fold_seed: false, ..options }).expect("rendered");
-        let t = h.renderer.stats.clone();
-        assert!(s.seeded && s.seed_folded, "{what}: folded ({s:?})");
-        assert!(t.seeded && !t.seed_folded, "{what}: not folded ({t:?})");
-        let (d, _) = common::diff(&one, &two, 2);
-        assert!(d.differing < 0.001, "{what}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
+        folded_and_not(&mut h, &sky, what, (&input, &camera, &options));
     }
+    // On the HDR target a physical model's sky stays at half resolution, and clouds seeded with it
+    // must be at least as fine: the cloudy layer's finer texture tiled twice as densely (5.4
+    // texels per degree) goes whole to 1.75 and takes the clear layer's run with it.
+    let mut fine = sky.clone();
+    let cloudy = fine.objects.iter_mut().find(|o| o.name == "clouds_cloudy").expect("cloudy layer");
+    cloudy.standard.stages[1].uv_scale = cloudy.standard.stages[1].uv_scale.map(|s| s * 2.0);
+    h.set_sky(&fine).expect("uploaded");
+    let mut lut = FrameInput::new(10.0, 0.6);
+    lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
+    folded_and_not(&mut h, &fine, "lut on the HDR target, looking up", (&lut, &Camera { pitch_deg: 60.0, ..Camera::default() }, &alone));
+}
+
+/// Renders a seeded frame with the seeded buffer's first layer over the seed and without, and
+/// holds the two to within 2 levels.
+fn folded_and_not(h: &mut skytune::render::Headless, sky: &skytune::sky::Sky, what: &str, (input, camera, options): (&FrameInput, &Camera, &RenderOptions)) {
+    let one = h.render(sky, input, camera, options).expect("rendered");
+    let s = h.renderer.stats.clone();
+    let two = h.render(sky, input, camera, &RenderOptions { fold_seed: false, ..*options }).expect("rendered");
+    let t = h.renderer.stats.clone();
+    assert!(s.seeded && s.seed_folded, "{what}: folded ({s:?})");
+    assert!(t.seeded && !t.seed_folded, "{what}: not folded ({t:?})");
+    let (d, _) = common::diff(&one, &two, 2);
+    assert!(d.differing < 0.001, "{what}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
 }
 
 #[test]
