@@ -551,7 +551,7 @@ impl SkyObjectsPass {
             // first under the background when additive.
             let placed = |p: Placement, wanted: bool| self.entry_key(e, target, p).filter(|k| wanted && k.placement == p);
             // As the background only when it may cover the frame (an additive dome layer).
-            let background = runs && self.additive(e) && self.draws.current.as_ref().is_some_and(|d| matches!(d.objects[e.index][e.version].shape, Shape::Dome { .. }));
+            let background = runs && self.additive(e) && self.dome_of(e);
             let wanted = [
                 self.entry_key(e, target, Placement::Plain),
                 placed(Placement::UnderRun, runs),
@@ -559,7 +559,7 @@ impl SkyObjectsPass {
                 placed(Placement::Background, background),
                 placed(Placement::JoinedBackground, background),
                 // The first layer of a seeded buffer: any whole dome layer reduced.
-                placed(Placement::OverSeed, runs && e.reduced && self.dome_of(e)),
+                placed(Placement::OverSeed, runs && self.dome_of(e)),
             ];
             for key in wanted.into_iter().flatten() {
                 if self.variants.contains_key(&key) {
@@ -751,9 +751,10 @@ impl Pass for SkyObjectsPass {
                         // The coarsest buffer allowed that resolves every coarse stage sampled (no
                         // stage sampled: the coarsest). A physical sky model's stage stays at the
                         // finest: its map has no texel size here, and the sun's aureole is sharp.
-                        let densest = (0..count).filter(|&k| coarse[k] && key.live[k]).map(|k| d.texels_per_deg[k]).fold(0.0, f32::max);
+                        // The most texels per degree among the stages sampled of `stages`.
+                        let densest = |stages: [bool; 4]| (0..count).filter(|&k| stages[k] && key.live[k]).map(|k| d.texels_per_deg[k]).fold(0.0, f32::max);
                         let physical = (key.view_stage as usize) < MAX_STAGES;
-                        let divisor = if physical { finest } else { Divisor::at_most(frame_px_per_deg / densest, finest, coarsest) };
+                        let divisor = if physical { finest } else { Divisor::at_most(frame_px_per_deg / densest(coarse), finest, coarsest) };
                         let reduced = Visible { reduced: true, divisor, ..entry };
                         match (any_fine, any_coarse, d.blend) {
                             (false, _, _) => self.visible.push(reduced),
@@ -767,8 +768,7 @@ impl Pass for SkyObjectsPass {
                             // Whole, in a buffer between `finest_whole` and the finest where one
                             // resolves every texture it samples (a cloud layer with a fine texture).
                             (true, _, BlendMode::Alpha) if !physical => {
-                                let densest = (0..count).filter(|&k| key.live[k]).map(|k| d.texels_per_deg[k]).fold(0.0, f32::max);
-                                let factor = frame_px_per_deg / densest;
+                                let factor = frame_px_per_deg / densest([true; 4]);
                                 if factor >= finest_whole.get() {
                                     self.visible.push(Visible { reduced: true, divisor: Divisor::at_most(factor, finest_whole, finest), ..entry });
                                 } else {
@@ -895,8 +895,9 @@ impl Pass for SkyObjectsPass {
     }
 
     fn can_draw_over_seed(&self, key: usize, target: Target) -> bool {
-        // A dome covers its buffer down to its lowest row (`background_gap`).
-        self.visible.get(key).is_some_and(|e| e.reduced && !e.on_top) && self.dome_bottom_deg(key).is_some() && self.can_place(key, target, Placement::OverSeed)
+        // A dome covers its buffer down to its lowest row (`background_gap`); only reduced draws
+        // have the placement (`entry_key`).
+        self.dome_bottom_deg(key).is_some() && self.can_place(key, target, Placement::OverSeed)
     }
 
     fn draw_over_seed(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, seed: &wgpu::BindGroup) -> u32 {
