@@ -38,8 +38,10 @@ fn skips_change_no_pixel_and_are_counted() {
     // At full resolution: a skipped stage can let a dome layer go to a reduced buffer, which
     // moves pixels by a level or two (tests/reduced_layers.rs bounds that).
     let on = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
-    let off =
-        RenderOptions { skips: Skips { dark_stages: false, invisible_stars: false, unchanged_tables: false, below_horizon: false, off_screen: false, unneeded_mips: false }, ..on };
+    let off = RenderOptions {
+        skips: Skips { dark_stages: false, invisible_stars: false, unchanged_tables: false, below_horizon: false, off_screen: false, unneeded_mips: false, covered_clears: false },
+        ..on
+    };
     // Two frames each: the second finds the tables and the map current.
     h.render(&sky, &input, &camera, &on).expect("rendered");
     let with = h.render(&sky, &input, &camera, &on).expect("rendered");
@@ -217,4 +219,46 @@ fn stars_too_faint_to_add_half_a_level_are_not_drawn_and_change_no_pixel() {
         }
     }
     assert!(partly >= 4, "some frames draw some of the stars and leave out others ({partly})");
+}
+
+#[test]
+fn clears_left_out_where_the_background_or_an_untouched_depth_makes_them_unneeded_change_no_pixel() {
+    let sky = default_sky();
+    let mut h = common::headless(160, 90);
+    h.set_sky(&sky).expect("uploaded");
+    let zenith = Camera::preset("zenith").expect("zenith view");
+    // Looking down: the frame shows what lies below the skydome (20 degrees down), which only the
+    // clear paints when no background covers the frame.
+    let down = Camera { pitch_deg: -25.0, ..Camera::default() };
+    let horizon = Camera { pitch_deg: 5.0, ..Camera::default() };
+    let on = RenderOptions { scene: false, glare: false, ..Default::default() };
+    let off = RenderOptions { skips: Skips { covered_clears: false, ..on.skips }, ..on };
+    for (what, input, camera, resolution) in [
+        ("dusk looking up (the background fused with the stars)", FrameInput::new(18.5, 0.3), &zenith, DomeResolution::Auto),
+        ("noon looking down (the background composited)", FrameInput::new(12.0, 0.0), &down, DomeResolution::Auto),
+        ("night looking down at full resolution (no background)", FrameInput::new(23.0, 0.0), &down, DomeResolution::Full),
+        ("dusk at the horizon at full resolution (every layer depth-tested)", FrameInput::new(18.5, 0.3), &horizon, DomeResolution::Full),
+    ] {
+        let (on, off) = (RenderOptions { dome_resolution: resolution, ..on }, RenderOptions { dome_resolution: resolution, ..off });
+        // Each frame follows one with the main scene drawn, whose colour and depth a clear left out
+        // where needed would keep: the sky failing the depth test where the terrain was, or the
+        // terrain's colour left below the dome.
+        h.render(&sky, &input, camera, &RenderOptions { scene: true, ..on }).expect("rendered");
+        let with = h.render(&sky, &input, camera, &on).expect("rendered");
+        let counted = h.renderer.stats.clears_skipped;
+        h.render(&sky, &input, camera, &RenderOptions { scene: true, ..on }).expect("rendered");
+        let without = h.render(&sky, &input, camera, &off).expect("rendered");
+        assert_eq!(h.renderer.stats.clears_skipped, 0);
+        let (d, _) = common::diff(&with, &without, 0);
+        assert_eq!(d.differing, 0.0, "{what}: leaving clears out moved {:.4} of the pixels (largest {})", d.differing, d.max);
+        // A second frame without the scene finds the depth still clear; the colour is left
+        // uncleared only under a background.
+        h.render(&sky, &input, camera, &on).expect("rendered");
+        let both = h.renderer.stats.clears_skipped;
+        match resolution {
+            DomeResolution::Full => assert_eq!(both, 1, "{what}: the depth's clear only"),
+            _ => assert_eq!(both, 2, "{what}: the colour's and the depth's clears"),
+        }
+        assert!(counted <= both, "{what}");
+    }
 }

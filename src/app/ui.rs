@@ -568,6 +568,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         ui.checkbox(&mut k.below_horizon, "skip objects behind the scene");
         ui.checkbox(&mut k.off_screen, "skip dome layers and scene out of view");
         ui.checkbox(&mut k.unneeded_mips, "skip unneeded mip selection");
+        ui.checkbox(&mut k.covered_clears, "skip clears the background covers");
     });
     let all_on = c.options.skips == crate::render::Skips::default();
     if before == crate::render::Skips::default() && !all_on {

@@ -112,6 +112,11 @@ pub struct Skips {
     /// Texture stages that no pixel of a draw minifies are sampled from level 0 alone (the same
     /// texels; lavapipe then skips computing the level of detail).
     pub unneeded_mips: bool,
+    /// The frame's colour is not cleared when the background (the first run of reduced dome
+    /// layers, composited or fused with the skydome's stars) writes every pixel before anything
+    /// reads it, nor the depth while it still holds the clear value: no main scene drawn into
+    /// that depth view since the renderer last cleared it. Each clear is a pass over the frame.
+    pub covered_clears: bool,
 }
 
 /// The main-scene stand-in covers every direction more than this far below the horizon, degrees
@@ -120,7 +125,7 @@ pub const SCENE_COVERS_BELOW_DEG: f32 = 2.0;
 
 impl Default for Skips {
     fn default() -> Self {
-        Self { dark_stages: true, invisible_stars: true, unchanged_tables: true, below_horizon: true, off_screen: true, unneeded_mips: true }
+        Self { dark_stages: true, invisible_stars: true, unchanged_tables: true, below_horizon: true, off_screen: true, unneeded_mips: true, covered_clears: true }
     }
 }
 
@@ -170,6 +175,8 @@ pub struct FrameStats {
     /// Draws added to a run of reduced layers only because the run was there
     /// ([`DrawItem::joins_only`]: the lightning flash, [`RenderOptions::flash_in_run`]).
     pub joined_runs_only: u32,
+    /// Clears of the frame left out ([`Skips::covered_clears`]): the colour's, the depth's.
+    pub clears_skipped: u32,
     /// The star field was not drawn: transparent this frame.
     pub stars_skipped: bool,
     /// The `lut` tables were not rebuilt: nothing they depend on moved.
@@ -193,7 +200,8 @@ pub struct UploadStats {
 pub struct RenderTarget<'a> {
     /// Colour view, in the renderer's colour format.
     pub color: &'a wgpu::TextureView,
-    /// Depth view ([`super::DEPTH_FORMAT`]).
+    /// Depth view ([`super::DEPTH_FORMAT`]), written by the renderer alone: it does not clear a
+    /// depth view again while it has drawn no main scene into it ([`Skips::covered_clears`]).
     pub depth: &'a wgpu::TextureView,
     /// Size, pixels.
     pub size: (u32, u32),
@@ -219,6 +227,9 @@ pub struct SkyRenderer {
     has_sky: bool,
     hdr: Option<HdrTarget>,
     timer: Option<GpuTimer>,
+    /// A depth view that still holds the clear value (1) everywhere: cleared by this renderer,
+    /// and no scene drawn into it since ([`Skips::covered_clears`]).
+    depth_untouched: Option<wgpu::TextureView>,
     /// Counters of the last recorded frame.
     pub stats: FrameStats,
     /// What the last sky upload reused.
@@ -250,6 +261,7 @@ impl SkyRenderer {
             has_sky: false,
             hdr: None,
             timer: ctx.timestamps.then(|| GpuTimer::new(device, &ctx.queue)),
+            depth_untouched: None,
             stats: FrameStats::default(),
             upload_stats: UploadStats::default(),
         })
@@ -464,6 +476,12 @@ impl SkyRenderer {
                 })
             });
         stats.background_fused = fused.is_some();
+        // The background writes every pixel of the frame before anything reads it: the fused draw
+        // (and the composite below its dome), or the composite's full-screen triangle, unless
+        // additive draws went onto the cleared frame before it.
+        let color_covered = options.skips.covered_clears && background && (fused.is_some() || first.is_empty());
+        let depth_clean = options.skips.covered_clears && self.depth_untouched.as_ref() == Some(target.depth);
+        stats.clears_skipped = u32::from(color_covered) + u32::from(depth_clean);
         if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
             let joining = if seeded { Joining::Seeded } else { Joining::Combined(&combined) };
             layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors, joining);
@@ -514,7 +532,18 @@ impl SkyRenderer {
                     // Without the depth split the scene phase's draws move to the end of the sky
                     // phase, painted over an already shaded sky.
                     let draws_here = phase != Phase::Scene || split;
-                    let load = if phase == Phase::Scene { (wgpu::LoadOp::Clear(wgpu::Color::BLACK), wgpu::LoadOp::Clear(1.0)) } else { (wgpu::LoadOp::Load, wgpu::LoadOp::Load) };
+                    let load = if phase == Phase::Scene {
+                        let color = if color_covered {
+                            // SAFETY: the background, the pass's first draw, writes every pixel
+                            // of the frame (`color_covered`), unblended, before any read or store.
+                            wgpu::LoadOp::DontCare(unsafe { wgpu::LoadOpDontCare::enabled() })
+                        } else {
+                            wgpu::LoadOp::Clear(wgpu::Color::BLACK)
+                        };
+                        (color, if depth_clean { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(1.0) })
+                    } else {
+                        (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
+                    };
                     if let (Phase::Scene, Some(rp)) = (phase, reduced_pass) {
                         // The reduced buffers first: the first may be the background.
                         let sky_list = &items[Phase::Sky.index()];
@@ -641,6 +670,8 @@ impl SkyRenderer {
         if let Some(t) = &self.timer {
             t.resolve(encoder);
         }
+        // Only the main scene writes depth: without it the view still holds the clear value.
+        self.depth_untouched = items[Phase::Scene.index()].is_empty().then(|| target.depth.clone());
         self.stats = stats;
     }
 
