@@ -79,6 +79,16 @@ pub fn shape_mesh(shape: &Shape) -> MeshData {
     }
 }
 
+/// A dome shape's outline: one band of triangles between its top ring (the pole, for a dome) and
+/// its bottom one, with the grid's segments ([`dome_grid`]). Its triangles cover the same
+/// directions as the grid's (their edges along the rings are the same chords, those between are
+/// on the same meridians), but its texture coordinates follow only the outline: for layers whose
+/// stages all map the view direction per pixel (celestial, sun, Quake), which a rasteriser pays
+/// per triangle. None for billboards and quads.
+pub fn outline_mesh(shape: &Shape) -> Option<MeshData> {
+    dome_grid(shape).map(|(top_deg, bottom_deg, _, segments)| sphere_band(top_deg, bottom_deg, 1, segments))
+}
+
 /// Cache key of a shape's geometry (quads share one mesh).
 pub fn shape_key(shape: &Shape) -> String {
     match *shape {
@@ -143,6 +153,40 @@ mod tests {
             }
         }
         (du, dv)
+    }
+
+    #[test]
+    fn a_domes_outline_covers_the_directions_its_grid_covers() {
+        // Directions inside the outline's triangles (seen from the centre) are inside the grid's,
+        // and the other way round: sampled over the sphere, each direction is covered by both or
+        // by neither.
+        fn covered(m: &MeshData, d: glam::Vec3) -> bool {
+            m.indices.chunks_exact(3).any(|t| {
+                let corners = glam::Mat3::from_cols_array_2d(&[0, 1, 2].map(|k| m.vertices[t[k] as usize].position));
+                // In the cone over the triangle: a sum of its corners with no negative weight.
+                corners.determinant().abs() > 1e-7 && (corners.inverse() * d).to_array().iter().all(|&w| w >= -1e-5)
+            })
+        }
+        for shape in
+            [Shape::Dome { bottom_deg: Elevation(-20.0) }, Shape::Dome { bottom_deg: Elevation(-5.0) }, Shape::DomeBand { bottom_deg: Elevation(-10.0), top_deg: Elevation(20.0) }]
+        {
+            let (grid, outline) = (shape_mesh(&shape), outline_mesh(&shape).expect("a dome shape"));
+            assert!(outline.indices.len() * 4 <= grid.indices.len(), "{shape:?}: the outline has fewer triangles");
+            let (mut inside, mut differ) = (0, 0);
+            for i in 0..4000 {
+                // A spiral of directions over the sphere, avoiding the grid's own vertices.
+                let y = 1.0 - 2.0 * (i as f32 + 0.5) / 4000.0;
+                let az = i as f32 * 2.399_963;
+                let r = (1.0 - y * y).sqrt();
+                let d = glam::Vec3::new(r * az.sin(), y, -r * az.cos());
+                let (g, o) = (covered(&grid, d), covered(&outline, d));
+                inside += usize::from(g);
+                differ += usize::from(g != o);
+            }
+            assert!(inside > 1000, "{shape:?}: {inside}");
+            assert_eq!(differ, 0, "{shape:?}: directions covered by one mesh and not the other");
+        }
+        assert!(outline_mesh(&Shape::Quad { size_deg: crate::sky::model::Positive(5.0) }).is_none());
     }
 
     #[test]

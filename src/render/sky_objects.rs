@@ -8,7 +8,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 
 use super::camera::Camera;
 use super::error::RenderResult;
-use super::mesh::{shape_key, shape_mesh, GpuMesh, SkyVertex};
+use super::mesh::{outline_mesh, shape_key, shape_mesh, GpuMesh, SkyVertex};
 use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
 use super::reduced_layers::Divisor;
 use super::renderer::FrameStats;
@@ -823,6 +823,16 @@ impl Pass for SkyObjectsPass {
                                 continue;
                             }
                             let mask = level0(Some(r as usize));
+                            // The outline's one band spans every ring: a stage is sampled from
+                            // level 0 there where it can be in every ring in view.
+                            if d.outline {
+                                let part = self.parts.get_mut(start).map(|(_, m)| m);
+                                match part {
+                                    Some(m) => *m &= mask,
+                                    None => self.parts.push((0..per_ring, mask)),
+                                }
+                                continue;
+                            }
                             used |= mask;
                             let indices = r * per_ring..(r + 1) * per_ring;
                             let ours = self.parts.len() > start;
@@ -830,6 +840,9 @@ impl Pass for SkyObjectsPass {
                                 Some((range, m)) if ours && *m == mask && range.end == indices.start => range.end = indices.end,
                                 _ => self.parts.push((indices, mask)),
                             }
+                        }
+                        if d.outline {
+                            used |= self.parts.get(start).map_or(0, |p| p.1);
                         }
                         // No ring in view: one empty part, drawn as nothing.
                         if self.parts.len() == start {
@@ -943,6 +956,8 @@ struct VersionDraw {
     /// How each stage's texture lies on the sky (None: no stage or no texture).
     maps: [Option<StageMap>; MAX_STAGES],
     mesh: Arc<GpuMesh>,
+    /// The mesh is the dome's outline ([`outline_mesh`]), one band of triangles, not its grid.
+    outline: bool,
     gradient: Option<(wgpu::Texture, u32)>,
     /// The stage the gradient feeds (and a physical sky model replaces).
     gradient_stage: Option<usize>,
@@ -1227,12 +1242,16 @@ impl SkyObjectDraws {
                     .enumerate()
                     .map(|(vi, v)| {
                         let label = format!("SkyObjects::{}[{vi}]", o.name);
-                        let key = shape_key(&v.shape);
+                        // Where no stage takes its coordinates from the mesh, a dome's triangles
+                        // only bound it: its outline does that with one band of them.
+                        let outline = v.stages.iter().all(|s| !matches!(s.uv, UvSource::Mesh)).then(|| outline_mesh(&v.shape)).flatten();
+                        let key = if outline.is_some() { format!("outline of {}", shape_key(&v.shape)) } else { shape_key(&v.shape) };
+                        let is_outline = outline.is_some();
                         let mesh = meshes
                             .entry(key.clone())
                             .or_insert_with(|| match old_meshes.and_then(|m| m.get(&key)) {
                                 Some(m) => m.clone(),
-                                None => Arc::new(GpuMesh::new(device, &format!("SkyObjects::mesh {key}"), &shape_mesh(&v.shape))),
+                                None => Arc::new(GpuMesh::new(device, &format!("SkyObjects::mesh {key}"), &outline.unwrap_or_else(|| shape_mesh(&v.shape)))),
                             })
                             .clone();
                         let gradient = v.gradients.as_ref().map(|g| {
@@ -1314,7 +1333,20 @@ impl SkyObjectDraws {
                             base.stages[second].cfg[1] = UV_WHITE;
                             base.stages[second].cfg[2] = NO_STAGE;
                         }
-                        VersionDraw { uniform, bind_groups, level0_able, maps, mesh, gradient, gradient_stage, blend: v.blend, shape: v.shape, base, texels_per_deg }
+                        VersionDraw {
+                            uniform,
+                            bind_groups,
+                            level0_able,
+                            maps,
+                            mesh,
+                            outline: is_outline,
+                            gradient,
+                            gradient_stage,
+                            blend: v.blend,
+                            shape: v.shape,
+                            base,
+                            texels_per_deg,
+                        }
                     })
                     .collect()
             })
