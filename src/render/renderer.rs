@@ -476,16 +476,18 @@ impl SkyRenderer {
                 })
             });
         stats.background_fused = fused.is_some();
-        // The background writes every pixel of the frame before anything reads it: the fused draw
-        // (and the composite below its dome), or the composite's full-screen triangle, unless
-        // additive draws went onto the cleared frame before it.
-        let color_covered = options.skips.covered_clears && background && (fused.is_some() || first.is_empty());
-        let depth_clean = options.skips.covered_clears && self.depth_untouched.as_ref() == Some(target.depth);
-        stats.clears_skipped = u32::from(color_covered) + u32::from(depth_clean);
         if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
             let joining = if seeded { Joining::Seeded } else { Joining::Combined(&combined) };
             layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors, joining);
         }
+        // The background writes every pixel of the frame before anything reads it: the fused draw
+        // (and the composite below its dome) where it has its run to read (as drawn below), or the
+        // composite's full-screen triangle, unless additive draws went onto the cleared frame
+        // before it.
+        let fused_drawn = fused.is_some() && self.pass::<ReducedLayersPass>().and_then(|l| l.upper_bind_group(0)).is_some();
+        let color_covered = options.skips.covered_clears && background && (fused_drawn || first.is_empty());
+        let depth_clean = options.skips.covered_clears && self.depth_untouched.as_ref() == Some(target.depth);
+        stats.clears_skipped = u32::from(color_covered) + u32::from(depth_clean);
 
         if let Some(t) = self.timer.as_mut() {
             t.begin_frame();
