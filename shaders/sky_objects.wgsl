@@ -34,6 +34,19 @@ struct Draw {
 // A physical sky model's colour by direction (sky_view.wgsl), replacing the gradient stage.
 @group(1) @binding(9) var sky_view: texture_2d<f32>;
 @group(1) @binding(10) var sky_view_sampler: sampler;
+// The upper layer of a pair drawn at once (`fs_pair`): the same bindings as group 1's, of the
+// layer drawn over it.
+@group(3) @binding(0) var<uniform> upper: Draw;
+@group(3) @binding(1) var upper_tex0: texture_2d<f32>;
+@group(3) @binding(2) var upper_tex1: texture_2d<f32>;
+@group(3) @binding(3) var upper_tex2: texture_2d<f32>;
+@group(3) @binding(4) var upper_tex3: texture_2d<f32>;
+@group(3) @binding(5) var upper_samp0: sampler;
+@group(3) @binding(6) var upper_samp1: sampler;
+@group(3) @binding(7) var upper_samp2: sampler;
+@group(3) @binding(8) var upper_samp3: sampler;
+@group(3) @binding(9) var upper_sky_view: texture_2d<f32>;
+@group(3) @binding(10) var upper_sky_view_sampler: sampler;
 
 const UV_MESH: u32 = 0u;
 const UV_SUN: u32 = 1u;
@@ -60,14 +73,14 @@ struct VertexOut {
     @location(3) mesh_uv23: vec4<f32>,
 };
 
-// Stage `i`'s scale and offset applied to texture coordinates `uv`.
-fn scaled(i: u32, uv: vec2<f32>) -> vec2<f32> {
-    let so = draw.stages[i].scale_offset;
+// Stage `i` of draw `d`: its scale and offset applied to texture coordinates `uv`.
+fn scaled(d: Draw, i: u32, uv: vec2<f32>) -> vec2<f32> {
+    let so = d.stages[i].scale_offset;
     return uv * so.xy + so.zw;
 }
 
-@vertex
-fn vs_main(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> VertexOut {
+// A vertex of the draw's shape, for `vs_main` and `vs_pair`.
+fn sky_vertex(position: vec3<f32>, uv: vec2<f32>) -> VertexOut {
     let dir = (draw.object_from_local * vec4<f32>(position, 0.0)).xyz;
     var clip = globals.clip_from_sky * vec4<f32>(dir, 1.0);
     // Any depth inside the sky's viewport range works: the sky neither writes nor sorts by depth,
@@ -77,9 +90,14 @@ fn vs_main(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> Vert
     out.clip = clip;
     out.uv = uv;
     out.world_dir = dir;
-    out.mesh_uv01 = vec4<f32>(scaled(0u, uv), scaled(1u, uv));
-    out.mesh_uv23 = vec4<f32>(scaled(2u, uv), scaled(3u, uv));
+    out.mesh_uv01 = vec4<f32>(scaled(draw, 0u, uv), scaled(draw, 1u, uv));
+    out.mesh_uv23 = vec4<f32>(scaled(draw, 2u, uv), scaled(draw, 3u, uv));
     return out;
+}
+
+@vertex
+fn vs_main(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> VertexOut {
+    return sky_vertex(position, uv);
 }
 
 // Specialisation: a pipeline per material signature sets SPECIALISED and the constants below from
@@ -124,74 +142,121 @@ override BACKGROUND: u32 = 0u;
 // The first layer of a seeded reduced buffer drawn over the lower run itself (group 2), replacing
 // the buffer's clear colour, unblended (src/render/sky_objects.rs, `Placement::OverSeed`).
 override OVER_SEED: bool = false;
+// The upper layer of a pair (`fs_pair`, group 3), specialised as the draw's own constants above.
+override UPPER_STAGE_COUNT: u32 = 0u;
+override UPPER_UV_MODE_0: u32 = 0u;
+override UPPER_UV_MODE_1: u32 = 0u;
+override UPPER_UV_MODE_2: u32 = 0u;
+override UPPER_UV_MODE_3: u32 = 0u;
+override UPPER_OP_0: u32 = 0u;
+override UPPER_OP_1: u32 = 0u;
+override UPPER_OP_2: u32 = 0u;
+override UPPER_OP_3: u32 = 0u;
+override UPPER_CONSTANT_0: u32 = 4u;
+override UPPER_CONSTANT_1: u32 = 4u;
+override UPPER_CONSTANT_2: u32 = 4u;
+override UPPER_CONSTANT_3: u32 = 4u;
+override UPPER_LIVE_0: bool = true;
+override UPPER_LIVE_1: bool = true;
+override UPPER_LIVE_2: bool = true;
+override UPPER_LIVE_3: bool = true;
+override UPPER_VIEW_STAGE: u32 = 4u;
+override UPPER_LIGHTING: u32 = 0u;
 
-fn stage_count() -> u32 {
+// Layers of a draw: its own (group 1), and the upper one of a pair (group 3). The functions below
+// take the layer, constant where they are called, and its uniform: the upper layer is always
+// specialised, the draw's own reads its uniform where not.
+const LAYER_OWN: u32 = 0u;
+const LAYER_UPPER: u32 = 1u;
+
+fn stage_count(l: u32, d: Draw) -> u32 {
+    if l == LAYER_UPPER {
+        return UPPER_STAGE_COUNT;
+    }
     if SPECIALISED {
         return STAGE_COUNT;
     }
-    return draw.misc.x;
+    return d.misc.x;
 }
 
-fn uv_mode(i: u32) -> u32 {
-    if SPECIALISED {
-        switch i {
-            case 0u: { return UV_MODE_0; }
-            case 1u: { return UV_MODE_1; }
-            case 2u: { return UV_MODE_2; }
-            default: { return UV_MODE_3; }
-        }
+// One of four per-stage constants by stage index.
+fn pick_u32(i: u32, c: vec4<u32>) -> u32 {
+    switch i {
+        case 0u: { return c.x; }
+        case 1u: { return c.y; }
+        case 2u: { return c.z; }
+        default: { return c.w; }
     }
-    return draw.stages[i].cfg.y;
 }
 
-fn stage_op(i: u32) -> u32 {
-    if SPECIALISED {
-        switch i {
-            case 0u: { return OP_0; }
-            case 1u: { return OP_1; }
-            case 2u: { return OP_2; }
-            default: { return OP_3; }
-        }
+// One of four per-stage flags by stage index.
+fn pick_bool(i: u32, c0: bool, c1: bool, c2: bool, c3: bool) -> bool {
+    switch i {
+        case 0u: { return c0; }
+        case 1u: { return c1; }
+        case 2u: { return c2; }
+        default: { return c3; }
     }
-    return draw.stages[i].cfg.x;
 }
 
-fn stage_constant(i: u32) -> u32 {
-    if SPECIALISED {
-        switch i {
-            case 0u: { return CONSTANT_0; }
-            case 1u: { return CONSTANT_1; }
-            case 2u: { return CONSTANT_2; }
-            default: { return CONSTANT_3; }
-        }
+fn uv_mode(l: u32, d: Draw, i: u32) -> u32 {
+    if l == LAYER_UPPER {
+        return pick_u32(i, vec4<u32>(UPPER_UV_MODE_0, UPPER_UV_MODE_1, UPPER_UV_MODE_2, UPPER_UV_MODE_3));
     }
-    return draw.stages[i].cfg.z;
-}
-
-fn stage_live(i: u32) -> bool {
     if SPECIALISED {
-        switch i {
-            case 0u: { return LIVE_0; }
-            case 1u: { return LIVE_1; }
-            case 2u: { return LIVE_2; }
-            default: { return LIVE_3; }
-        }
+        return pick_u32(i, vec4<u32>(UV_MODE_0, UV_MODE_1, UV_MODE_2, UV_MODE_3));
     }
-    return draw.stages[i].cfg.w != 0u;
+    return d.stages[i].cfg.y;
 }
 
-fn view_stage() -> u32 {
+fn stage_op(l: u32, d: Draw, i: u32) -> u32 {
+    if l == LAYER_UPPER {
+        return pick_u32(i, vec4<u32>(UPPER_OP_0, UPPER_OP_1, UPPER_OP_2, UPPER_OP_3));
+    }
+    if SPECIALISED {
+        return pick_u32(i, vec4<u32>(OP_0, OP_1, OP_2, OP_3));
+    }
+    return d.stages[i].cfg.x;
+}
+
+fn stage_constant(l: u32, d: Draw, i: u32) -> u32 {
+    if l == LAYER_UPPER {
+        return pick_u32(i, vec4<u32>(UPPER_CONSTANT_0, UPPER_CONSTANT_1, UPPER_CONSTANT_2, UPPER_CONSTANT_3));
+    }
+    if SPECIALISED {
+        return pick_u32(i, vec4<u32>(CONSTANT_0, CONSTANT_1, CONSTANT_2, CONSTANT_3));
+    }
+    return d.stages[i].cfg.z;
+}
+
+fn stage_live(l: u32, d: Draw, i: u32) -> bool {
+    if l == LAYER_UPPER {
+        return pick_bool(i, UPPER_LIVE_0, UPPER_LIVE_1, UPPER_LIVE_2, UPPER_LIVE_3);
+    }
+    if SPECIALISED {
+        return pick_bool(i, LIVE_0, LIVE_1, LIVE_2, LIVE_3);
+    }
+    return d.stages[i].cfg.w != 0u;
+}
+
+fn view_stage(l: u32, d: Draw) -> u32 {
+    if l == LAYER_UPPER {
+        return UPPER_VIEW_STAGE;
+    }
     if SPECIALISED {
         return VIEW_STAGE;
     }
-    return draw.misc.z;
+    return d.misc.z;
 }
 
-fn lighting() -> u32 {
+fn lighting(l: u32, d: Draw) -> u32 {
+    if l == LAYER_UPPER {
+        return UPPER_LIGHTING;
+    }
     if SPECIALISED {
         return LIGHTING;
     }
-    return draw.misc.y;
+    return d.misc.y;
 }
 
 // Plate carree coordinates of world direction `dir` in the rotating celestial frame; u wraps
@@ -201,19 +266,27 @@ fn celestial_uv(dir: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(atan2(c.x, -c.z) / (2.0 * PI) + 0.5, 0.5 - asin(clamp(c.y, -1.0, 1.0)) / PI);
 }
 
+// Where a layer's fragment lies: the view direction and each stage's texture coordinates under
+// the mesh mapping (stages 0 and 1, then 2 and 3), as the vertex shader interpolated them.
+struct Place {
+    world_dir: vec3<f32>,
+    mesh_uv01: vec4<f32>,
+    mesh_uv23: vec4<f32>,
+};
+
 // Stage `i`'s texture coordinates under its mapping `mode`: the mesh's come from the vertex
 // shader, the others from the view direction.
-fn stage_uv(i: u32, mode: u32, in: VertexOut) -> vec2<f32> {
+fn stage_uv(d: Draw, i: u32, mode: u32, at: Place) -> vec2<f32> {
     if mode == UV_MESH {
         switch i {
-            case 0u: { return in.mesh_uv01.xy; }
-            case 1u: { return in.mesh_uv01.zw; }
-            case 2u: { return in.mesh_uv23.xy; }
-            default: { return in.mesh_uv23.zw; }
+            case 0u: { return at.mesh_uv01.xy; }
+            case 1u: { return at.mesh_uv01.zw; }
+            case 2u: { return at.mesh_uv23.xy; }
+            default: { return at.mesh_uv23.zw; }
         }
     }
-    let s = draw.stages[i];
-    let dir = normalize(in.world_dir);
+    let s = d.stages[i];
+    let dir = normalize(at.world_dir);
     var uv = vec2<f32>(0.0);
     if mode == UV_SUN {
         let sun = globals.towards_sun.xyz;
@@ -230,19 +303,19 @@ fn stage_uv(i: u32, mode: u32, in: VertexOut) -> vec2<f32> {
     } else if mode == UV_CELESTIAL {
         uv = celestial_uv(dir);
     } else if mode == UV_QUAKE {
-        var d = dir;
-        d.y = d.y * s.params.x + s.params.y;
+        var q = dir;
+        q.y = q.y * s.params.x + s.params.y;
         let scroll = globals.time.w * s.params.w;
-        uv = vec2<f32>(scroll) + d.xz * (s.params.z / max(length(d), 1e-4));
+        uv = vec2<f32>(scroll) + q.xz * (s.params.z / max(length(q), 1e-4));
     }
-    return scaled(i, uv);
+    return scaled(d, i, uv);
 }
 
 // Adds one term of the material (display values, times the diffuse colour) to the sum. On the
 // display target as they are; on the HDR target through `to_target`, or as a factor of the sky
 // model's exposed radiance for the term that holds it.
-fn add_term(sum: vec4<f32>, term_display: vec4<f32>, view: vec3<f32>, has_view: bool) -> vec4<f32> {
-    let t = term_display * draw.diffuse;
+fn add_term(d: Draw, sum: vec4<f32>, term_display: vec4<f32>, view: vec3<f32>, has_view: bool) -> vec4<f32> {
+    let t = term_display * d.diffuse;
     var rgb: vec3<f32>;
     if has_view {
         rgb = view * linear_from_display(t.rgb);
@@ -262,45 +335,46 @@ struct Terms {
 
 // Folds stage `i` (its sample `c`) into the sum. Called with constant indices: a loop over a
 // dynamically indexed array of samples spills to memory on SIMD rasterisers (lavapipe).
-fn fold_stage(acc_in: Terms, i: u32, c_in: vec4<f32>, view: vec3<f32>) -> Terms {
+fn fold_stage(l: u32, d: Draw, acc_in: Terms, i: u32, c_in: vec4<f32>, view: vec3<f32>) -> Terms {
     var acc = acc_in;
     var c = c_in;
-    let k = stage_constant(i);
-    if k < 4u { c = c * draw.constants[k]; }
-    if stage_op(i) == 1u {
+    let k = stage_constant(l, d, i);
+    if k < 4u { c = c * d.constants[k]; }
+    if stage_op(l, d, i) == 1u {
         acc.term = acc.term * c;
     } else {
-        if acc.has_term { acc.sum = add_term(acc.sum, acc.term, view, acc.term_has_view); }
+        if acc.has_term { acc.sum = add_term(d, acc.sum, acc.term, view, acc.term_has_view); }
         acc.term = c;
         acc.has_term = true;
         acc.term_has_view = false;
     }
-    acc.term_has_view = acc.term_has_view || i == view_stage();
+    acc.term_has_view = acc.term_has_view || i == view_stage(l, d);
     return acc;
 }
 
 // Stage `i`'s sample: not placed nor sampled when its term is black this frame or left to another
 // draw of the layer (reads as 0), white when the sky-view map stands in for it.
-fn stage_sample(i: u32, t: texture_2d<f32>, smp: sampler, in: VertexOut) -> vec4<f32> {
-    if !stage_live(i) { return vec4<f32>(0.0); }
-    if view_stage() == i || uv_mode(i) == UV_WHITE { return vec4<f32>(1.0); }
-    if uv_mode(i) == UV_CELESTIAL_LEVEL0 {
-        return textureSampleLevel(t, smp, scaled(i, celestial_uv(normalize(in.world_dir))), 0.0);
+fn stage_sample(l: u32, d: Draw, i: u32, t: texture_2d<f32>, smp: sampler, at: Place) -> vec4<f32> {
+    if !stage_live(l, d, i) { return vec4<f32>(0.0); }
+    let mode = uv_mode(l, d, i);
+    if view_stage(l, d) == i || mode == UV_WHITE { return vec4<f32>(1.0); }
+    if mode == UV_CELESTIAL_LEVEL0 {
+        return textureSampleLevel(t, smp, scaled(d, i, celestial_uv(normalize(at.world_dir))), 0.0);
     }
-    if uv_mode(i) == UV_CELESTIAL {
+    if mode == UV_CELESTIAL {
         // Differenced across the wrap of u, the derivative spans the whole texture and picks
         // its smallest level: a dashed line of the texture's mean along the meridian. The same
         // coordinates turned by half a turn wrap on the far side; per axis the smaller of the two
         // derivatives is the true one. (Taking u back by a turn in the 2x2 quads that straddle
         // the wrap, for implicit derivatives, left the line on lavapipe.)
-        let c = celestial_uv(normalize(in.world_dir));
-        let uv = scaled(i, c);
-        let turned = scaled(i, vec2<f32>(fract(c.x + 0.5), c.y));
+        let c = celestial_uv(normalize(at.world_dir));
+        let uv = scaled(d, i, c);
+        let turned = scaled(d, i, vec2<f32>(fract(c.x + 0.5), c.y));
         let dx = select(dpdx(uv), dpdx(turned), abs(dpdx(turned).x) < abs(dpdx(uv).x));
         let dy = select(dpdy(uv), dpdy(turned), abs(dpdy(turned).x) < abs(dpdy(uv).x));
         return textureSampleGrad(t, smp, uv, dx, dy);
     }
-    return textureSample(t, smp, stage_uv(i, uv_mode(i), in));
+    return textureSample(t, smp, stage_uv(d, i, mode, at));
 }
 
 // The procedural-sky text's 2D cloud: along the view ray a constant scattering strength rho over
@@ -327,32 +401,44 @@ fn lit_cloud(world_dir: vec3<f32>, depth: f32) -> vec4<f32> {
     return vec4<f32>(sun + ambient, coverage);
 }
 
-@fragment
-fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+// Layer `l`'s material (uniform `d`, its stages' textures and samplers, its sky-view map) at
+// `at`, lit clouds included: display values, alpha its coverage.
+fn material(
+    l: u32,
+    d: Draw,
+    t0: texture_2d<f32>, t1: texture_2d<f32>, t2: texture_2d<f32>, t3: texture_2d<f32>,
+    s0: sampler, s1: sampler, s2: sampler, s3: sampler,
+    view_map: texture_2d<f32>, view_sampler: sampler,
+    at: Place,
+) -> vec4<f32> {
     // Stages past the material's count are neither placed nor sampled.
-    let count = stage_count();
+    let count = stage_count(l, d);
     // A physical model's radiance (already exposed, on the HDR target) in place of its stage; that
     // stage's colour then counts as white in its term.
     var view = vec3<f32>(1.0);
-    if view_stage() < 4u {
-        view = textureSample(sky_view, sky_view_sampler, sky_view_uv(normalize(in.world_dir))).rgb;
+    if view_stage(l, d) < 4u {
+        view = textureSample(view_map, view_sampler, sky_view_uv(normalize(at.world_dir))).rgb;
     }
     var acc = Terms(vec4<f32>(0.0), vec4<f32>(0.0), false, false);
-    if count > 0u { acc = fold_stage(acc, 0u, stage_sample(0u, tex0, samp0, in), view); }
-    if count > 1u { acc = fold_stage(acc, 1u, stage_sample(1u, tex1, samp1, in), view); }
-    if count > 2u { acc = fold_stage(acc, 2u, stage_sample(2u, tex2, samp2, in), view); }
-    if count > 3u { acc = fold_stage(acc, 3u, stage_sample(3u, tex3, samp3, in), view); }
+    if count > 0u { acc = fold_stage(l, d, acc, 0u, stage_sample(l, d, 0u, t0, s0, at), view); }
+    if count > 1u { acc = fold_stage(l, d, acc, 1u, stage_sample(l, d, 1u, t1, s1, at), view); }
+    if count > 2u { acc = fold_stage(l, d, acc, 2u, stage_sample(l, d, 2u, t2, s2, at), view); }
+    if count > 3u { acc = fold_stage(l, d, acc, 3u, stage_sample(l, d, 3u, t3, s3, at), view); }
     var sum = acc.sum;
-    if acc.has_term { sum = add_term(sum, acc.term, view, acc.term_has_view); }
-    var color = sum;
-
+    if acc.has_term { sum = add_term(d, sum, acc.term, view, acc.term_has_view); }
     // Lit clouds. The lighting is per draw (uniform control flow), so the derivatives `lit_cloud`
     // takes are computed only by the draws that use them.
-    if lighting() == 2u {
-        color = lit_cloud(in.world_dir, sum.a * bitcast<f32>(draw.misc.w));
+    if lighting(l, d) == 2u {
+        return lit_cloud(at.world_dir, sum.a * bitcast<f32>(d.misc.w));
     }
+    return sum;
+}
 
-    if lighting() == 1u {
+@fragment
+fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    let at = Place(in.world_dir, in.mesh_uv01, in.mesh_uv23);
+    var color = material(LAYER_OWN, draw, tex0, tex1, tex2, tex3, samp0, samp1, samp2, samp3, sky_view, sky_view_sampler, at);
+    if lighting(LAYER_OWN, draw) == 1u {
         // Moon: a lit sphere seen from the dome centre; the sun side is bright, so phases show.
         let p = in.uv * 2.0 - vec2<f32>(1.0);
         let r2 = dot(p, p);
@@ -422,4 +508,47 @@ fn under_run(color: vec4<f32>, pixel: vec2<f32>) -> vec4<f32> {
         case 2u: { return vec4<f32>(run.a * color.a * color.rgb, color.a); }
         default: { return vec4<f32>(run.a * color.rgb, color.a); }
     }
+}
+
+// A pair of alpha-blended dome layers on the same mesh drawn at once into a reduced buffer
+// (src/render/sky_objects.rs, `Pass::draw_pair_reduced`): each one's mesh coordinates.
+struct PairOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(1) world_dir: vec3<f32>,
+    @location(2) mesh_uv01: vec4<f32>,
+    @location(3) mesh_uv23: vec4<f32>,
+    @location(4) upper_uv01: vec4<f32>,
+    @location(5) upper_uv23: vec4<f32>,
+};
+
+@vertex
+fn vs_pair(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> PairOut {
+    let own = sky_vertex(position, uv);
+    var out: PairOut;
+    out.clip = own.clip;
+    out.world_dir = own.world_dir;
+    out.mesh_uv01 = own.mesh_uv01;
+    out.mesh_uv23 = own.mesh_uv23;
+    out.upper_uv01 = vec4<f32>(scaled(upper, 0u, uv), scaled(upper, 1u, uv));
+    out.upper_uv23 = vec4<f32>(scaled(upper, 2u, uv), scaled(upper, 3u, uv));
+    return out;
+}
+
+// The upper layer over the draw's own, as the two alpha blends one after the other would leave
+// them: premultiplied colour, and in alpha what the pair covers (the buffer's transmittance is
+// multiplied by what it lets through: `PAIR_BLEND` in src/render/sky_objects.rs). Over the seed
+// (`OVER_SEED`), written as it is, with the transmittance left.
+@fragment
+fn fs_pair(in: PairOut) -> @location(0) vec4<f32> {
+    let own = material(LAYER_OWN, draw, tex0, tex1, tex2, tex3, samp0, samp1, samp2, samp3, sky_view, sky_view_sampler, Place(in.world_dir, in.mesh_uv01, in.mesh_uv23));
+    let up = material(
+        LAYER_UPPER, upper, upper_tex0, upper_tex1, upper_tex2, upper_tex3, upper_samp0, upper_samp1, upper_samp2, upper_samp3, upper_sky_view, upper_sky_view_sampler,
+        Place(in.world_dir, in.upper_uv01, in.upper_uv23),
+    );
+    let rgb = up.a * up.rgb + (1.0 - up.a) * own.a * own.rgb;
+    let through = (1.0 - own.a) * (1.0 - up.a);
+    if OVER_SEED {
+        return vec4<f32>(rgb + through * run_at_seeded(in.clip.xy).rgb, through);
+    }
+    return vec4<f32>(rgb, 1.0 - through);
 }

@@ -176,14 +176,18 @@ fn broken_shader_edit_keeps_the_old_pipelines() {
 
     let file = dir.path().join("sky_objects.wgsl");
     let good = std::fs::read_to_string(&file).unwrap();
-    std::fs::write(&file, good.replace("var color = sum;", "var color = sum +;")).unwrap();
+    let broken = good.replace("let at = Place(", "let at = +Place(");
+    assert_ne!(broken, good, "the edit must apply to the shader");
+    std::fs::write(&file, broken).unwrap();
     let err = h.renderer.reload_shaders(&h.ctx).unwrap_err().to_string();
     assert!(err.contains("sky_objects"), "{err}");
     let still = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
     assert_eq!(common::diff(&still, &before, 2).0.differing, 0.0, "the old pipelines must keep rendering");
 
     // A valid edit is picked up: the sky turns red.
-    std::fs::write(&file, good.replace("    return color;\n}", "    return vec4<f32>(1.0, 0.0, 0.0, 1.0);\n}")).unwrap();
+    let red = good.replace("    return color;\n}", "    return vec4<f32>(1.0, 0.0, 0.0, 1.0);\n}");
+    assert_ne!(red, good, "the edit must apply to the shader");
+    std::fs::write(&file, red).unwrap();
     h.renderer.reload_shaders(&h.ctx).unwrap();
     let red = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
     assert_eq!(red.get_pixel(W / 2, 5).0, [255, 0, 0, 255]);

@@ -553,6 +553,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
             egui::Checkbox::new(&mut c.options.fold_seed, format!("its first layer over the seed ({})", if s.seed_folded { "this frame" } else { "not this frame" })),
         );
         ui.checkbox(&mut c.options.flash_in_run, format!("lightning flash in a run ({})", if s.joined_runs_only > 0 { "this frame" } else { "not this frame" }));
+        ui.checkbox(&mut c.options.pair_layers, format!("two alpha layers at once ({} pairs)", s.layers_paired));
     });
     let median = |v: &VecDeque<f32>| {
         let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();

@@ -300,6 +300,20 @@ pub trait Pass: Any {
         0
     }
 
+    /// Whether [`Pass::draw_pair`] can draw reduced items `lower` and `upper`, consecutive in a
+    /// run (`upper` right after `lower`), at once this frame; `over_seed`: `lower` as the first
+    /// layer of a seeded buffer ([`Pass::draw_over_seed`]).
+    fn can_draw_pair(&self, _lower: usize, _upper: usize, _target: Target, _over_seed: bool) -> bool {
+        false
+    }
+
+    /// Records reduced items `lower` and `upper` at once into a run's buffer
+    /// ([`super::RenderOptions::pair_layers`]): one draw that leaves what the two would, one after
+    /// the other; over `seed` (as [`Pass::draw_over_seed`]) when given. Returns draw calls.
+    fn draw_pair(&self, _rpass: &mut wgpu::RenderPass<'_>, _lower: usize, _upper: usize, _target: Target, _seed: Option<&wgpu::BindGroup>) -> u32 {
+        0
+    }
+
     /// Whether [`Pass::draw_as_background`] can draw additive item `key` this frame: it covers
     /// every pixel of the frame outside [`Pass::background_gap`]. `joined`: the background is the
     /// combination of joined runs.

@@ -70,6 +70,11 @@ pub struct RenderOptions {
     /// full-screen blended pass less while a flash lasts). Off, or with no run before it: drawn
     /// over the frame.
     pub flash_in_run: bool,
+    /// With dome layers in reduced buffers: two alpha-blended layers next to each other in a run,
+    /// on the same mesh (the cloud layers), are drawn at once, one shader evaluating both and one
+    /// blend leaving what the two would (`Pass::draw_pair`): one set of triangles and one blend
+    /// per pixel less. Off: one after the other.
+    pub pair_layers: bool,
 }
 
 impl Default for RenderOptions {
@@ -87,6 +92,7 @@ impl Default for RenderOptions {
             seed_joined: true,
             fold_seed: true,
             flash_in_run: true,
+            pair_layers: true,
         }
     }
 }
@@ -172,6 +178,8 @@ pub struct FrameStats {
     pub seeded: bool,
     /// The seeded buffer's first layer was drawn over the lower run itself ([`RenderOptions::fold_seed`]).
     pub seed_folded: bool,
+    /// Pairs of reduced layers drawn at once ([`RenderOptions::pair_layers`]).
+    pub layers_paired: u32,
     /// Draws added to a run of reduced layers only because the run was there
     /// ([`DrawItem::joins_only`]: the lightning flash, [`RenderOptions::flash_in_run`]).
     pub joined_runs_only: u32,
@@ -564,16 +572,35 @@ impl SkyRenderer {
                                             stats.draw_calls += l.seed_within(&mut rpass, &self.globals.bind_group, kind, gap);
                                         }
                                         rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-                                        stats.draw_calls += self.passes[*i].draw_over_seed(&mut rpass, it.key, kind, seed);
+                                        // With the layer after it, at once, where the two pair.
+                                        match pair_at(&self.passes, sky_list, start, end, kind, true).filter(|_| options.pair_layers) {
+                                            Some(upper) => {
+                                                stats.draw_calls += self.passes[*i].draw_pair(&mut rpass, it.key, upper, kind, Some(seed));
+                                                stats.layers_paired += 1;
+                                                first += 2;
+                                            }
+                                            None => {
+                                                stats.draw_calls += self.passes[*i].draw_over_seed(&mut rpass, it.key, kind, seed);
+                                                first += 1;
+                                            }
+                                        }
                                         stats.seed_folded = true;
-                                        first += 1;
                                     }
                                     None => stats.draw_calls += l.seed(&mut rpass, &self.globals.bind_group, kind),
                                 }
                             }
                             rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-                            for (i, it) in &sky_list[first..end] {
-                                stats.draw_calls += self.passes[*i].draw_reduced(&mut rpass, it.key, kind);
+                            let mut k = first;
+                            while k < end {
+                                let (i, it) = &sky_list[k];
+                                if let Some(upper) = pair_at(&self.passes, sky_list, k, end, kind, false).filter(|_| options.pair_layers) {
+                                    stats.draw_calls += self.passes[*i].draw_pair(&mut rpass, it.key, upper, kind, None);
+                                    stats.layers_paired += 1;
+                                    k += 2;
+                                } else {
+                                    stats.draw_calls += self.passes[*i].draw_reduced(&mut rpass, it.key, kind);
+                                    k += 1;
+                                }
                             }
                         }
                         if let (true, false, Some(l)) = (joined, seeded, layers) {
@@ -743,6 +770,13 @@ pub fn release_freed_memory() {
             malloc_trim(0);
         }
     }
+}
+
+/// The key of the item after item `k` of a run ending at `end` when the two can be drawn at once
+/// by their pass ([`Pass::draw_pair`]; `over_seed`: item `k` as a seeded buffer's first layer).
+fn pair_at(passes: &[Box<dyn Pass>], items: &[(usize, DrawItem)], k: usize, end: usize, target: Target, over_seed: bool) -> Option<usize> {
+    let ((i, lower), (j, upper)) = (items.get(k)?, items.get(k + 1).filter(|_| k + 1 < end)?);
+    (i == j && passes[*i].can_draw_pair(lower.key, upper.key, target, over_seed)).then_some(upper.key)
 }
 
 /// Moves every full-resolution additive draw of the sky phase past the reduced additive layers

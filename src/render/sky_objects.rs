@@ -286,6 +286,41 @@ impl VariantKey {
     }
 }
 
+/// What a pipeline drawing two alpha-blended dome layers at once into a reduced buffer is built
+/// for (`vs_pair`, `fs_pair` in shaders/sky_objects.wgsl): the lower layer's signature (its
+/// placement: plain or over the seed) and the upper one's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct PairKey {
+    lower: VariantKey,
+    upper: VariantKey,
+}
+
+impl PairKey {
+    /// The lower layer's override constants and the upper layer's as `UPPER_*`.
+    fn constants(&self) -> Vec<(&'static str, f64)> {
+        const MODES: [&str; 4] = ["UPPER_UV_MODE_0", "UPPER_UV_MODE_1", "UPPER_UV_MODE_2", "UPPER_UV_MODE_3"];
+        const OPS: [&str; 4] = ["UPPER_OP_0", "UPPER_OP_1", "UPPER_OP_2", "UPPER_OP_3"];
+        const CONSTANTS: [&str; 4] = ["UPPER_CONSTANT_0", "UPPER_CONSTANT_1", "UPPER_CONSTANT_2", "UPPER_CONSTANT_3"];
+        const LIVE: [&str; 4] = ["UPPER_LIVE_0", "UPPER_LIVE_1", "UPPER_LIVE_2", "UPPER_LIVE_3"];
+        let u = &self.upper;
+        let mut c = self.lower.constants();
+        c.extend([("UPPER_STAGE_COUNT", f64::from(u.count)), ("UPPER_VIEW_STAGE", f64::from(u.view_stage)), ("UPPER_LIGHTING", f64::from(u.lighting))]);
+        for k in 0..4 {
+            c.extend([(MODES[k], f64::from(u.modes[k])), (OPS[k], f64::from(u.ops[k])), (CONSTANTS[k], f64::from(u.constants[k])), (LIVE[k], f64::from(u8::from(u.live[k])))]);
+        }
+        c
+    }
+}
+
+/// The blend of a pair of alpha layers into a reduced buffer: `fs_pair` writes premultiplied
+/// colour and what the pair covers, so the buffer ends as two alpha blends would leave it
+/// ([`super::reduced_layers::REDUCED_BLENDS`]): colour + (1 - covered) x buffer, and the
+/// transmittance in alpha times what the pair lets through.
+const PAIR_BLEND: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha, operation: wgpu::BlendOperation::Add },
+    alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha, operation: wgpu::BlendOperation::Add },
+};
+
 /// The sky objects pass: pipelines (one per blend mode, built once and rebuilt on shader edits,
 /// plus one per material signature, built on first use) and the current sky's per-object resources.
 pub struct SkyObjectsPass {
@@ -299,6 +334,11 @@ pub struct SkyObjectsPass {
     /// Specialised pipelines by material signature (`None`: building it failed; the generic one
     /// draws). Emptied when the shaders change.
     variants: HashMap<VariantKey, Option<wgpu::RenderPipeline>>,
+    /// Pipelines drawing two layers at once, by their signatures (`None`: building it failed;
+    /// the two are drawn one after the other). Emptied when the shaders change.
+    pairs: HashMap<PairKey, Option<wgpu::RenderPipeline>>,
+    /// The layout of pair pipelines: the upper layer's draw bind group as group 3.
+    pair_layout: wgpu::PipelineLayout,
     draws: Staged<Option<SkyObjectDraws>>,
     /// The shared sky-view map and its sampler, bound to every draw.
     sky_view: (wgpu::TextureView, wgpu::Sampler),
@@ -413,6 +453,11 @@ impl SkyObjectsPass {
             bind_group_layouts: &[Some(globals), Some(&bind_layout), Some(&run_layout)],
             immediate_size: 0,
         });
+        let pair_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("SkyObjects::pair_layout"),
+            bind_group_layouts: &[Some(globals), Some(&bind_layout), Some(&run_layout), Some(&bind_layout)],
+            immediate_size: 0,
+        });
         let no_run = {
             let uniform = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("SkyObjects::no_run_uniform"),
@@ -441,6 +486,8 @@ impl SkyObjectsPass {
             display_format: b.color_format,
             pipelines,
             variants: HashMap::new(),
+            pairs: HashMap::new(),
+            pair_layout,
             draws: Staged::new(None),
             sky_view,
             visible: Vec::new(),
@@ -461,7 +508,7 @@ impl SkyObjectsPass {
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<SkyObjectPipelines> {
         let module = shaders::module(b.device, b.library, "sky_objects")?;
         let names = ["SkyObjects::pipeline_opaque", "SkyObjects::pipeline_alpha", "SkyObjects::pipeline_additive"];
-        let one = |i: usize| create_pipeline(b.device, layout, &module, names[i], (BLENDS[i], b.color_format, Some(wgpu::CompareFunction::Less)), &b.target_constants());
+        let one = |i: usize| create_pipeline(b.device, (layout, &module, MAIN), names[i], (BLENDS[i], b.color_format, Some(wgpu::CompareFunction::Less)), &b.target_constants());
         Ok(SkyObjectPipelines { generic: [one(0)?, one(1)?, one(2)?], module })
     }
 
@@ -544,6 +591,72 @@ impl SkyObjectsPass {
         count as u32
     }
 
+    /// Whether draws `lower` and `upper` can be drawn at once: whole alpha-blended layers in
+    /// reduced buffers, on one mesh, or on one shape's grid and outline (the same directions).
+    fn pairable(&self, lower: &Visible, upper: &Visible) -> bool {
+        let Some(draws) = &self.draws.current else { return false };
+        let (a, b) = (&draws.objects[lower.index][lower.version], &draws.objects[upper.index][upper.version]);
+        let one_cover = Arc::ptr_eq(&a.mesh, &b.mesh) || (a.shape == b.shape && (a.outline || b.outline));
+        [lower, upper].iter().all(|e| e.reduced && !e.on_top) && a.blend == BlendMode::Alpha && b.blend == BlendMode::Alpha && one_cover
+    }
+
+    /// The mesh a pair is drawn on: the one draw's grid where the other draws an outline.
+    fn pair_mesh<'a>(draws: &'a SkyObjectDraws, lower: &Visible, upper: &Visible) -> &'a VersionDraw {
+        let (a, b) = (&draws.objects[lower.index][lower.version], &draws.objects[upper.index][upper.version]);
+        if a.outline && !b.outline {
+            b
+        } else {
+            a
+        }
+    }
+
+    /// The signature of draws `lower` and `upper` drawn at once this frame, `lower` over the seed
+    /// or not.
+    fn pair_key(&self, lower: &Visible, upper: &Visible, target: Target, over_seed: bool) -> Option<PairKey> {
+        if !self.pairable(lower, upper) {
+            return None;
+        }
+        let placement = if over_seed { Placement::OverSeed } else { Placement::Plain };
+        let lower = self.entry_key(lower, target, placement).filter(|k| k.placement == placement)?;
+        Some(PairKey { lower, upper: self.entry_key(upper, target, Placement::Plain)? })
+    }
+
+    /// The index ranges draws `lower` and `upper` (on one mesh of `index_count` indices) both
+    /// draw, each with both draws' level-0 stages; None where they do not draw the same
+    /// triangles.
+    fn pair_parts(&self, lower: &Visible, upper: &Visible, index_count: u32) -> Option<Vec<(std::ops::Range<u32>, u8, u8)>> {
+        let parts = |e: &Visible| match e.parts {
+            (_, 0) => vec![(0..index_count, 0)],
+            (start, count) => self.parts[start as usize..(start + count) as usize].to_vec(),
+        };
+        let (mut a, mut b) = (parts(lower), parts(upper));
+        // An outline drawn on the other's grid: that grid's rows, with the outline's level-0
+        // stages (those of every row in view).
+        let outline = |e: &Visible| self.draws.current.as_ref().is_some_and(|d| d.objects[e.index][e.version].outline);
+        match (outline(lower), outline(upper)) {
+            (true, false) => a = b.iter().map(|p| (p.0.clone(), a.first().map_or(0, |q| q.1))).collect(),
+            (false, true) => b = a.iter().map(|p| (p.0.clone(), b.first().map_or(0, |q| q.1))).collect(),
+            _ => {}
+        }
+        let mut shared = Vec::new();
+        let (mut i, mut j) = (0, 0);
+        while i < a.len() && j < b.len() {
+            let (ra, rb) = (&a[i].0, &b[j].0);
+            let range = ra.start.max(rb.start)..ra.end.min(rb.end);
+            if !range.is_empty() {
+                shared.push((range, a[i].1, b[j].1));
+            }
+            if ra.end <= rb.end {
+                i += 1;
+            } else {
+                j += 1;
+            }
+        }
+        let indices = |ranges: &mut dyn Iterator<Item = &std::ops::Range<u32>>| ranges.map(|r| r.end - r.start).sum::<u32>();
+        let both = indices(&mut shared.iter().map(|p| &p.0));
+        (both == indices(&mut a.iter().map(|p| &p.0)) && both == indices(&mut b.iter().map(|p| &p.0))).then_some(shared)
+    }
+
     /// Builds the specialised pipelines this frame's draws need and do not have yet.
     fn build_variants(&mut self, device: &wgpu::Device, target: Target, runs: bool) {
         for e in &self.visible {
@@ -587,21 +700,46 @@ impl SkyObjectsPass {
                     (false, _) => Some(wgpu::CompareFunction::Less),
                 };
                 let label = format!("SkyObjects::pipeline {key:?}");
-                let built = create_pipeline(device, &self.pipeline_layout, &self.pipelines.get().module, &label, (blend, format, depth), &constants);
+                let built = create_pipeline(device, (&self.pipeline_layout, &self.pipelines.get().module, MAIN), &label, (blend, format, depth), &constants);
                 if let Err(e) = &built {
                     log::error!("{label}: {e}; the generic pipeline draws this material whole on the frame, reduced or split parts are not drawn");
                 }
                 self.variants.insert(key, built.ok());
             }
         }
+        // Pairs: each reduced alpha layer with the next one in the renderer's order (priority,
+        // then this list's), over the seed too where the lower is a whole dome.
+        let mut alpha: Vec<usize> = (0..self.visible.len()).filter(|&k| self.pairable(&self.visible[k], &self.visible[k])).collect();
+        alpha.sort_by_key(|&k| self.visible[k].priority);
+        let mut wanted = Vec::new();
+        for w in alpha.windows(2) {
+            let (lower, upper) = (&self.visible[w[0]], &self.visible[w[1]]);
+            wanted.extend([false, true].into_iter().filter(|&o| !o || self.dome_of(lower)).filter_map(|o| self.pair_key(lower, upper, target, o)));
+        }
+        for key in wanted {
+            if self.pairs.contains_key(&key) {
+                continue;
+            }
+            let label = format!("SkyObjects::pair {key:?}");
+            let blend = if key.lower.placement == Placement::OverSeed { None } else { Some(PAIR_BLEND) };
+            let format = super::reduced_layers::reduced_format(target);
+            let built = create_pipeline(device, (&self.pair_layout, &self.pipelines.get().module, PAIR), &label, (blend, format, None), &key.constants());
+            if let Err(e) = &built {
+                log::error!("{label}: {e}; the two layers are drawn one after the other");
+            }
+            self.pairs.insert(key, built.ok());
+        }
     }
 }
+
+/// Entry points (vertex, fragment) of one draw's pipelines and of a pair's.
+const MAIN: (&str, &str) = ("vs_main", "fs_main");
+const PAIR: (&str, &str) = ("vs_pair", "fs_pair");
 
 /// One sky-object pipeline: `constants` specialise it (none: the generic pipeline).
 fn create_pipeline(
     device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
+    (layout, module, (vertex, fragment)): (&wgpu::PipelineLayout, &wgpu::ShaderModule, (&str, &str)),
     label: &str,
     (blend, format, depth): (Option<wgpu::BlendState>, wgpu::TextureFormat, Option<wgpu::CompareFunction>),
     constants: &[(&str, f64)],
@@ -611,13 +749,13 @@ fn create_pipeline(
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(label),
             layout: Some(layout),
-            vertex: wgpu::VertexState { module, entry_point: Some("vs_main"), buffers: &[Some(SkyVertex::LAYOUT)], compilation_options: options.clone() },
+            vertex: wgpu::VertexState { module, entry_point: Some(vertex), buffers: &[Some(SkyVertex::LAYOUT)], compilation_options: options.clone() },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
             depth_stencil: depth.and_then(|compare| super::depth_state(false, compare)),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module,
-                entry_point: Some("fs_main"),
+                entry_point: Some(fragment),
                 targets: &[Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL })],
                 compilation_options: options,
             }),
@@ -645,6 +783,7 @@ impl Pass for SkyObjectsPass {
         if accept {
             // Rebuilt from the new module on their next use.
             self.variants.clear();
+            self.pairs.clear();
         }
     }
 
@@ -915,6 +1054,30 @@ impl Pass for SkyObjectsPass {
 
     fn draw_over_seed(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, seed: &wgpu::BindGroup) -> u32 {
         self.record(rpass, key, target, true, (Placement::OverSeed, Some(seed)))
+    }
+
+    fn can_draw_pair(&self, lower: usize, upper: usize, target: Target, over_seed: bool) -> bool {
+        let (Some(draws), Some(a), Some(b)) = (&self.draws.current, self.visible.get(lower), self.visible.get(upper)) else { return false };
+        let built = self.pair_key(a, b, target, over_seed).is_some_and(|k| self.pairs.get(&k).is_some_and(Option::is_some));
+        built && self.pair_parts(a, b, Self::pair_mesh(draws, a, b).mesh.index_count).is_some()
+    }
+
+    fn draw_pair(&self, rpass: &mut wgpu::RenderPass<'_>, lower: usize, upper: usize, target: Target, seed: Option<&wgpu::BindGroup>) -> u32 {
+        let (Some(draws), Some(a), Some(b)) = (&self.draws.current, self.visible.get(lower), self.visible.get(upper)) else { return 0 };
+        let Some(pipeline) = self.pair_key(a, b, target, seed.is_some()).and_then(|k| self.pairs.get(&k)).and_then(Option::as_ref) else { return 0 };
+        let (da, db) = (&draws.objects[a.index][a.version], &draws.objects[b.index][b.version]);
+        let mesh = &Self::pair_mesh(draws, a, b).mesh;
+        let Some(parts) = self.pair_parts(a, b, mesh.index_count) else { return 0 };
+        rpass.set_pipeline(pipeline);
+        rpass.set_bind_group(2, seed.unwrap_or(&self.no_run), &[]);
+        rpass.set_vertex_buffer(0, mesh.vertices.slice(..));
+        rpass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for (indices, level0_lower, level0_upper) in &parts {
+            rpass.set_bind_group(1, &da.bind_groups[usize::from(level0_lower & da.level0_able)], &[]);
+            rpass.set_bind_group(3, &db.bind_groups[usize::from(level0_upper & db.level0_able)], &[]);
+            rpass.draw_indexed(indices.clone(), 0, 0..1);
+        }
+        parts.len() as u32
     }
 
     fn background_gap(&self, key: usize) -> Option<[u32; 4]> {

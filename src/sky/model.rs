@@ -659,7 +659,7 @@ pub struct VersionDef {
 }
 
 /// Procedural sky geometry. Directions: x east, y up, -z north.
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Shape {
     /// Hemisphere plus a skirt down to `bottom_deg`; v runs 0 at the zenith to 1 at the bottom.
