@@ -591,13 +591,18 @@ impl SkyObjectsPass {
         count as u32
     }
 
-    /// Whether draws `lower` and `upper` can be drawn at once: whole alpha-blended layers in
-    /// reduced buffers, on one mesh, or on one shape's grid and outline (the same directions).
+    /// Whether draw `e` can be one of a pair: a whole alpha-blended layer in a reduced buffer.
+    fn pair_candidate(&self, e: &Visible) -> bool {
+        e.reduced && !e.on_top && self.draws.current.as_ref().is_some_and(|d| d.objects[e.index][e.version].blend == BlendMode::Alpha)
+    }
+
+    /// Whether draws `lower` and `upper` can be drawn at once: both candidates, on one mesh, or
+    /// on one shape's grid and outline (the same directions).
     fn pairable(&self, lower: &Visible, upper: &Visible) -> bool {
         let Some(draws) = &self.draws.current else { return false };
         let (a, b) = (&draws.objects[lower.index][lower.version], &draws.objects[upper.index][upper.version]);
         let one_cover = Arc::ptr_eq(&a.mesh, &b.mesh) || (a.shape == b.shape && (a.outline || b.outline));
-        [lower, upper].iter().all(|e| e.reduced && !e.on_top) && a.blend == BlendMode::Alpha && b.blend == BlendMode::Alpha && one_cover
+        self.pair_candidate(lower) && self.pair_candidate(upper) && one_cover
     }
 
     /// The mesh a pair is drawn on: the one draw's grid where the other draws an outline.
@@ -652,9 +657,9 @@ impl SkyObjectsPass {
                 j += 1;
             }
         }
-        let indices = |ranges: &mut dyn Iterator<Item = &std::ops::Range<u32>>| ranges.map(|r| r.end - r.start).sum::<u32>();
-        let both = indices(&mut shared.iter().map(|p| &p.0));
-        (both == indices(&mut a.iter().map(|p| &p.0)) && both == indices(&mut b.iter().map(|p| &p.0))).then_some(shared)
+        let indices = |r: &std::ops::Range<u32>| r.end - r.start;
+        let both: u32 = shared.iter().map(|p| indices(&p.0)).sum();
+        (both == a.iter().map(|p| indices(&p.0)).sum::<u32>() && both == b.iter().map(|p| indices(&p.0)).sum::<u32>()).then_some(shared)
     }
 
     /// Builds the specialised pipelines this frame's draws need and do not have yet.
@@ -709,7 +714,7 @@ impl SkyObjectsPass {
         }
         // Pairs: each reduced alpha layer with the next one in the renderer's order (priority,
         // then this list's), over the seed too where the lower is a whole dome.
-        let mut alpha: Vec<usize> = (0..self.visible.len()).filter(|&k| self.pairable(&self.visible[k], &self.visible[k])).collect();
+        let mut alpha: Vec<usize> = (0..self.visible.len()).filter(|&k| self.pair_candidate(&self.visible[k])).collect();
         alpha.sort_by_key(|&k| self.visible[k].priority);
         let mut wanted = Vec::new();
         for w in alpha.windows(2) {
