@@ -554,6 +554,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         );
         ui.checkbox(&mut c.options.flash_in_run, format!("lightning flash in a run ({})", if s.joined_runs_only > 0 { "this frame" } else { "not this frame" }));
         ui.checkbox(&mut c.options.pair_layers, format!("two alpha layers at once ({} pairs)", s.layers_paired));
+        ui.checkbox(&mut c.options.texel_quads, format!("sparse stars texel by texel ({} triangles)", s.texel_triangles));
     });
     let median = |v: &VecDeque<f32>| {
         let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();

@@ -24,6 +24,7 @@ pub mod sky_objects;
 pub mod sky_view;
 pub mod stage_fold;
 pub mod stars;
+pub mod texel_quads;
 pub mod textures;
 pub mod timing;
 pub mod tone_map;

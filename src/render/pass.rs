@@ -362,6 +362,9 @@ pub trait Pass: Any {
     /// Adds this pass's counters to the frame's.
     fn stats(&self, _stats: &mut FrameStats) {}
 
+    /// Adds the counters of what this pass recorded to the frame's, once every phase is recorded.
+    fn stats_recorded(&self, _stats: &mut FrameStats) {}
+
     /// The time step a still should use while it settles, if this pass needs history to show
     /// its steady state (glare: one persistence period per frame).
     fn settle_dt_s(&self, _options: &RenderOptions) -> Option<f32> {

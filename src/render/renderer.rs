@@ -75,6 +75,12 @@ pub struct RenderOptions {
     /// blend leaving what the two would (`Pass::draw_pair`): one set of triangles and one blend
     /// per pixel less. Off: one after the other.
     pub pair_layers: bool,
+    /// On the display target, a sparse texture stage of the fused background (the skydome's
+    /// stars times their mask: under 1% of texels lit) is drawn texel by texel where it is
+    /// sampled from level 0: one small polygon per lit texel adding the texel times its bilinear
+    /// weight ([`super::texel_quads`]), over the background drawn without that stage. The same
+    /// sum as the sample, for the pixels near a lit texel only. Off: sampled everywhere.
+    pub texel_quads: bool,
 }
 
 impl Default for RenderOptions {
@@ -93,6 +99,7 @@ impl Default for RenderOptions {
             fold_seed: true,
             flash_in_run: true,
             pair_layers: true,
+            texel_quads: true,
         }
     }
 }
@@ -180,6 +187,9 @@ pub struct FrameStats {
     pub seed_folded: bool,
     /// Pairs of reduced layers drawn at once ([`RenderOptions::pair_layers`]).
     pub layers_paired: u32,
+    /// Triangles of texel polygons drawn in place of a sparse stage's sample
+    /// ([`RenderOptions::texel_quads`]).
+    pub texel_triangles: u32,
     /// Draws added to a run of reduced layers only because the run was there
     /// ([`DrawItem::joins_only`]: the lightning flash, [`RenderOptions::flash_in_run`]).
     pub joined_runs_only: u32,
@@ -701,6 +711,9 @@ impl SkyRenderer {
         }
         // Only the main scene writes depth: without it the view still holds the clear value.
         self.depth_untouched = items[Phase::Scene.index()].is_empty().then(|| target.depth.clone());
+        for pass in &self.passes {
+            pass.stats_recorded(&mut stats);
+        }
         self.stats = stats;
     }
 

@@ -14,6 +14,7 @@ use super::reduced_layers::Divisor;
 use super::renderer::FrameStats;
 use super::shaders;
 use super::stage_fold;
+use super::texel_quads::{self, GpuTexelMesh, TexelSource, TexelVertex};
 use super::textures::{self, TextureCache};
 use crate::sky::eval::{FrameSky, VersionFrame};
 use crate::sky::resolved::{BlendMode, Lighting, Shape, Sky, StageOp, UvSource, Version, MAX_STAGES};
@@ -56,6 +57,10 @@ const NO_STAGE: u32 = 4;
 /// UV mode of a stage folded into the one before it ([`super::stage_fold`]): reads as white,
 /// not sampled. Keep in sync with `UV_WHITE` in shaders/sky_objects.wgsl.
 const UV_WHITE: u32 = 4;
+
+/// UV mode of the mesh's texture coordinates. Keep in sync with `UV_MESH` in
+/// shaders/sky_objects.wgsl.
+const UV_MESH: u32 = 0;
 
 /// UV mode of the celestial mapping.
 const UV_CELESTIAL: u32 = 2;
@@ -339,6 +344,14 @@ pub struct SkyObjectsPass {
     pairs: HashMap<PairKey, Option<wgpu::RenderPipeline>>,
     /// The layout of pair pipelines: the upper layer's draw bind group as group 3.
     pair_layout: wgpu::PipelineLayout,
+    /// Pipelines drawing a sparse stage texel by texel ([`super::texel_quads`]), by the
+    /// background's signature (`None`: building it failed; the stage is sampled). Emptied when
+    /// the shaders change.
+    texel_pipelines: HashMap<VariantKey, Option<wgpu::RenderPipeline>>,
+    /// Sparse stages are drawn texel by texel this frame ([`super::RenderOptions::texel_quads`]).
+    texels_on: bool,
+    /// Triangles of texel polygons recorded this frame (counted as they are recorded).
+    texel_triangles: std::cell::Cell<u32>,
     draws: Staged<Option<SkyObjectDraws>>,
     /// The shared sky-view map and its sampler, bound to every draw.
     sky_view: (wgpu::TextureView, wgpu::Sampler),
@@ -488,6 +501,9 @@ impl SkyObjectsPass {
             variants: HashMap::new(),
             pairs: HashMap::new(),
             pair_layout,
+            texel_pipelines: HashMap::new(),
+            texels_on: false,
+            texel_triangles: std::cell::Cell::new(0),
             draws: Staged::new(None),
             sky_view,
             visible: Vec::new(),
@@ -584,11 +600,64 @@ impl SkyObjectsPass {
             rpass.draw_indexed(0..d.mesh.index_count, 0, 0..1);
             return 1;
         }
+        // The background's sparse stage texel by texel where it is sampled from level 0: those
+        // parts drawn without it, its polygons there added after.
+        let texels = self.texel_draw(e, target, placement);
+        let mut texel_rings = Vec::new();
         for (indices, level0) in &self.parts[start..start + count] {
+            match &texels {
+                Some((stage, without, _, per_ring)) if level0 & (1 << stage) != 0 => {
+                    rpass.set_pipeline(without);
+                    texel_rings.push(indices.start as usize / per_ring..indices.end as usize / per_ring);
+                }
+                _ => rpass.set_pipeline(pipeline),
+            }
             rpass.set_bind_group(1, &d.bind_groups[usize::from(level0 & d.level0_able)], &[]);
             rpass.draw_indexed(indices.clone(), 0, 0..1);
         }
-        count as u32
+        let mut calls = count as u32;
+        if let (Some((_, _, (pipeline, mesh), _)), false) = (&texels, texel_rings.is_empty()) {
+            rpass.set_pipeline(pipeline);
+            rpass.set_bind_group(1, &d.bind_groups[0], &[]);
+            rpass.set_vertex_buffer(0, mesh.vertices.slice(..));
+            rpass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+            for rings in texel_rings {
+                let indices = mesh.ring_indices(rings);
+                self.texel_triangles.set(self.texel_triangles.get() + (indices.end - indices.start) / 3);
+                rpass.draw_indexed(indices, 0, 0..1);
+                calls += 1;
+            }
+        }
+        calls
+    }
+
+    /// The background signature `key` with its sparse stage `stage` drawn texel by texel: the
+    /// signature without the stage, if the stage makes a term of its own that the polygons can
+    /// stand for (mesh-mapped, not the sky model's, the term's other stages folded into it as
+    /// white, no lighting) on the display target.
+    fn without_texel_stage(key: &VariantKey, stage: usize) -> Option<VariantKey> {
+        let background = matches!(key.placement, Placement::Background | Placement::JoinedBackground);
+        let own_term = (0..MAX_STAGES).filter(|&j| j != stage && key.live[j]).all(|j| j > stage && key.modes[j] == UV_WHITE && key.ops[j] == 1 && key.constants[j] == NO_STAGE);
+        let term = key.live[stage] && key.modes[stage] == UV_MESH && key.ops[stage] != 1 && key.view_stage as usize != stage && key.lighting == 0;
+        (background && key.target == Target::Display && !key.reduced && own_term && term).then(|| {
+            let mut live = key.live;
+            live[stage] = false;
+            VariantKey { live, ..*key }
+        })
+    }
+
+    /// Draw `e` placed as `placement` with its sparse stage texel by texel this frame: the stage,
+    /// the pipeline drawing the rest, the polygons' pipeline and mesh, and the grid's indices
+    /// per ring.
+    #[allow(clippy::type_complexity)]
+    fn texel_draw(&self, e: &Visible, target: Target, placement: Placement) -> Option<(usize, &wgpu::RenderPipeline, (&wgpu::RenderPipeline, &GpuTexelMesh), usize)> {
+        let d = &self.draws.current.as_ref()?.objects[e.index][e.version];
+        let (stage, mesh) = d.texels.as_ref().filter(|_| self.texels_on)?;
+        let key = self.entry_key(e, target, placement)?;
+        let without = self.variants.get(&Self::without_texel_stage(&key, *stage)?)?.as_ref()?;
+        let polygons = self.texel_pipelines.get(&key)?.as_ref()?;
+        let (_, _, _, segments) = super::mesh::dome_grid(&d.shape)?;
+        Some((*stage, without, (polygons, mesh.as_ref()), segments as usize * 6))
     }
 
     /// Whether draw `e` can be one of a pair: a whole alpha-blended layer in a reduced buffer.
@@ -712,6 +781,49 @@ impl SkyObjectsPass {
                 self.variants.insert(key, built.ok());
             }
         }
+        // Sparse stages of background draws texel by texel: the draw without the stage, and the
+        // polygons' pipeline.
+        let mut texel_keys = Vec::new();
+        for e in self.visible.iter().filter(|e| runs && self.additive(e) && self.dome_of(e)) {
+            let Some(stage) = self.draws.current.as_ref().and_then(|d| d.objects[e.index][e.version].texels.as_ref()).map(|t| t.0) else { continue };
+            for placement in [Placement::Background, Placement::JoinedBackground] {
+                if let Some((key, without)) = self.entry_key(e, target, placement).and_then(|k| Some((k, Self::without_texel_stage(&k, stage)?))) {
+                    texel_keys.push((key, without, stage));
+                }
+            }
+        }
+        for (key, without, stage) in texel_keys {
+            if !self.variants.contains_key(&without) {
+                let label = format!("SkyObjects::pipeline {without:?}");
+                let built = create_pipeline(
+                    device,
+                    (&self.pipeline_layout, &self.pipelines.get().module, MAIN),
+                    &label,
+                    (None, self.display_format, Some(wgpu::CompareFunction::Always)),
+                    &without.constants(),
+                );
+                if let Err(e) = &built {
+                    log::error!("{label}: {e}; the stage is sampled");
+                }
+                self.variants.insert(without, built.ok());
+            }
+            if !self.texel_pipelines.contains_key(&key) {
+                let label = format!("SkyObjects::texels {key:?}");
+                let mut constants = key.constants();
+                constants.push(("TEXEL_STAGE", stage as f64));
+                let built = create_pipeline(
+                    device,
+                    (&self.pipeline_layout, &self.pipelines.get().module, TEXELS),
+                    &label,
+                    (BLENDS[BLEND_ADD], self.display_format, Some(wgpu::CompareFunction::Always)),
+                    &constants,
+                );
+                if let Err(e) = &built {
+                    log::error!("{label}: {e}; the stage is sampled");
+                }
+                self.texel_pipelines.insert(key, built.ok());
+            }
+        }
         // Pairs: each reduced alpha layer with the next one in the renderer's order (priority,
         // then this list's), over the seed too where the lower is a whole dome.
         let mut alpha: Vec<usize> = (0..self.visible.len()).filter(|&k| self.pair_candidate(&self.visible[k])).collect();
@@ -740,6 +852,7 @@ impl SkyObjectsPass {
 /// Entry points (vertex, fragment) of one draw's pipelines and of a pair's.
 const MAIN: (&str, &str) = ("vs_main", "fs_main");
 const PAIR: (&str, &str) = ("vs_pair", "fs_pair");
+const TEXELS: (&str, &str) = ("vs_texels", "fs_texels");
 
 /// One sky-object pipeline: `constants` specialise it (none: the generic pipeline).
 fn create_pipeline(
@@ -754,7 +867,12 @@ fn create_pipeline(
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(label),
             layout: Some(layout),
-            vertex: wgpu::VertexState { module, entry_point: Some(vertex), buffers: &[Some(SkyVertex::LAYOUT)], compilation_options: options.clone() },
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some(vertex),
+                buffers: &[Some(if vertex == TEXELS.0 { TexelVertex::LAYOUT } else { SkyVertex::LAYOUT })],
+                compilation_options: options.clone(),
+            },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
             depth_stencil: depth.and_then(|compare| super::depth_state(false, compare)),
             multisample: Default::default(),
@@ -789,6 +907,7 @@ impl Pass for SkyObjectsPass {
             // Rebuilt from the new module on their next use.
             self.variants.clear();
             self.pairs.clear();
+            self.texel_pipelines.clear();
         }
     }
 
@@ -804,6 +923,8 @@ impl Pass for SkyObjectsPass {
     fn prepare(&mut self, cx: &FrameContext<'_>) {
         self.visible.clear();
         self.hidden = 0;
+        self.texels_on = cx.options.texel_quads && cx.target == Target::Display;
+        self.texel_triangles.set(0);
         let Some(draws) = &self.draws.current else { return };
         let neutral = super::tone_map::ToneMapUniform::from(cx.frame.sky_model.tone_mapper).settings[0] != 0;
         self.keys.clear();
@@ -1098,6 +1219,10 @@ impl Pass for SkyObjectsPass {
         self.record(rpass, key, target, false, (Placement::background(joined), Some(run)))
     }
 
+    fn stats_recorded(&self, stats: &mut FrameStats) {
+        stats.texel_triangles = self.texel_triangles.get();
+    }
+
     fn stats(&self, stats: &mut FrameStats) {
         let mut objects: Vec<usize> = self.visible.iter().map(|e| e.index).collect();
         objects.dedup();
@@ -1134,6 +1259,9 @@ struct VersionDraw {
     base: DrawUniform,
     /// Finest detail of each stage's texture on the sky, texels per degree (0: no stage).
     texels_per_deg: [f32; 4],
+    /// A sparse stage's texels as polygons on the grid ([`super::texel_quads`]): the stage and
+    /// its polygons.
+    texels: Option<(usize, Arc<GpuTexelMesh>)>,
 }
 
 /// The finest detail a stage's texture puts on the sky, texels per degree of view direction:
@@ -1386,6 +1514,9 @@ pub struct SkyObjectDraws {
     objects: Vec<Vec<VersionDraw>>,
     /// Geometry by shape; a reload takes over the meshes of shapes that are still used.
     meshes: HashMap<String, Arc<GpuMesh>>,
+    /// Texel polygons by (texture key, content, shape); taken over like the meshes. `None`: the
+    /// texture is not sparse.
+    texel_meshes: HashMap<(String, u64, String), Option<Arc<GpuTexelMesh>>>,
 }
 
 impl SkyObjectDraws {
@@ -1400,6 +1531,8 @@ impl SkyObjectDraws {
     ) -> Self {
         let old_meshes = previous.map(|p| &p.meshes);
         let mut meshes: HashMap<String, Arc<GpuMesh>> = HashMap::new();
+        let old_texels = previous.map(|p| &p.texel_meshes);
+        let mut texel_meshes: HashMap<(String, u64, String), Option<Arc<GpuTexelMesh>>> = HashMap::new();
         let mut oversampling: HashMap<String, f32> = HashMap::new();
         let objects = sky
             .objects
@@ -1501,6 +1634,51 @@ impl SkyObjectDraws {
                             base.stages[second].cfg[1] = UV_WHITE;
                             base.stages[second].cfg[2] = NO_STAGE;
                         }
+                        // A sparse stage under the dome's mesh mapping, static: the folded one, or
+                        // one of its own that repeats.
+                        let texels = match (super::mesh::dome_grid(&v.shape), is_outline) {
+                            (Some((_, _, rings, _)), false) => (0..v.stages.len()).find_map(|k| {
+                                let s = &v.stages[k];
+                                let fixed = matches!(s.uv, UvSource::Mesh) && s.panner == [0.0, 0.0] && s.uv_offset.is_none() && !folded_away(k) && gradient_stage != Some(k);
+                                let (key, content, scale): (String, u64, [f32; 2]) = match (fold_at(k), s.texture.as_deref()) {
+                                    (Some(f), _) if !f.clamp => {
+                                        let (key, content) = stage_fold::identity(v, f);
+                                        (key, content, [1.0, 1.0])
+                                    }
+                                    (None, Some(t)) if !s.clamp => (t.key.clone(), textures::content_hash(t), s.uv_scale),
+                                    _ => return None,
+                                };
+                                if !fixed {
+                                    return None;
+                                }
+                                let id = (key, content, format!("{} x {scale:?}", shape_key(&v.shape)));
+                                let mesh = texel_meshes
+                                    .entry(id.clone())
+                                    .or_insert_with(|| match old_texels.and_then(|m| m.get(&id)) {
+                                        Some(m) => m.clone(),
+                                        None => {
+                                            let baked;
+                                            let image = match (fold_at(k), s.texture.as_deref()) {
+                                                (Some(f), _) => {
+                                                    baked = stage_fold::bake(v, f, &id.0);
+                                                    &baked
+                                                }
+                                                (None, Some(t)) => t,
+                                                (None, None) => return None,
+                                            };
+                                            let source = TexelSource { size: (image.width, image.height), rgba8: &image.rgba8, scale };
+                                            source
+                                                .sparse()
+                                                .then(|| GpuTexelMesh::new(device, &label, &texel_quads::build(&shape_mesh(&v.shape), rings, &source)))
+                                                .flatten()
+                                                .map(Arc::new)
+                                        }
+                                    })
+                                    .clone();
+                                mesh.map(|m| (k, m))
+                            }),
+                            _ => None,
+                        };
                         VersionDraw {
                             uniform,
                             bind_groups,
@@ -1514,12 +1692,13 @@ impl SkyObjectDraws {
                             shape: v.shape,
                             base,
                             texels_per_deg,
+                            texels,
                         }
                     })
                     .collect()
             })
             .collect();
-        Self { objects, meshes }
+        Self { objects, meshes, texel_meshes }
     }
 
     /// Writes this frame's uniforms and gradients and records each drawn version's pipeline

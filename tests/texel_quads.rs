@@ -1,0 +1,46 @@
+//! A sparse stage drawn texel by texel (`RenderOptions::texel_quads`, src/render/texel_quads.rs):
+//! the skydome's stars times their mask, in the fused background, as one polygon per lit texel
+//! where they are sampled from level 0. The polygons add up to the bilinear sample: frames with
+//! and without them differ by the blend's rounding of each texel's share (a level or two).
+
+mod common;
+
+use skytune::render::{Camera, RenderOptions};
+use skytune::sky::builtin::default_sky;
+use skytune::sky::resolved::{SkyModel, SkyModelKind};
+use skytune::sky::FrameInput;
+
+#[test]
+fn stars_drawn_texel_by_texel_give_the_sampled_picture() {
+    let lakes = skytune::sky::load_sky_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("skies/lakes/sky.toml")).expect("lakes loads");
+    let mut h = common::headless(640, 360);
+    // 9 pixels per degree: the stars' texels (5.8 per degree down the dome) land on level 0
+    // away from the pole, as at 1280 x 720 and 70 degrees.
+    let views = [("horizon", Camera { pitch_deg: 10.0, fov_y_deg: 40.0, ..Camera::default() }), ("zenith", Camera { pitch_deg: 89.0, fov_y_deg: 40.0, ..Camera::default() })];
+    let on = RenderOptions { glare: false, scene: false, ..Default::default() };
+    let off = RenderOptions { texel_quads: false, ..on };
+    for (name, sky) in [("built-in", default_sky()), ("lakes", lakes)] {
+        h.set_sky(&sky).expect("uploaded");
+        for (hour, weather) in [(18.5, 0.3), (23.0, 0.0), (2.0, 0.6)] {
+            let input = FrameInput::new(hour, weather);
+            for (view, camera) in &views {
+                let what = format!("{name} at {hour} h, weather {weather}, {view}");
+                let with = h.render(&sky, &input, camera, &on).expect("rendered");
+                let s = h.renderer.stats.clone();
+                assert!(s.background_fused && s.texel_triangles > 0, "{what}: the stars drawn texel by texel ({s:?})");
+                let without = h.render(&sky, &input, camera, &off).expect("rendered");
+                assert_eq!(h.renderer.stats.texel_triangles, 0, "{what}");
+                let (d, _) = common::diff(&with, &without, 2);
+                assert_eq!(d.differing, 0.0, "{what}: {:.4} of the pixels moved by more than 2 (largest {})", d.differing, d.max);
+            }
+        }
+    }
+    // On the HDR target (a physical sky model) the term goes through the inverse tone curve,
+    // which does not add up texel by texel: sampled.
+    let sky = default_sky();
+    h.set_sky(&sky).expect("uploaded");
+    let mut input = FrameInput::new(23.0, 0.0);
+    input.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
+    h.render(&sky, &input, &views[0].1, &on).expect("rendered");
+    assert_eq!(h.renderer.stats.texel_triangles, 0, "{:?}", h.renderer.stats);
+}
