@@ -621,11 +621,13 @@ impl SkyObjectsPass {
             rpass.set_bind_group(1, &d.bind_groups[0], &[]);
             rpass.set_vertex_buffer(0, mesh.vertices.slice(..));
             rpass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+            let aspect = self.frame_size.0 as f32 / self.frame_size.1.max(1) as f32;
             for rings in texel_rings {
-                let indices = mesh.ring_indices(rings);
-                self.texel_triangles.set(self.texel_triangles.get() + (indices.end - indices.start) / 3);
-                rpass.draw_indexed(indices, 0, 0..1);
-                calls += 1;
+                for indices in mesh.ring_indices(rings, |centre, radius_deg| self.frame_camera.sees_cone(aspect, centre, radius_deg)) {
+                    self.texel_triangles.set(self.texel_triangles.get() + (indices.end - indices.start) / 3);
+                    rpass.draw_indexed(indices, 0, 0..1);
+                    calls += 1;
+                }
             }
         }
         calls

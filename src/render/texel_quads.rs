@@ -85,8 +85,13 @@ pub struct TexelMesh {
     pub vertices: Vec<TexelVertex>,
     /// Triangle list indices, ring by ring of the grid (top first).
     pub indices: Vec<u32>,
-    /// Index of each ring's first triangle, and the count at the end (rings + 1 entries).
-    pub ring_starts: Vec<u32>,
+    /// Index of each grid cell's first triangle (ring by ring, then segment by segment), and
+    /// the count at the end (rings x segments + 1 entries).
+    pub cell_starts: Vec<u32>,
+    /// Segments per ring.
+    pub segments: u32,
+    /// Each cell's bounding cone: unit centre direction and angular radius, degrees.
+    pub cell_cones: Vec<(Vec3, f32)>,
     /// Polygons (lit texels clipped to one grid triangle).
     pub polygons: u32,
 }
@@ -113,10 +118,16 @@ fn clip(p: &[Vec2], a: Vec2, b: Vec2) -> Vec<Vec2> {
 pub fn build(grid: &MeshData, rings: u32, source: &TexelSource<'_>) -> TexelMesh {
     let mut m = TexelMesh::default();
     let per_ring = grid.indices.len() / rings.max(1) as usize;
+    // A grid cell is two triangles, six indices.
+    m.segments = (per_ring / 6) as u32;
     let texels = Vec2::new(source.size.0 as f32 * source.scale[0], source.size.1 as f32 * source.scale[1]);
-    for ring in grid.indices.chunks(per_ring.max(3)) {
-        m.ring_starts.push(m.indices.len() as u32);
-        for t in ring.chunks_exact(3) {
+    for cell in grid.indices.chunks(6) {
+        m.cell_starts.push(m.indices.len() as u32);
+        let corners: Vec<Vec3> = cell.iter().map(|&i| Vec3::from(grid.vertices[i as usize].position)).collect();
+        let centre = corners.iter().copied().sum::<Vec3>().normalize_or_zero();
+        let radius = corners.iter().map(|c| centre.dot(c.normalize_or_zero()).clamp(-1.0, 1.0).acos().to_degrees()).fold(0.0, f32::max);
+        m.cell_cones.push((centre, radius));
+        for t in cell.chunks_exact(3) {
             let v = [t[0], t[1], t[2]].map(|i| grid.vertices[i as usize]);
             let p = v.map(|v| Vec3::from(v.position));
             // The pole's triangles with two corners at the pole cover nothing.
@@ -173,7 +184,7 @@ pub fn build(grid: &MeshData, rings: u32, source: &TexelSource<'_>) -> TexelMesh
             }
         }
     }
-    m.ring_starts.push(m.indices.len() as u32);
+    m.cell_starts.push(m.indices.len() as u32);
     m
 }
 
@@ -183,8 +194,12 @@ pub struct GpuTexelMesh {
     pub vertices: wgpu::Buffer,
     /// Index buffer (u32).
     pub indices: wgpu::Buffer,
-    /// Index of each ring's first triangle, and the count at the end.
-    pub ring_starts: Vec<u32>,
+    /// Index of each grid cell's first triangle, and the count at the end ([`TexelMesh`]).
+    pub cell_starts: Vec<u32>,
+    /// Segments per ring.
+    pub segments: u32,
+    /// Each cell's bounding cone ([`TexelMesh::cell_cones`]).
+    pub cell_cones: Vec<(Vec3, f32)>,
 }
 
 impl GpuTexelMesh {
@@ -203,13 +218,27 @@ impl GpuTexelMesh {
             contents: bytemuck::cast_slice(&m.indices),
             usage: wgpu::BufferUsages::INDEX,
         });
-        Some(Self { vertices, indices, ring_starts: m.ring_starts.clone() })
+        Some(Self { vertices, indices, cell_starts: m.cell_starts.clone(), segments: m.segments, cell_cones: m.cell_cones.clone() })
     }
 
-    /// The index range of rings `rings` (grid rings, top first).
-    pub fn ring_indices(&self, rings: std::ops::Range<usize>) -> std::ops::Range<u32> {
-        let last = self.ring_starts.len() - 1;
-        self.ring_starts[rings.start.min(last)]..self.ring_starts[rings.end.min(last)]
+    /// The index ranges of rings `rings` (grid rings, top first) in cells that `shown` says may
+    /// be in view (given a cell's bounding cone), consecutive cells in one range: polygons out of
+    /// view still cost the rasteriser their vertices and setup.
+    pub fn ring_indices(&self, rings: std::ops::Range<usize>, shown: impl Fn(Vec3, f32) -> bool) -> Vec<std::ops::Range<u32>> {
+        let cells = self.cell_cones.len();
+        let segments = self.segments.max(1) as usize;
+        let mut out: Vec<std::ops::Range<u32>> = Vec::new();
+        for c in (rings.start * segments).min(cells)..(rings.end * segments).min(cells) {
+            let (start, end) = (self.cell_starts[c], self.cell_starts[c + 1]);
+            if start == end || !shown(self.cell_cones[c].0, self.cell_cones[c].1) {
+                continue;
+            }
+            match out.last_mut() {
+                Some(r) if r.end == start => r.end = end,
+                _ => out.push(start..end),
+            }
+        }
+        out
     }
 }
 
@@ -253,8 +282,16 @@ mod tests {
         let source = TexelSource { size: (w, h), rgba8: &rgba8, scale: [3.0, 2.0] };
         assert!(source.sparse());
         let m = build(&grid, rings, &source);
-        assert_eq!(m.ring_starts.len(), rings as usize + 1);
+        let (_, _, _, segments) = dome_grid(&shape).expect("a dome has a grid");
+        assert_eq!(m.cell_starts.len(), (rings * segments) as usize + 1);
         assert!(m.polygons >= 5 * 6, "{} polygons", m.polygons);
+        // Each cell's cone holds its polygons.
+        for (c, &(centre, radius_deg)) in m.cell_cones.iter().enumerate() {
+            for &i in &m.indices[m.cell_starts[c] as usize..m.cell_starts[c + 1] as usize] {
+                let p = Vec3::from(m.vertices[i as usize].position).normalize();
+                assert!(centre.dot(p).clamp(-1.0, 1.0).acos().to_degrees() <= radius_deg + 1e-3, "cell {c}");
+            }
+        }
         // Points on each grid triangle: the mesh's texture coordinates there, and the sum of the
         // polygons that hold the same point (on the same flat triangle).
         let mut checked = 0;
@@ -274,8 +311,8 @@ mod tests {
                 let expected = bilinear(&source, uv);
                 let mut sum = [0.0f32; 3];
                 let mut counted = std::collections::HashSet::new();
-                let ring = t_index * 3 / (grid.indices.len() / rings as usize);
-                let range = m.ring_starts[ring] as usize..m.ring_starts[ring + 1] as usize;
+                let cell = t_index / 2;
+                let range = m.cell_starts[cell] as usize..m.cell_starts[cell + 1] as usize;
                 for tri in m.indices[range].chunks_exact(3) {
                     let q = [tri[0], tri[1], tri[2]].map(|i| m.vertices[i as usize]);
                     let qp = q.map(|q| Vec3::from(q.position));
