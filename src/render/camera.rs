@@ -95,16 +95,21 @@ impl Camera {
     /// `dir`: false only when that cone lies wholly outside one of the frame's four sides (a
     /// cone near a corner, outside two sides but inside each, counts as shown).
     pub fn sees_cone(&self, aspect: f32, dir: Vec3, radius_deg: f32) -> bool {
-        if radius_deg >= 90.0 {
-            return true;
-        }
+        self.cone_test(aspect)(dir, radius_deg)
+    }
+
+    /// [`Self::sees_cone`] for many cones of one frame: the frame's sides computed once.
+    pub fn cone_test(&self, aspect: f32) -> impl Fn(Vec3, f32) -> bool {
         let (_, clip_from_sky) = self.matrices(aspect);
         let row = |i: usize| Vec3::new(clip_from_sky.x_axis[i], clip_from_sky.y_axis[i], clip_from_sky.z_axis[i]);
         let (x, y, w) = (row(0), row(1), row(3));
         // The sides are the planes |x| = w and |y| = w of clip space, through the eye: a
         // direction shows where it lies on the inner side of all four.
-        let reach = radius_deg.max(0.0).to_radians().sin();
-        [w + x, w - x, w + y, w - y].iter().all(|side| side.try_normalize().is_none_or(|n| n.dot(dir) >= -reach))
+        let sides = [w + x, w - x, w + y, w - y].map(|side| side.try_normalize());
+        move |dir, radius_deg| {
+            let reach = radius_deg.max(0.0).to_radians().sin();
+            radius_deg >= 90.0 || sides.iter().all(|n| n.is_none_or(|n| n.dot(dir) >= -reach))
+        }
     }
 
     /// A rectangle of a `size` frame's pixels (x, y, width, height; y down) that holds every

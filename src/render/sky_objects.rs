@@ -17,7 +17,7 @@ use super::stage_fold;
 use super::texel_quads::{self, GpuTexelMesh, TexelSource, TexelVertex};
 use super::textures::{self, TextureCache};
 use crate::sky::eval::{FrameSky, VersionFrame};
-use crate::sky::resolved::{BlendMode, Lighting, Shape, Sky, StageOp, UvSource, Version, MAX_STAGES};
+use crate::sky::resolved::{BlendMode, Lighting, Shape, Sky, StageOp, TextureImage, UvSource, Version, MAX_STAGES};
 
 /// One texture stage. Keep in sync with `Stage` in shaders/sky_objects.wgsl.
 #[repr(C)]
@@ -621,9 +621,9 @@ impl SkyObjectsPass {
             rpass.set_bind_group(1, &d.bind_groups[0], &[]);
             rpass.set_vertex_buffer(0, mesh.vertices.slice(..));
             rpass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-            let aspect = self.frame_size.0 as f32 / self.frame_size.1.max(1) as f32;
+            let shown = self.frame_camera.cone_test(self.frame_size.0 as f32 / self.frame_size.1.max(1) as f32);
             for rings in texel_rings {
-                for indices in mesh.ring_indices(rings, |centre, radius_deg| self.frame_camera.sees_cone(aspect, centre, radius_deg)) {
+                for indices in mesh.ring_indices(rings, &shown) {
                     self.texel_triangles.set(self.texel_triangles.get() + (indices.end - indices.start) / 3);
                     rpass.draw_indexed(indices, 0, 0..1);
                     calls += 1;
@@ -1485,7 +1485,7 @@ fn quake_uv_per_rad(z_scale: f32, z_offset: f32, t_scale: f32, bottom_deg: f32, 
 /// most 4) such that halving it k times and scaling it back up (box down, bilinear up, as a
 /// reduced buffer would show it) changes 99% of its channel values by at most
 /// [`DETAIL_TOLERANCE`] levels of 255. Soft cloud noise drops levels; a star field does not.
-pub fn texture_oversampling(img: &crate::sky::resolved::TextureImage) -> f32 {
+pub fn texture_oversampling(img: &TextureImage) -> f32 {
     use image::imageops::{resize, FilterType};
     let Some(full) = image::RgbaImage::from_raw(img.width, img.height, img.rgba8.clone()) else { return 1.0 };
     let mut factor = 1.0;
@@ -1534,6 +1534,8 @@ impl SkyObjectDraws {
         let old_meshes = previous.map(|p| &p.meshes);
         let mut meshes: HashMap<String, Arc<GpuMesh>> = HashMap::new();
         let old_texels = previous.map(|p| &p.texel_meshes);
+        // Folded textures baked in this load, by key: the texture and its texel polygons share one.
+        let mut baked: HashMap<String, Arc<TextureImage>> = HashMap::new();
         let mut texel_meshes: HashMap<(String, u64, String), Option<Arc<GpuTexelMesh>>> = HashMap::new();
         let mut oversampling: HashMap<String, f32> = HashMap::new();
         let objects = sky
@@ -1575,7 +1577,9 @@ impl SkyObjectDraws {
                                 _ if folded_away(k) => cache.white.clone(),
                                 (Some(f), _, _) => {
                                     let (key, content) = stage_fold::identity(v, f);
-                                    cache.derived(device, queue, &key, content, || stage_fold::bake(v, f, &key))
+                                    cache.derived(device, queue, &key, content, || {
+                                        baked.entry(key.clone()).or_insert_with(|| Arc::new(stage_fold::bake(v, f, &key))).as_ref().clone()
+                                    })
                                 }
                                 (None, Some(img), _) => cache.get(device, queue, img),
                                 (None, None, Some(gv)) if v.gradients.as_ref().is_some_and(|g| g.stage == k) => gv.clone(),
@@ -1659,13 +1663,9 @@ impl SkyObjectDraws {
                                     .or_insert_with(|| match old_texels.and_then(|m| m.get(&id)) {
                                         Some(m) => m.clone(),
                                         None => {
-                                            let baked;
-                                            let image = match (fold_at(k), s.texture.as_deref()) {
-                                                (Some(f), _) => {
-                                                    baked = stage_fold::bake(v, f, &id.0);
-                                                    &baked
-                                                }
-                                                (None, Some(t)) => t,
+                                            let image = match (fold_at(k), &s.texture) {
+                                                (Some(f), _) => baked.entry(id.0.clone()).or_insert_with(|| Arc::new(stage_fold::bake(v, f, &id.0))).clone(),
+                                                (None, Some(t)) => t.clone(),
                                                 (None, None) => return None,
                                             };
                                             let source = TexelSource { size: (image.width, image.height), rgba8: &image.rgba8, scale };
