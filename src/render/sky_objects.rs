@@ -1646,6 +1646,9 @@ impl SkyObjectDraws {
                             (Some((_, _, rings, _)), false) => (0..v.stages.len()).find_map(|k| {
                                 let s = &v.stages[k];
                                 let fixed = matches!(s.uv, UvSource::Mesh) && s.panner == [0.0, 0.0] && s.uv_offset.is_none() && !folded_away(k) && gradient_stage != Some(k);
+                                if !fixed {
+                                    return None;
+                                }
                                 let (key, content, scale): (String, u64, [f32; 2]) = match (fold_at(k), s.texture.as_deref()) {
                                     (Some(f), _) if !f.clamp => {
                                         let (key, content) = stage_fold::identity(v, f);
@@ -1654,9 +1657,6 @@ impl SkyObjectDraws {
                                     (None, Some(t)) if !s.clamp => (t.key.clone(), textures::content_hash(t), s.uv_scale),
                                     _ => return None,
                                 };
-                                if !fixed {
-                                    return None;
-                                }
                                 let id = (key, content, format!("{} x {scale:?}", shape_key(&v.shape)));
                                 let mesh = texel_meshes
                                     .entry(id.clone())

@@ -21,8 +21,9 @@ use super::mesh::MeshData;
 /// megabyte of vertices); denser textures are sampled.
 pub const MAX_TEXELS: usize = 40_000;
 /// The largest share of a texture's texels that may be lit for it to be drawn texel by texel:
-/// above it, the polygons would cost more than the sample they replace.
-pub const MAX_LIT_SHARE: f32 = 0.04;
+/// the built-in stars (0.75% lit) cost about half the sample they replace at dusk looking up
+/// (docs/architecture.md), so above about twice that the polygons would cost more.
+pub const MAX_LIT_SHARE: f32 = 0.015;
 
 /// Vertex of a texel's polygon. Keep in sync with `vs_texels` in shaders/sky_objects.wgsl.
 #[repr(C)]
