@@ -606,9 +606,11 @@ impl SkyObjectsPass {
         let mut texel_rings = Vec::new();
         for (indices, level0) in &self.parts[start..start + count] {
             match &texels {
-                Some((stage, without, _, per_ring)) if level0 & (1 << stage) != 0 => {
+                Some((stage, without, (_, mesh))) if level0 & (1 << stage) != 0 => {
                     rpass.set_pipeline(without);
-                    texel_rings.push(indices.start as usize / per_ring..indices.end as usize / per_ring);
+                    // The grid's indices: six per cell, `segments` cells per ring.
+                    let per_ring = mesh.segments.max(1) * 6;
+                    texel_rings.push((indices.start / per_ring) as usize..(indices.end / per_ring) as usize);
                 }
                 _ => rpass.set_pipeline(pipeline),
             }
@@ -616,7 +618,7 @@ impl SkyObjectsPass {
             rpass.draw_indexed(indices.clone(), 0, 0..1);
         }
         let mut calls = count as u32;
-        if let (Some((_, _, (pipeline, mesh), _)), false) = (&texels, texel_rings.is_empty()) {
+        if let (Some((_, _, (pipeline, mesh))), false) = (&texels, texel_rings.is_empty()) {
             rpass.set_pipeline(pipeline);
             rpass.set_bind_group(1, &d.bind_groups[0], &[]);
             rpass.set_vertex_buffer(0, mesh.vertices.slice(..));
@@ -649,17 +651,14 @@ impl SkyObjectsPass {
     }
 
     /// Draw `e` placed as `placement` with its sparse stage texel by texel this frame: the stage,
-    /// the pipeline drawing the rest, the polygons' pipeline and mesh, and the grid's indices
-    /// per ring.
-    #[allow(clippy::type_complexity)]
-    fn texel_draw(&self, e: &Visible, target: Target, placement: Placement) -> Option<(usize, &wgpu::RenderPipeline, (&wgpu::RenderPipeline, &GpuTexelMesh), usize)> {
+    /// the pipeline drawing the rest, and the polygons' pipeline and mesh.
+    fn texel_draw(&self, e: &Visible, target: Target, placement: Placement) -> Option<(usize, &wgpu::RenderPipeline, (&wgpu::RenderPipeline, &GpuTexelMesh))> {
         let d = &self.draws.current.as_ref()?.objects[e.index][e.version];
         let (stage, mesh) = d.texels.as_ref().filter(|_| self.texels_on)?;
         let key = self.entry_key(e, target, placement)?;
         let without = self.variants.get(&Self::without_texel_stage(&key, *stage)?)?.as_ref()?;
         let polygons = self.texel_pipelines.get(&key)?.as_ref()?;
-        let (_, _, _, segments) = super::mesh::dome_grid(&d.shape)?;
-        Some((*stage, without, (polygons, mesh.as_ref()), segments as usize * 6))
+        Some((*stage, without, (polygons, mesh.as_ref())))
     }
 
     /// Whether draw `e` can be one of a pair: a whole alpha-blended layer in a reduced buffer.
@@ -741,6 +740,9 @@ impl SkyObjectsPass {
             let placed = |p: Placement, wanted: bool| self.entry_key(e, target, p).filter(|k| wanted && k.placement == p);
             // As the background only when it may cover the frame (an additive dome layer).
             let background = runs && self.additive(e) && self.dome_of(e);
+            // As the background with its sparse stage left to the texel polygons.
+            let texel_stage = self.draws.current.as_ref().and_then(|d| d.objects[e.index][e.version].texels.as_ref()).map(|t| t.0);
+            let without = |p: Placement| placed(p, background).zip(texel_stage).and_then(|(k, stage)| Self::without_texel_stage(&k, stage));
             let wanted = [
                 self.entry_key(e, target, Placement::Plain),
                 placed(Placement::UnderRun, runs),
@@ -749,6 +751,8 @@ impl SkyObjectsPass {
                 placed(Placement::JoinedBackground, background),
                 // The first layer of a seeded buffer: any whole dome layer reduced.
                 placed(Placement::OverSeed, runs && self.dome_of(e)),
+                without(Placement::Background),
+                without(Placement::JoinedBackground),
             ];
             for key in wanted.into_iter().flatten() {
                 if self.variants.contains_key(&key) {
@@ -783,32 +787,18 @@ impl SkyObjectsPass {
                 self.variants.insert(key, built.ok());
             }
         }
-        // Sparse stages of background draws texel by texel: the draw without the stage, and the
-        // polygons' pipeline.
+        // The polygons' pipelines of sparse stages of background draws (the draws without the
+        // stage are variants, above).
         let mut texel_keys = Vec::new();
         for e in self.visible.iter().filter(|e| runs && self.additive(e) && self.dome_of(e)) {
             let Some(stage) = self.draws.current.as_ref().and_then(|d| d.objects[e.index][e.version].texels.as_ref()).map(|t| t.0) else { continue };
             for placement in [Placement::Background, Placement::JoinedBackground] {
-                if let Some((key, without)) = self.entry_key(e, target, placement).and_then(|k| Some((k, Self::without_texel_stage(&k, stage)?))) {
-                    texel_keys.push((key, without, stage));
+                if let Some(key) = self.entry_key(e, target, placement).filter(|k| Self::without_texel_stage(k, stage).is_some()) {
+                    texel_keys.push((key, stage));
                 }
             }
         }
-        for (key, without, stage) in texel_keys {
-            if !self.variants.contains_key(&without) {
-                let label = format!("SkyObjects::pipeline {without:?}");
-                let built = create_pipeline(
-                    device,
-                    (&self.pipeline_layout, &self.pipelines.get().module, MAIN),
-                    &label,
-                    (None, self.display_format, Some(wgpu::CompareFunction::Always)),
-                    &without.constants(),
-                );
-                if let Err(e) = &built {
-                    log::error!("{label}: {e}; the stage is sampled");
-                }
-                self.variants.insert(without, built.ok());
-            }
+        for (key, stage) in texel_keys {
             if !self.texel_pipelines.contains_key(&key) {
                 let label = format!("SkyObjects::texels {key:?}");
                 let mut constants = key.constants();

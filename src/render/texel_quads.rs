@@ -79,12 +79,12 @@ impl TexelSource<'_> {
     }
 }
 
-/// CPU geometry: the polygons as triangles, by the grid's rings.
+/// CPU geometry: the polygons as triangles, by the grid's cells.
 #[derive(Debug, Clone, Default)]
 pub struct TexelMesh {
     /// Vertices.
     pub vertices: Vec<TexelVertex>,
-    /// Triangle list indices, ring by ring of the grid (top first).
+    /// Triangle list indices, cell by cell of the grid ([`Self::cell_starts`]).
     pub indices: Vec<u32>,
     /// Index of each grid cell's first triangle (ring by ring, then segment by segment), and
     /// the count at the end (rings x segments + 1 entries).
@@ -148,7 +148,7 @@ pub fn build(grid: &MeshData, rings: u32, source: &TexelSource<'_>) -> TexelMesh
             // A texel's tent spans a texel either side of its centre.
             let (i0, i1) = ((lo.x - 1.5).floor() as i64, (hi.x + 0.5).ceil() as i64);
             let (j0, j1) = ((lo.y - 1.5).floor() as i64, (hi.y + 0.5).ceil() as i64);
-            let area = (tri[1] - tri[0]).perp_dot(tri[2] - tri[0]);
+            let area = area.abs();
             for j in j0..=j1 {
                 for i in i0..=i1 {
                     let texel = source.at(i, j);
