@@ -213,7 +213,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     );
     let _ = writeln!(md, "- Sky pass with the split, scene covering {:.0}% vs {:.0}% of the screen: {:.2}x.", cover_down * 100.0, cover_up * 100.0, sky_ratio(0, 2));
     let _ = writeln!(md, "- With the sky filling the screen (almost nothing for the split to reject): split / no split = {:.2}x.", ratio(2, 3));
-    let _ = writeln!(md, "- Tier 2 fallbacks vs tier 4, sky pass: {:.2}x; tier 1 vs tier 4: {:.2}x.", sky_ratio(4, 2), sky_ratio(5, 2));
+    // Most of a sky frame is drawn before the sky phase (the reduced buffers, the background in
+    // the scene's pass), so tiers compare whole frames.
+    let _ = writeln!(md, "- Tier 2 fallbacks vs tier 4, whole frame: {:.2}x; tier 1 vs tier 4: {:.2}x.", ratio(4, 2), ratio(5, 2));
     let _ = writeln!(
         md,
         "- Physical sky models with the sky filling the screen, frame time relative to the bitmap sky: `single` {:.2}x with the sun still (the sky-view map is reused) and {:.2}x with the sun moving every frame; `lut` {:.2}x and {:.2}x (its tables are built once; only the map follows the sun). \

@@ -3,9 +3,9 @@
 
 mod common;
 
-use skytune::render::glare::GlareState;
+use skytune::render::glare::{GlareState, QueryPhase};
 use skytune::render::scene::Occluder;
-use skytune::render::{Camera, Headless, RenderOptions};
+use skytune::render::{Camera, Headless, RenderOptions, Skips};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::{FrameInput, Sky};
 
@@ -37,13 +37,17 @@ fn edge_for(fraction: f64) -> f64 {
 
 /// Runs frames until a query result covering this setup arrives; returns the glare state.
 fn measure(h: &mut Headless, sky: &Sky, occluder: Option<Occluder>) -> GlareState {
+    measure_with(h, sky, &camera(), &RenderOptions { scene: false, occluder, ..Default::default() })
+}
+
+/// [`measure`] with its own camera and options.
+fn measure_with(h: &mut Headless, sky: &Sky, camera: &Camera, options: &RenderOptions) -> GlareState {
     let input = FrameInput::new(12.0, 0.0);
-    let options = RenderOptions { scene: false, occluder, ..Default::default() };
     // Results of queries issued before this setup may still arrive: skip the first two.
     let mut results = 0;
     let mut without = h.renderer.glare_state().map_or(0, |s| s.frames_without_result);
     for _ in 0..400 {
-        h.frame(sky, &input, &camera(), &options, 1.0 / 60.0);
+        h.frame(sky, &input, camera, options, 1.0 / 60.0);
         let s = h.renderer.glare_state().unwrap().clone();
         if s.frames_without_result == without {
             results += 1;
@@ -81,6 +85,39 @@ fn visibility_matches_the_occluded_fraction() {
         assert!(s.total_samples > 1500, "disc too small to measure: T = {}", s.total_samples);
         assert!((s.ratio - expected).abs() <= 0.02, "occluded {occluded}: V/T = {}/{} = {:.4}, expected {expected} +- 0.02", s.visible_samples, s.total_samples, s.ratio);
     }
+}
+
+#[test]
+fn a_disc_outside_the_frame_is_not_queried_and_reads_as_the_queries_would() {
+    let (mut h, sky) = headless_with_sky();
+    let disc_deg = sky.glare.as_ref().unwrap().disc_size_deg;
+    let half_fov_deg = camera().fov_y_deg * 0.5;
+    // The sun below the frame's lower side by `below_deg` (its centre), the camera pitched up.
+    let pitched = |below_deg: f32| Camera { pitch_deg: camera().pitch_deg + half_fov_deg + below_deg, ..camera() };
+    let skip = RenderOptions { scene: false, ..Default::default() };
+    let no_skip = RenderOptions { skips: Skips { off_screen: false, ..Skips::default() }, ..skip };
+    let input = FrameInput::new(12.0, 0.0);
+
+    // The whole disc a degree below the frame: no query is issued, and a result (no sample either
+    // way) stands for one every frame.
+    let outside = pitched(disc_deg * 0.5 + 1.0);
+    measure_with(&mut h, &sky, &outside, &skip);
+    let before = h.renderer.glare_state().unwrap().frames_without_result;
+    for _ in 0..5 {
+        h.frame(&sky, &input, &outside, &skip, 1.0 / 60.0);
+        assert_eq!(h.renderer.glare_query_phase(), Some(QueryPhase::Idle), "a query was issued for a disc outside the frame");
+    }
+    let s = h.renderer.glare_state().unwrap().clone();
+    assert_eq!(s.frames_without_result, before, "frames went without a result");
+    assert_eq!((s.visible_samples, s.total_samples, s.ratio), (0, 0, 0.0));
+    // The queries themselves, issued, say the same.
+    let queried = measure_with(&mut h, &sky, &outside, &no_skip);
+    assert_eq!((queried.visible_samples, queried.total_samples), (0, 0), "the disc outside the frame covers pixels");
+
+    // The disc's centre outside the frame but its edge inside: queried, and seen.
+    let edge_inside = pitched(disc_deg * 0.5 - 0.4);
+    let s = measure_with(&mut h, &sky, &edge_inside, &skip);
+    assert!(s.total_samples > 0 && s.visible_samples > 0, "a disc partly in the frame was not queried: V/T = {}/{}", s.visible_samples, s.total_samples);
 }
 
 #[test]

@@ -185,6 +185,9 @@ pub struct SpriteInstance {
 }
 
 const DISC_SEGMENTS: usize = 48;
+/// Margin of the disc's cone against the frame's sides, degrees (rounding only: a pixel centre
+/// always lies inside the sides).
+const DISC_MARGIN_DEG: f32 = 0.5;
 
 fn disc_vertices() -> Vec<[f32; 2]> {
     (0..DISC_SEGMENTS)
@@ -336,7 +339,7 @@ impl Pass for GlarePass {
         match color {
             Some(color) => {
                 let f = GlareFrame { towards_sun: cx.frame.towards_sun, color, dt_s: cx.frame.dt_s, frame: cx.frame.frame };
-                let arrived = g.prepare(cx.device, cx.queue, &f, cx.camera, cx.aspect());
+                let arrived = g.prepare(cx.device, cx.queue, &f, cx.camera, cx.aspect(), cx.options.skips.off_screen);
                 self.active = true;
                 self.settled = !g.draw_this_frame || arrived;
             }
@@ -349,7 +352,8 @@ impl Pass for GlarePass {
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
-        if self.active {
+        // Nothing to query nor draw (the disc out of the frame, the glare faded): no pass.
+        if self.active && self.resources.current.as_ref().is_some_and(GlareResources::has_work) {
             out.push(DrawItem::new(0, 0));
         }
     }
@@ -468,18 +472,27 @@ impl GlareResources {
     }
 
     /// Collects any finished result, updates the intensity and prepares this frame's draws.
+    /// `skip_off_screen`: while the sun's disc lies wholly outside the frame and no query is in
+    /// flight, the result both queries would give (no sample either way) stands for them.
     /// Returns whether a query result arrived.
-    pub fn prepare(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, f: &GlareFrame, camera: &Camera, aspect: f32) -> bool {
+    pub fn prepare(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, f: &GlareFrame, camera: &Camera, aspect: f32, skip_off_screen: bool) -> bool {
         let (_, clip_from_sky) = camera.matrices(aspect);
         let clip = clip_from_sky * f.towards_sun.extend(1.0);
         let in_front = clip.w > 1e-4;
         let visible = in_front && f.color[3] > 0.5 / 255.0;
+        // The disc (inscribed in a circle disc_size / 2 from the sun) covers no pixel centre when
+        // its circle lies wholly outside the frame's sides, which pass outside every centre.
+        let disc_off_screen = skip_off_screen && !camera.sees_cone(aspect, f.towards_sun, self.settings.disc_size_deg * 0.5 + DISC_MARGIN_DEG);
 
-        let result = self.queries.try_take(device).map(|(v, t, issued)| (v, t, (f.frame.saturating_sub(issued)).max(1) as u32));
+        let mut result = self.queries.try_take(device).map(|(v, t, issued)| (v, t, (f.frame.saturating_sub(issued)).max(1) as u32));
+        let known = visible && disc_off_screen && result.is_none() && self.queries.phase == QueryPhase::Idle;
+        if known {
+            result = Some((0, 0, 1));
+        }
         let arrived = result.is_some();
         self.state.step(f.dt_s, self.settings.persistence_s, result);
         // A new query only when none is in flight: NeL's rule, and the reason frames are counted.
-        self.issue_this_frame = visible && self.queries.phase == QueryPhase::Idle;
+        self.issue_this_frame = visible && !known && self.queries.phase == QueryPhase::Idle;
         if self.issue_this_frame {
             self.queries.phase = QueryPhase::Issued { issued_frame: f.frame };
         }
@@ -501,6 +514,11 @@ impl GlareResources {
         self.sprite_count = sprites.len() as u32;
         queue.write_buffer(&self.sprites, 0, bytemuck::cast_slice(&sprites));
         arrived
+    }
+
+    /// Whether this frame has queries to issue or sprites to draw.
+    fn has_work(&self) -> bool {
+        self.issue_this_frame || (self.draw_this_frame && self.state.intensity > 0.0 && self.sprite_count > 0)
     }
 
     fn sprites(&self, sun_ndc: Vec3, color: Rgba, camera: &Camera, aspect: f32) -> Vec<SpriteInstance> {

@@ -120,7 +120,9 @@ pub struct Skips {
     pub below_horizon: bool,
     /// Dome layers whose band of elevations the frame does not show (a fog band under a view
     /// of the zenith) are not drawn, nor composited; nor are billboards and quads wholly
-    /// outside the frame, nor the parts of the main-scene stand-in wholly outside the view.
+    /// outside the frame, nor the parts of the main-scene stand-in wholly outside the view, nor
+    /// the glare's occlusion queries while the sun's disc lies wholly outside the frame (both
+    /// would count no sample: that result stands for them).
     pub off_screen: bool,
     /// Texture stages that no pixel of a draw minifies are sampled from level 0 alone (the same
     /// texels; lavapipe then skips computing the level of detail).
