@@ -44,3 +44,35 @@ fn stars_drawn_texel_by_texel_give_the_sampled_picture() {
     h.render(&sky, &input, &views[0].1, &on).expect("rendered");
     assert_eq!(h.renderer.stats.texel_triangles, 0, "{:?}", h.renderer.stats);
 }
+
+#[test]
+fn the_background_drawn_as_bands_where_the_polygons_stand_in_gives_the_same_bytes() {
+    // Where the polygons stand for the stars, the rest of the background maps nothing from the
+    // dome's grid: its rings there go as one band of quads (`RenderOptions::grid_bands`), which
+    // must cover exactly the grid's pixels. Each frame follows one of another hour, whose pixels a
+    // band that left some out would keep (the background's frame is not cleared first).
+    let lakes = skytune::sky::load_sky_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("skies/lakes/sky.toml")).expect("lakes loads");
+    let mut h = common::headless(640, 360);
+    let views = [
+        ("horizon", Camera { pitch_deg: 10.0, fov_y_deg: 40.0, ..Camera::default() }),
+        ("zenith", Camera { pitch_deg: 89.0, fov_y_deg: 40.0, ..Camera::default() }),
+        ("looking up, to the east", Camera { yaw_deg: 75.0, pitch_deg: 55.0, fov_y_deg: 40.0, ..Camera::default() }),
+    ];
+    let bands = RenderOptions { glare: false, scene: false, ..Default::default() };
+    let grid = RenderOptions { grid_bands: false, ..bands };
+    for (name, sky) in [("built-in", default_sky()), ("lakes", lakes)] {
+        h.set_sky(&sky).expect("uploaded");
+        for (hour, weather) in [(18.5, 0.3), (23.0, 0.0)] {
+            let input = FrameInput::new(hour, weather);
+            for (view, camera) in &views {
+                let what = format!("{name} at {hour} h, weather {weather}, {view}");
+                let on_grid = h.render(&sky, &input, camera, &grid).expect("rendered");
+                h.render(&sky, &FrameInput::new(12.0, 1.0), camera, &bands).expect("rendered");
+                let as_bands = h.render(&sky, &input, camera, &bands).expect("rendered");
+                assert!(h.renderer.stats.texel_triangles > 0, "{what}: no polygons, no bands ({:?})", h.renderer.stats);
+                let differing = on_grid.as_raw().iter().zip(as_bands.as_raw()).filter(|(a, b)| a != b).count();
+                assert_eq!(differing, 0, "{what}: {differing} bytes differ between the grid and the bands");
+            }
+        }
+    }
+}

@@ -89,6 +89,32 @@ pub fn outline_mesh(shape: &Shape) -> Option<MeshData> {
     dome_grid(shape).map(|(top_deg, bottom_deg, _, segments)| sphere_band(top_deg, bottom_deg, 1, segments))
 }
 
+/// Bands of a dome's grid ([`sphere_band`]'s `rings` x `segments`): for every pair of vertex rows
+/// a < b, one quad per segment between row a's chord and row b's, as triangle-list indices into
+/// the grid's vertices, in the order [`band_start`] gives. A band covers the same directions as
+/// the grid's rings a..b (its quads are flat trapezoids on the same chords, their sides on the
+/// same meridians), with far fewer triangles: for draws that map nothing from the grid.
+pub fn band_indices(rings: u32, segments: u32) -> Vec<u32> {
+    let row = segments + 1;
+    let mut out = Vec::new();
+    for a in 0..rings {
+        for b in a + 1..=rings {
+            for s in 0..segments {
+                let (top, bottom) = (a * row + s, b * row + s);
+                out.extend_from_slice(&[top, bottom, top + 1, top + 1, bottom, bottom + 1]);
+            }
+        }
+    }
+    out
+}
+
+/// Where the band from vertex row `a` to row `b` (a < b <= rings) starts in [`band_indices`].
+pub fn band_start(rings: u32, segments: u32, a: u32, b: u32) -> u32 {
+    // Pairs before (a, a + 1): rings + (rings - 1) + ... for the rows above a.
+    let before = a * rings - a * a.saturating_sub(1) / 2 + (b - a - 1);
+    before * segments * 6
+}
+
 /// Cache key of a shape's geometry (quads share one mesh).
 pub fn shape_key(shape: &Shape) -> String {
     match *shape {
@@ -153,6 +179,47 @@ mod tests {
             }
         }
         (du, dv)
+    }
+
+    #[test]
+    fn a_band_covers_the_directions_its_rings_of_the_grid_cover() {
+        // Seen from the centre: the cone over a triangle holds the sums of its corners with no
+        // negative weight.
+        fn covered(m: &MeshData, indices: &[u32], d: glam::Vec3) -> bool {
+            indices.chunks_exact(3).any(|t| {
+                let corners = glam::Mat3::from_cols_array_2d(&[0, 1, 2].map(|k| m.vertices[t[k] as usize].position));
+                corners.determinant().abs() > 1e-7 && (corners.inverse() * d).to_array().iter().all(|&w| w >= -1e-5)
+            })
+        }
+        for shape in [Shape::Dome { bottom_deg: Elevation(-20.0) }, Shape::DomeBand { bottom_deg: Elevation(-10.0), top_deg: Elevation(20.0) }] {
+            let (_, _, rings, segments) = dome_grid(&shape).expect("a dome shape");
+            let grid = shape_mesh(&shape);
+            let bands = band_indices(rings, segments);
+            let per_band = (segments * 6) as usize;
+            assert_eq!(bands.len(), (rings * (rings + 1) / 2) as usize * per_band);
+            let per_ring = (segments * 6) as usize;
+            for (a, b) in [(0, 1), (0, rings), (1, rings), (3, 7.min(rings)), (rings - 1, rings), (2, 3)] {
+                let start = band_start(rings, segments, a, b) as usize;
+                let band = &bands[start..start + per_band];
+                // The band's rows are a and b.
+                let row = segments + 1;
+                assert!(band.iter().all(|&i| i / row == a || i / row == b), "{shape:?} band {a}..{b}: rows");
+                let rings_of_grid = &grid.indices[a as usize * per_ring..b as usize * per_ring];
+                let (mut inside, mut differ) = (0, 0);
+                for i in 0..3000 {
+                    let y = 1.0 - 2.0 * (i as f32 + 0.5) / 3000.0;
+                    let az = i as f32 * 2.399_963;
+                    let r = (1.0 - y * y).sqrt();
+                    let d = glam::Vec3::new(r * az.sin(), y, -r * az.cos());
+                    let (g, o) = (covered(&grid, rings_of_grid, d), covered(&grid, band, d));
+                    inside += usize::from(g);
+                    differ += usize::from(g != o);
+                }
+                assert!(inside > 0, "{shape:?} band {a}..{b}: no direction inside");
+                assert_eq!(differ, 0, "{shape:?} band {a}..{b}: directions covered by the band or the rings alone");
+                assert!(band.len() * 2 <= rings_of_grid.len() || b - a == 1, "{shape:?} band {a}..{b}: no fewer triangles");
+            }
+        }
     }
 
     #[test]

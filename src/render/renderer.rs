@@ -81,6 +81,11 @@ pub struct RenderOptions {
     /// weight ([`super::texel_quads`]), over the background drawn without that stage. The same
     /// sum as the sample, for the pixels near a lit texel only. Off: sampled everywhere.
     pub texel_quads: bool,
+    /// With `texel_quads`: the rings of the background's dome where the polygons stand for its
+    /// sparse stage, which there maps nothing from the dome's grid (it writes the runs' colour),
+    /// are drawn as one band of quads between their top and bottom chords (the same pixels, a
+    /// tenth of the triangles, whose edges lavapipe shades twice). Off: on the grid.
+    pub grid_bands: bool,
 }
 
 impl Default for RenderOptions {
@@ -100,6 +105,7 @@ impl Default for RenderOptions {
             flash_in_run: true,
             pair_layers: true,
             texel_quads: true,
+            grid_bands: true,
         }
     }
 }

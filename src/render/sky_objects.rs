@@ -350,6 +350,9 @@ pub struct SkyObjectsPass {
     texel_pipelines: HashMap<VariantKey, Option<wgpu::RenderPipeline>>,
     /// Sparse stages are drawn texel by texel this frame ([`super::RenderOptions::texel_quads`]).
     texels_on: bool,
+    /// The rest of such a draw goes as bands where the polygons stand for the stage
+    /// ([`super::RenderOptions::grid_bands`]).
+    bands_on: bool,
     /// Triangles of texel polygons recorded this frame (counted as they are recorded).
     texel_triangles: std::cell::Cell<u32>,
     draws: Staged<Option<SkyObjectDraws>>,
@@ -503,6 +506,7 @@ impl SkyObjectsPass {
             pair_layout,
             texel_pipelines: HashMap::new(),
             texels_on: false,
+            bands_on: false,
             texel_triangles: std::cell::Cell::new(0),
             draws: Staged::new(None),
             sky_view,
@@ -605,17 +609,29 @@ impl SkyObjectsPass {
         let texels = self.texel_draw(e, target, placement);
         let mut texel_rings = Vec::new();
         for (indices, level0) in &self.parts[start..start + count] {
+            rpass.set_bind_group(1, &d.bind_groups[usize::from(level0 & d.level0_able)], &[]);
             match &texels {
                 Some((stage, without, (_, mesh))) if level0 & (1 << stage) != 0 => {
                     rpass.set_pipeline(without);
                     // The grid's indices: six per cell, `segments` cells per ring.
                     let per_ring = mesh.segments.max(1) * 6;
-                    texel_rings.push((indices.start / per_ring) as usize..(indices.end / per_ring) as usize);
+                    let rings = (indices.start / per_ring) as usize..(indices.end / per_ring) as usize;
+                    if self.bands_on {
+                        // Without the stage the draw samples nothing mapped by the grid (only
+                        // the runs, at the pixel: `without_texel_stage`): one band.
+                        rpass.set_index_buffer(mesh.bands.slice(..), wgpu::IndexFormat::Uint32);
+                        rpass.draw_indexed(mesh.band(rings.clone()), 0, 0..1);
+                        rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    } else {
+                        rpass.draw_indexed(indices.clone(), 0, 0..1);
+                    }
+                    texel_rings.push(rings);
                 }
-                _ => rpass.set_pipeline(pipeline),
+                _ => {
+                    rpass.set_pipeline(pipeline);
+                    rpass.draw_indexed(indices.clone(), 0, 0..1);
+                }
             }
-            rpass.set_bind_group(1, &d.bind_groups[usize::from(level0 & d.level0_able)], &[]);
-            rpass.draw_indexed(indices.clone(), 0, 0..1);
         }
         let mut calls = count as u32;
         if let (Some((_, _, (pipeline, mesh))), false) = (&texels, texel_rings.is_empty()) {
@@ -916,6 +932,7 @@ impl Pass for SkyObjectsPass {
         self.visible.clear();
         self.hidden = 0;
         self.texels_on = cx.options.texel_quads && cx.target == Target::Display;
+        self.bands_on = cx.options.grid_bands;
         self.texel_triangles.set(0);
         let Some(draws) = &self.draws.current else { return };
         let neutral = super::tone_map::ToneMapUniform::from(cx.frame.sky_model.tone_mapper).settings[0] != 0;

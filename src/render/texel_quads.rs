@@ -201,6 +201,13 @@ pub struct GpuTexelMesh {
     pub segments: u32,
     /// Each cell's bounding cone ([`TexelMesh::cell_cones`]).
     pub cell_cones: Vec<(Vec3, f32)>,
+    /// The grid's bands ([`super::mesh::band_indices`], indices into the grid's own vertices):
+    /// where the polygons stand for the sparse stage, the rest of the draw maps nothing from the
+    /// grid, and one band over those rings covers the same pixels with fewer triangles, whose
+    /// edges a rasteriser shades twice.
+    pub bands: wgpu::Buffer,
+    /// Rings of the grid.
+    pub rings: u32,
 }
 
 impl GpuTexelMesh {
@@ -219,7 +226,24 @@ impl GpuTexelMesh {
             contents: bytemuck::cast_slice(&m.indices),
             usage: wgpu::BufferUsages::INDEX,
         });
-        Some(Self { vertices, indices, cell_starts: m.cell_starts.clone(), segments: m.segments, cell_cones: m.cell_cones.clone() })
+        let segments = m.segments.max(1);
+        let rings = (m.cell_starts.len().saturating_sub(1) as u32) / segments;
+        let bands = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(&format!("{label}::grid_bands")),
+            contents: bytemuck::cast_slice(&super::mesh::band_indices(rings, segments)),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        Some(Self { vertices, indices, cell_starts: m.cell_starts.clone(), segments: m.segments, cell_cones: m.cell_cones.clone(), bands, rings })
+    }
+
+    /// The indices in [`Self::bands`] of the band over grid rings `rings` (top first).
+    pub fn band(&self, rings: std::ops::Range<usize>) -> std::ops::Range<u32> {
+        let (a, b) = ((rings.start as u32).min(self.rings), (rings.end as u32).min(self.rings));
+        if a >= b {
+            return 0..0;
+        }
+        let start = super::mesh::band_start(self.rings, self.segments.max(1), a, b);
+        start..start + self.segments.max(1) * 6
     }
 
     /// The index ranges of rings `rings` (grid rings, top first) in cells that `shown` says may
