@@ -100,6 +100,22 @@ fn vs_main(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> Vert
     return sky_vertex(position, uv);
 }
 
+// One triangle over the frame, for a draw that maps nothing from its shape (the background
+// where its sparse stage is drawn texel by texel: the runs' colour at the pixel), scissored to
+// where the shape covers the frame. No vertex buffer; nothing but the position is meant to be read.
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) vi: u32) -> VertexOut {
+    let p = vec2<f32>(f32((vi << 1u) & 2u), f32(vi & 2u));
+    var out: VertexOut;
+    // Inside the sky's depth range, as `sky_vertex`.
+    out.clip = vec4<f32>(p * 2.0 - vec2<f32>(1.0), 0.5, 1.0);
+    out.uv = vec2<f32>(0.0);
+    out.world_dir = vec3<f32>(0.0, 1.0, 0.0);
+    out.mesh_uv01 = vec4<f32>(0.0);
+    out.mesh_uv23 = vec4<f32>(0.0);
+    return out;
+}
+
 // Specialisation: a pipeline per material signature sets SPECIALISED and the constants below from
 // the draw's uniform (src/render/sky_objects.rs, `VariantKey`), so the compiler drops what the draw
 // does not use. This matters on SIMD rasterisers such as lavapipe, which run both sides of every

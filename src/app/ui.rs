@@ -555,7 +555,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         ui.checkbox(&mut c.options.flash_in_run, format!("lightning flash in a run ({})", if s.joined_runs_only > 0 { "this frame" } else { "not this frame" }));
         ui.checkbox(&mut c.options.pair_layers, format!("two alpha layers at once ({} pairs)", s.layers_paired));
         ui.checkbox(&mut c.options.texel_quads, format!("sparse stars texel by texel ({} triangles)", s.texel_triangles));
-        ui.add_enabled(c.options.texel_quads, egui::Checkbox::new(&mut c.options.grid_bands, "the background there as bands of the dome"));
+        ui.add_enabled(c.options.texel_quads, egui::Checkbox::new(&mut c.options.grid_bands, format!("the background there on one triangle ({} rectangles)", s.background_rects)));
     });
     let median = |v: &VecDeque<f32>| {
         let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();

@@ -81,10 +81,12 @@ pub struct RenderOptions {
     /// weight ([`super::texel_quads`]), over the background drawn without that stage. The same
     /// sum as the sample, for the pixels near a lit texel only. Off: sampled everywhere.
     pub texel_quads: bool,
-    /// With `texel_quads`: the rings of the background's dome where the polygons stand for its
-    /// sparse stage, which there maps nothing from the dome's grid (it writes the runs' colour),
-    /// are drawn as one band of quads between their top and bottom chords (the same pixels, a
-    /// tenth of the triangles, whose edges lavapipe shades twice). Off: on the grid.
+    /// With `texel_quads`: where the polygons stand for the background's sparse stage, the rest
+    /// of its draw maps nothing from the dome's grid (it writes the runs' colour), so it goes as
+    /// one triangle over the frame, scissored round the box of the rings that still sample the
+    /// stage (round the pole) and the rows below the dome, and inside those as one band of quads
+    /// between the rings' top and bottom chords: the same pixels, without most of the triangle
+    /// edges whose 4 x 4 blocks lavapipe shades twice. Off: on the grid.
     pub grid_bands: bool,
 }
 
@@ -198,6 +200,9 @@ pub struct FrameStats {
     /// Triangles of texel polygons drawn in place of a sparse stage's sample
     /// ([`RenderOptions::texel_quads`]).
     pub texel_triangles: u32,
+    /// Scissor rectangles in which the background without its sparse stage went as one triangle
+    /// over the frame ([`RenderOptions::grid_bands`]).
+    pub background_rects: u32,
     /// Draws added to a run of reduced layers only because the run was there
     /// ([`DrawItem::joins_only`]: the lightning flash, [`RenderOptions::flash_in_run`]).
     pub joined_runs_only: u32,

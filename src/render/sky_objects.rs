@@ -348,6 +348,9 @@ pub struct SkyObjectsPass {
     /// background's signature (`None`: building it failed; the stage is sampled). Emptied when
     /// the shaders change.
     texel_pipelines: HashMap<VariantKey, Option<wgpu::RenderPipeline>>,
+    /// The background without its sparse stage as one triangle over the frame
+    /// ([`super::RenderOptions::grid_bands`]), by the signature without the stage.
+    fullscreen_pipelines: HashMap<VariantKey, Option<wgpu::RenderPipeline>>,
     /// Sparse stages are drawn texel by texel this frame ([`super::RenderOptions::texel_quads`]).
     texels_on: bool,
     /// The rest of such a draw goes as bands where the polygons stand for the stage
@@ -355,6 +358,8 @@ pub struct SkyObjectsPass {
     bands_on: bool,
     /// Triangles of texel polygons recorded this frame (counted as they are recorded).
     texel_triangles: std::cell::Cell<u32>,
+    /// Scissor rectangles of the background drawn as one triangle this frame.
+    background_rects: std::cell::Cell<u32>,
     draws: Staged<Option<SkyObjectDraws>>,
     /// The shared sky-view map and its sampler, bound to every draw.
     sky_view: (wgpu::TextureView, wgpu::Sampler),
@@ -505,9 +510,11 @@ impl SkyObjectsPass {
             pairs: HashMap::new(),
             pair_layout,
             texel_pipelines: HashMap::new(),
+            fullscreen_pipelines: HashMap::new(),
             texels_on: false,
             bands_on: false,
             texel_triangles: std::cell::Cell::new(0),
+            background_rects: std::cell::Cell::new(0),
             draws: Staged::new(None),
             sky_view,
             visible: Vec::new(),
@@ -607,8 +614,35 @@ impl SkyObjectsPass {
         // The background's sparse stage texel by texel where it is sampled from level 0: those
         // parts drawn without it, its polygons there added after.
         let texels = self.texel_draw(e, target, placement);
+        let parts = &self.parts[start..start + count];
+        let mut calls = 0;
+        // Without the stage the draw samples nothing mapped by the grid (only the runs, at the
+        // pixel: `without_texel_stage`), so where no ring needs the grid it is one triangle over
+        // the frame, scissored round the rectangles that do: the box of the rings still sampling
+        // the stage and the rows below the dome (`background_gap`). Inside those, one band over
+        // each run of such rings. Every triangle edge costs lavapipe the 4 x 4 blocks it crosses
+        // shaded twice.
+        let (full_frame, boxed) = match (&texels, self.bands_on) {
+            (Some((stage, _, _)), true) => {
+                let sampled_rings = parts.iter().filter(|(_, level0)| level0 & (1 << stage) == 0).map(|(indices, _)| indices.clone());
+                let holes: Vec<[u32; 4]> = self.rings_box(d, sampled_rings).into_iter().chain(self.background_gap(key)).collect();
+                (self.fullscreen_without(e, target, placement).map(|p| (p, scissor_rects([0, 0, self.frame_size.0, self.frame_size.1], &holes))), holes)
+            }
+            _ => (None, Vec::new()),
+        };
+        if let Some((p, rects)) = &full_frame {
+            rpass.set_pipeline(p);
+            rpass.set_bind_group(1, &d.bind_groups[0], &[]);
+            for &[x, y, w, h] in rects {
+                rpass.set_scissor_rect(x, y, w, h);
+                rpass.draw(0..3, 0..1);
+                calls += 1;
+            }
+            self.background_rects.set(self.background_rects.get() + rects.len() as u32);
+            rpass.set_scissor_rect(0, 0, self.frame_size.0, self.frame_size.1);
+        }
         let mut texel_rings = Vec::new();
-        for (indices, level0) in &self.parts[start..start + count] {
+        for (indices, level0) in parts {
             rpass.set_bind_group(1, &d.bind_groups[usize::from(level0 & d.level0_able)], &[]);
             match &texels {
                 Some((stage, without, (_, mesh))) if level0 & (1 << stage) != 0 => {
@@ -617,23 +651,36 @@ impl SkyObjectsPass {
                     let per_ring = mesh.segments.max(1) * 6;
                     let rings = (indices.start / per_ring) as usize..(indices.end / per_ring) as usize;
                     if self.bands_on {
-                        // Without the stage the draw samples nothing mapped by the grid (only
-                        // the runs, at the pixel: `without_texel_stage`): one band.
                         rpass.set_index_buffer(mesh.bands.slice(..), wgpu::IndexFormat::Uint32);
-                        rpass.draw_indexed(mesh.band(rings.clone()), 0, 0..1);
+                        let band = mesh.band(rings.clone());
+                        match full_frame {
+                            Some(_) => {
+                                for &[x, y, w, h] in &boxed {
+                                    rpass.set_scissor_rect(x, y, w, h);
+                                    rpass.draw_indexed(band.clone(), 0, 0..1);
+                                    calls += 1;
+                                }
+                                rpass.set_scissor_rect(0, 0, self.frame_size.0, self.frame_size.1);
+                            }
+                            None => {
+                                rpass.draw_indexed(band, 0, 0..1);
+                                calls += 1;
+                            }
+                        }
                         rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
                     } else {
                         rpass.draw_indexed(indices.clone(), 0, 0..1);
+                        calls += 1;
                     }
                     texel_rings.push(rings);
                 }
                 _ => {
                     rpass.set_pipeline(pipeline);
                     rpass.draw_indexed(indices.clone(), 0, 0..1);
+                    calls += 1;
                 }
             }
         }
-        let mut calls = count as u32;
         if let (Some((_, _, (pipeline, mesh))), false) = (&texels, texel_rings.is_empty()) {
             rpass.set_pipeline(pipeline);
             rpass.set_bind_group(1, &d.bind_groups[0], &[]);
@@ -649,6 +696,52 @@ impl SkyObjectsPass {
             }
         }
         calls
+    }
+
+    /// The pipeline drawing `e` placed as `placement` without its sparse stage as one triangle
+    /// over the frame, if built.
+    fn fullscreen_without(&self, e: &Visible, target: Target, placement: Placement) -> Option<&wgpu::RenderPipeline> {
+        let stage = self.draws.current.as_ref()?.objects[e.index][e.version].texels.as_ref()?.0;
+        let without = Self::without_texel_stage(&self.entry_key(e, target, placement)?, stage)?;
+        self.fullscreen_pipelines.get(&without)?.as_ref()
+    }
+
+    /// The frame's pixels (x, y, width, height) that hold the grid rings of `d` whose triangles
+    /// `ring_indices` index (ranges of its grid's indices), with a pixel of margin: the box of
+    /// their rows of vertices, projected. The whole frame when one lies behind the eye (the box
+    /// would be unbounded), None for no rings.
+    fn rings_box(&self, d: &VersionDraw, ring_indices: impl Iterator<Item = std::ops::Range<u32>>) -> Option<[u32; 4]> {
+        let (top_deg, bottom_deg, rings, segments) = super::mesh::dome_grid(&d.shape)?;
+        let per_ring = segments * 6;
+        let (w, h) = (self.frame_size.0.max(1), self.frame_size.1.max(1));
+        let (_, clip_from_sky) = self.frame_camera.matrices(w as f32 / h as f32);
+        let (mut lo, mut hi) = (glam::Vec2::splat(f32::INFINITY), glam::Vec2::splat(f32::NEG_INFINITY));
+        let mut any = false;
+        for indices in ring_indices {
+            // The rings' region is bounded by its top and bottom rows' chords and the meridians
+            // between: its projection lies in the box of those rows' vertices.
+            for row in [indices.start / per_ring, indices.end.div_ceil(per_ring)] {
+                let elevation = top_deg + (bottom_deg - top_deg) * row.min(rings) as f32 / rings as f32;
+                for s in 0..segments {
+                    let dir = crate::sky::eval::direction(s as f32 / segments as f32 * 360.0, elevation);
+                    let clip = clip_from_sky * dir.extend(1.0);
+                    if clip.w < 1e-4 {
+                        return Some([0, 0, w, h]);
+                    }
+                    let p = glam::Vec2::new((clip.x / clip.w * 0.5 + 0.5) * w as f32, (0.5 - clip.y / clip.w * 0.5) * h as f32);
+                    (lo, hi) = (lo.min(p), hi.max(p));
+                    any = true;
+                }
+            }
+        }
+        if !any {
+            return None;
+        }
+        let x0 = (lo.x.floor() - 1.0).clamp(0.0, w as f32) as u32;
+        let y0 = (lo.y.floor() - 1.0).clamp(0.0, h as f32) as u32;
+        let x1 = (hi.x.ceil() + 1.0).clamp(0.0, w as f32) as u32;
+        let y1 = (hi.y.ceil() + 1.0).clamp(0.0, h as f32) as u32;
+        (x1 > x0 && y1 > y0).then_some([x0, y0, x1 - x0, y1 - y0])
     }
 
     /// The background signature `key` with its sparse stage `stage` drawn texel by texel: the
@@ -815,6 +908,20 @@ impl SkyObjectsPass {
             }
         }
         for (key, stage) in texel_keys {
+            if let Some(without) = Self::without_texel_stage(&key, stage).filter(|k| !self.fullscreen_pipelines.contains_key(k)) {
+                let label = format!("SkyObjects::fullscreen {without:?}");
+                let built = create_pipeline(
+                    device,
+                    (&self.pipeline_layout, &self.pipelines.get().module, FULLSCREEN),
+                    &label,
+                    (None, self.display_format, Some(wgpu::CompareFunction::Always)),
+                    &without.constants(),
+                );
+                if let Err(e) = &built {
+                    log::error!("{label}: {e}; drawn on the dome");
+                }
+                self.fullscreen_pipelines.insert(without, built.ok());
+            }
             if !self.texel_pipelines.contains_key(&key) {
                 let label = format!("SkyObjects::texels {key:?}");
                 let mut constants = key.constants();
@@ -861,6 +968,29 @@ impl SkyObjectsPass {
 const MAIN: (&str, &str) = ("vs_main", "fs_main");
 const PAIR: (&str, &str) = ("vs_pair", "fs_pair");
 const TEXELS: (&str, &str) = ("vs_texels", "fs_texels");
+const FULLSCREEN: (&str, &str) = ("vs_fullscreen", "fs_main");
+
+/// `frame` (x, y, width, height) less the rectangles `holes`, as rectangles that do not overlap.
+fn scissor_rects(frame: [u32; 4], holes: &[[u32; 4]]) -> Vec<[u32; 4]> {
+    let mut rects = vec![frame];
+    for &[hx, hy, hw, hh] in holes {
+        let (hx1, hy1) = (hx + hw, hy + hh);
+        let mut out = Vec::new();
+        for [x, y, w, h] in rects {
+            let (x1, y1) = (x + w, y + h);
+            if hx >= x1 || hx1 <= x || hy >= y1 || hy1 <= y {
+                out.push([x, y, w, h]);
+                continue;
+            }
+            // Above and below the hole across the rectangle, then left and right of it beside it.
+            let (top, bottom) = (hy.max(y), hy1.min(y1));
+            let pieces = [[x, y, w, top - y], [x, bottom, w, y1 - bottom], [x, top, hx.max(x) - x, bottom - top], [hx1.min(x1), top, x1 - hx1.min(x1), bottom - top]];
+            out.extend(pieces.into_iter().filter(|r| r[2] > 0 && r[3] > 0));
+        }
+        rects = out;
+    }
+    rects
+}
 
 /// One sky-object pipeline: `constants` specialise it (none: the generic pipeline).
 fn create_pipeline(
@@ -878,7 +1008,11 @@ fn create_pipeline(
             vertex: wgpu::VertexState {
                 module,
                 entry_point: Some(vertex),
-                buffers: &[Some(if vertex == TEXELS.0 { TexelVertex::LAYOUT } else { SkyVertex::LAYOUT })],
+                buffers: match vertex {
+                    v if v == TEXELS.0 => &[Some(TexelVertex::LAYOUT)],
+                    v if v == FULLSCREEN.0 => &[],
+                    _ => &[Some(SkyVertex::LAYOUT)],
+                },
                 compilation_options: options.clone(),
             },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
@@ -916,6 +1050,7 @@ impl Pass for SkyObjectsPass {
             self.variants.clear();
             self.pairs.clear();
             self.texel_pipelines.clear();
+            self.fullscreen_pipelines.clear();
         }
     }
 
@@ -934,6 +1069,7 @@ impl Pass for SkyObjectsPass {
         self.texels_on = cx.options.texel_quads && cx.target == Target::Display;
         self.bands_on = cx.options.grid_bands;
         self.texel_triangles.set(0);
+        self.background_rects.set(0);
         let Some(draws) = &self.draws.current else { return };
         let neutral = super::tone_map::ToneMapUniform::from(cx.frame.sky_model.tone_mapper).settings[0] != 0;
         self.keys.clear();
@@ -1230,6 +1366,7 @@ impl Pass for SkyObjectsPass {
 
     fn stats_recorded(&self, stats: &mut FrameStats) {
         stats.texel_triangles = self.texel_triangles.get();
+        stats.background_rects = self.background_rects.get();
     }
 
     fn stats(&self, stats: &mut FrameStats) {
@@ -1749,6 +1886,29 @@ impl SkyObjectDraws {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn scissor_rects_cover_the_frame_outside_the_holes_once() {
+        let mut rng = fastrand::Rng::with_seed(11);
+        let (w, h) = (37u32, 23u32);
+        for _ in 0..300 {
+            let holes: Vec<[u32; 4]> = (0..rng.u32(0..4))
+                .map(|_| {
+                    let (x, y) = (rng.u32(0..w), rng.u32(0..h));
+                    [x, y, rng.u32(1..=w - x), rng.u32(1..=h - y)]
+                })
+                .collect();
+            let rects = scissor_rects([0, 0, w, h], &holes);
+            let inside = |r: &[u32; 4], px: u32, py: u32| px >= r[0] && px < r[0] + r[2] && py >= r[1] && py < r[1] + r[3];
+            for py in 0..h {
+                for px in 0..w {
+                    let covered = rects.iter().filter(|r| inside(r, px, py)).count();
+                    let in_hole = holes.iter().any(|r| inside(r, px, py));
+                    assert_eq!(covered, usize::from(!in_hole), "pixel ({px}, {py}) of {rects:?} with holes {holes:?}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn the_celestial_poles_lie_at_least_the_bound_away_from_every_pixel() {
