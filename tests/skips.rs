@@ -262,3 +262,25 @@ fn clears_left_out_where_the_background_or_an_untouched_depth_makes_them_unneede
         assert!(counted <= both, "{what}");
     }
 }
+
+#[test]
+fn blended_draws_black_and_transparent_are_left_out_without_moving_a_pixel() {
+    // At tier 2 by day the skydome's second card (stars x mask, added) has every term black:
+    // left out, and nothing moves (full resolution: a skipped stage can also change which layers
+    // go to a reduced buffer, which tests/reduced_layers.rs bounds).
+    let sky = default_sky();
+    let mut h = common::headless(160, 90);
+    h.set_sky(&sky).expect("uploaded");
+    let on = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
+    let off = RenderOptions { skips: Skips { dark_stages: false, ..Skips::default() }, ..on };
+    for (hour, tier) in [(13.0, 2), (16.0, 2), (13.0, 4)] {
+        let input = FrameInput { tier: skytune::sky::Tier::new(tier).expect("a tier"), ..FrameInput::new(hour, 0.3) };
+        for camera in [Camera { pitch_deg: 35.0, ..Camera::default() }, Camera::preset("zenith").expect("zenith view")] {
+            let (with, without) = same_pixels(&mut h, (&sky, &input, &camera), (&on, &off), 0, |s| format!("tier {tier} at {hour} h ({s:?})"));
+            assert_eq!(without.draws_dark, 0);
+            if tier == 2 {
+                assert!(with.draws_dark >= 1 && with.draw_calls < without.draw_calls, "tier 2 at {hour} h: the stars card drawn ({with:?})");
+            }
+        }
+    }
+}

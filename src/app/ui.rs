@@ -514,6 +514,7 @@ fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         format!("{} below the horizon behind the scene", s.objects_below_horizon),
         format!("{} dome layers out of view", s.objects_off_screen),
         format!("{} black texture stages", s.stages_skipped),
+        format!("{} blended draws black and transparent", s.draws_dark),
         format!("mip selection of {} stages no pixel minifies", s.stages_level0),
     ];
     if s.stars_skipped {

@@ -115,7 +115,8 @@ impl Default for RenderOptions {
 /// The renderer's skips of work that contributes nothing to the frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Skips {
-    /// Texture stages whose term is black this frame are not sampled.
+    /// Texture stages whose term is black this frame are not sampled, and alpha-blended or
+    /// additive draws whose every term is (black and transparent) are not drawn.
     pub dark_stages: bool,
     /// The star field is not drawn while its colour is transparent (daylight), nor its stars
     /// too faint this frame to add half a level of 255 (dusk).
@@ -168,6 +169,9 @@ pub struct FrameStats {
     pub stars_drawn: u32,
     /// Texture stages of sky objects not sampled because their term is black this frame.
     pub stages_skipped: u32,
+    /// Alpha-blended and additive draws of sky objects left out because every term of theirs is
+    /// black and transparent this frame (they would leave the frame as it is).
+    pub draws_dark: u32,
     /// Sky objects not drawn because their ref colour's alpha is 0 this frame.
     pub objects_ref_hidden: u32,
     /// Sky objects not drawn because they are below the horizon, behind the main scene.

@@ -368,6 +368,8 @@ pub struct SkyObjectsPass {
     hidden: u32,
     /// Texture stages not sampled this frame (their term is black).
     stages_skipped: u32,
+    /// Draws left out this frame: blended, every term black and transparent.
+    draws_dark: u32,
     /// Objects hidden this frame by their ref colour.
     ref_hidden: u32,
     /// Objects below the horizon this frame, behind the main scene.
@@ -520,6 +522,7 @@ impl SkyObjectsPass {
             visible: Vec::new(),
             hidden: 0,
             stages_skipped: 0,
+            draws_dark: 0,
             ref_hidden: 0,
             below_horizon: 0,
             off_screen: 0,
@@ -1066,6 +1069,7 @@ impl Pass for SkyObjectsPass {
     fn prepare(&mut self, cx: &FrameContext<'_>) {
         self.visible.clear();
         self.hidden = 0;
+        self.draws_dark = 0;
         self.texels_on = cx.options.texel_quads && cx.target == Target::Display;
         self.bands_on = cx.options.grid_bands;
         self.texel_triangles.set(0);
@@ -1144,6 +1148,17 @@ impl Pass for SkyObjectsPass {
                             on_top: false,
                             parts: (0, 0),
                         };
+                        // Blended by its alpha with every term black and transparent this frame (a
+                        // night-only card by day), the draw's material is 0 and leaves every
+                        // buffer as it is: not drawn.
+                        let dark = self.keys.get(&(of.index, v.version)).filter(|_| cx.options.skips.dark_stages).is_some_and(|key| {
+                            let count = (key.count as usize).min(MAX_STAGES);
+                            d.blend != BlendMode::Opaque && !key.live[..count].iter().any(|&live| live)
+                        });
+                        if dark {
+                            self.draws_dark += 1;
+                            continue;
+                        }
                         let dome = matches!(d.shape, Shape::Dome { .. } | Shape::DomeBand { .. });
                         let Some(key) = self.keys.get(&(of.index, v.version)).filter(|_| reduce_domes && dome) else {
                             self.visible.push(entry);
@@ -1375,6 +1390,7 @@ impl Pass for SkyObjectsPass {
         stats.objects_drawn = objects.len() as u32;
         stats.objects_hidden = self.hidden;
         stats.stages_skipped = self.stages_skipped;
+        stats.draws_dark = self.draws_dark;
         stats.objects_ref_hidden = self.ref_hidden;
         stats.objects_below_horizon = self.below_horizon;
         stats.objects_off_screen = self.off_screen;
