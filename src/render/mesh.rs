@@ -181,16 +181,27 @@ mod tests {
         (du, dv)
     }
 
+    /// Whether direction `d`, seen from the centre, lies in one of the triangles `indices` of
+    /// `m`'s vertices: in the cone over a triangle, a sum of its corners with no negative weight.
+    fn covered(m: &MeshData, indices: &[u32], d: glam::Vec3) -> bool {
+        indices.chunks_exact(3).any(|t| {
+            let corners = glam::Mat3::from_cols_array_2d(&[0, 1, 2].map(|k| m.vertices[t[k] as usize].position));
+            corners.determinant().abs() > 1e-7 && (corners.inverse() * d).to_array().iter().all(|&w| w >= -1e-5)
+        })
+    }
+
+    /// `n` directions on a spiral over the sphere, avoiding the grids' own vertices.
+    fn spiral(n: usize) -> impl Iterator<Item = glam::Vec3> {
+        (0..n).map(move |i| {
+            let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let az = i as f32 * 2.399_963;
+            let r = (1.0 - y * y).sqrt();
+            glam::Vec3::new(r * az.sin(), y, -r * az.cos())
+        })
+    }
+
     #[test]
     fn a_band_covers_the_directions_its_rings_of_the_grid_cover() {
-        // Seen from the centre: the cone over a triangle holds the sums of its corners with no
-        // negative weight.
-        fn covered(m: &MeshData, indices: &[u32], d: glam::Vec3) -> bool {
-            indices.chunks_exact(3).any(|t| {
-                let corners = glam::Mat3::from_cols_array_2d(&[0, 1, 2].map(|k| m.vertices[t[k] as usize].position));
-                corners.determinant().abs() > 1e-7 && (corners.inverse() * d).to_array().iter().all(|&w| w >= -1e-5)
-            })
-        }
         for shape in [Shape::Dome { bottom_deg: Elevation(-20.0) }, Shape::DomeBand { bottom_deg: Elevation(-10.0), top_deg: Elevation(20.0) }] {
             let (_, _, rings, segments) = dome_grid(&shape).expect("a dome shape");
             let grid = shape_mesh(&shape);
@@ -206,11 +217,7 @@ mod tests {
                 assert!(band.iter().all(|&i| i / row == a || i / row == b), "{shape:?} band {a}..{b}: rows");
                 let rings_of_grid = &grid.indices[a as usize * per_ring..b as usize * per_ring];
                 let (mut inside, mut differ) = (0, 0);
-                for i in 0..3000 {
-                    let y = 1.0 - 2.0 * (i as f32 + 0.5) / 3000.0;
-                    let az = i as f32 * 2.399_963;
-                    let r = (1.0 - y * y).sqrt();
-                    let d = glam::Vec3::new(r * az.sin(), y, -r * az.cos());
+                for d in spiral(3000) {
                     let (g, o) = (covered(&grid, rings_of_grid, d), covered(&grid, band, d));
                     inside += usize::from(g);
                     differ += usize::from(g != o);
@@ -227,26 +234,14 @@ mod tests {
         // Directions inside the outline's triangles (seen from the centre) are inside the grid's,
         // and the other way round: sampled over the sphere, each direction is covered by both or
         // by neither.
-        fn covered(m: &MeshData, d: glam::Vec3) -> bool {
-            m.indices.chunks_exact(3).any(|t| {
-                let corners = glam::Mat3::from_cols_array_2d(&[0, 1, 2].map(|k| m.vertices[t[k] as usize].position));
-                // In the cone over the triangle: a sum of its corners with no negative weight.
-                corners.determinant().abs() > 1e-7 && (corners.inverse() * d).to_array().iter().all(|&w| w >= -1e-5)
-            })
-        }
         for shape in
             [Shape::Dome { bottom_deg: Elevation(-20.0) }, Shape::Dome { bottom_deg: Elevation(-5.0) }, Shape::DomeBand { bottom_deg: Elevation(-10.0), top_deg: Elevation(20.0) }]
         {
             let (grid, outline) = (shape_mesh(&shape), outline_mesh(&shape).expect("a dome shape"));
             assert!(outline.indices.len() * 4 <= grid.indices.len(), "{shape:?}: the outline has fewer triangles");
             let (mut inside, mut differ) = (0, 0);
-            for i in 0..4000 {
-                // A spiral of directions over the sphere, avoiding the grid's own vertices.
-                let y = 1.0 - 2.0 * (i as f32 + 0.5) / 4000.0;
-                let az = i as f32 * 2.399_963;
-                let r = (1.0 - y * y).sqrt();
-                let d = glam::Vec3::new(r * az.sin(), y, -r * az.cos());
-                let (g, o) = (covered(&grid, d), covered(&outline, d));
+            for d in spiral(4000) {
+                let (g, o) = (covered(&grid, &grid.indices, d), covered(&outline, &outline.indices, d));
                 inside += usize::from(g);
                 differ += usize::from(g != o);
             }
