@@ -492,7 +492,7 @@ impl GlareResources {
         let arrived = result.is_some();
         self.state.step(f.dt_s, self.settings.persistence_s, result);
         // A new query only when none is in flight: NeL's rule, and the reason frames are counted.
-        self.issue_this_frame = visible && !known && self.queries.phase == QueryPhase::Idle;
+        self.issue_this_frame = visible && !disc_off_screen && self.queries.phase == QueryPhase::Idle;
         if self.issue_this_frame {
             self.queries.phase = QueryPhase::Issued { issued_frame: f.frame };
         }

@@ -34,24 +34,33 @@ pub struct MeshData {
     pub indices: Vec<u32>,
 }
 
+/// Elevation of vertex row `row` of a grid of `rings` from `top_deg` down to `bottom_deg`, degrees.
+pub fn row_elevation_deg(top_deg: f32, bottom_deg: f32, rings: u32, row: u32) -> f32 {
+    top_deg + (bottom_deg - top_deg) * row as f32 / rings as f32
+}
+
+/// Triangle-list indices of the quads between vertex rows `top` and `bottom` of a grid of
+/// `segments` (rows of `segments` + 1 vertices): one quad per segment, the chords of both rows.
+fn row_quads(top: u32, bottom: u32, segments: u32) -> impl Iterator<Item = u32> {
+    let row = segments + 1;
+    (0..segments).flat_map(move |s| {
+        let (a, b) = (top * row + s, bottom * row + s);
+        [a, b, a + 1, a + 1, b, b + 1]
+    })
+}
+
 /// A grid over (azimuth, elevation) from `top_deg` down to `bottom_deg`; v runs 0 at the top to 1.
 fn sphere_band(top_deg: f32, bottom_deg: f32, rings: u32, segments: u32) -> MeshData {
     let mut m = MeshData::default();
     for r in 0..=rings {
         let v = r as f32 / rings as f32;
-        let elevation = top_deg + (bottom_deg - top_deg) * v;
+        let elevation = row_elevation_deg(top_deg, bottom_deg, rings, r);
         for s in 0..=segments {
             let u = s as f32 / segments as f32;
             m.vertices.push(SkyVertex { position: direction(u * 360.0, elevation).to_array(), uv: [u, v] });
         }
     }
-    let row = segments + 1;
-    for r in 0..rings {
-        for s in 0..segments {
-            let (a, b) = (r * row + s, (r + 1) * row + s);
-            m.indices.extend_from_slice(&[a, b, a + 1, a + 1, b, b + 1]);
-        }
-    }
+    m.indices = (0..rings).flat_map(|r| row_quads(r, r + 1, segments)).collect();
     m
 }
 
@@ -95,17 +104,7 @@ pub fn outline_mesh(shape: &Shape) -> Option<MeshData> {
 /// the grid's rings a..b (its quads are flat trapezoids on the same chords, their sides on the
 /// same meridians), with far fewer triangles: for draws that map nothing from the grid.
 pub fn band_indices(rings: u32, segments: u32) -> Vec<u32> {
-    let row = segments + 1;
-    let mut out = Vec::new();
-    for a in 0..rings {
-        for b in a + 1..=rings {
-            for s in 0..segments {
-                let (top, bottom) = (a * row + s, b * row + s);
-                out.extend_from_slice(&[top, bottom, top + 1, top + 1, bottom, bottom + 1]);
-            }
-        }
-    }
-    out
+    (0..rings).flat_map(|a| (a + 1..=rings).flat_map(move |b| row_quads(a, b, segments))).collect()
 }
 
 /// Where the band from vertex row `a` to row `b` (a < b <= rings) starts in [`band_indices`].

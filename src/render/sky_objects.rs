@@ -622,25 +622,24 @@ impl SkyObjectsPass {
         // Without the stage the draw samples nothing mapped by the grid (only the runs, at the
         // pixel: `without_texel_stage`), so where no ring needs the grid it is one triangle over
         // the frame, scissored round the rectangles that do: the box of the rings still sampling
-        // the stage and the rows below the dome (`background_gap`). Inside those, one band over
-        // each run of such rings. Every triangle edge costs lavapipe the 4 x 4 blocks it crosses
-        // shaded twice.
-        let (full_frame, boxed) = match (&texels, self.bands_on) {
-            (Some((stage, _, _)), true) => {
-                let sampled_rings = parts.iter().filter(|(_, level0)| level0 & (1 << stage) == 0).map(|(indices, _)| indices.clone());
-                let holes: Vec<[u32; 4]> = self.rings_box(d, sampled_rings).into_iter().chain(self.background_gap(key)).collect();
-                (self.fullscreen_without(e, target, placement).map(|p| (p, scissor_rects([0, 0, self.frame_size.0, self.frame_size.1], &holes))), holes)
-            }
-            _ => (None, Vec::new()),
-        };
-        if let Some((p, rects)) = &full_frame {
-            rpass.set_pipeline(p);
+        // the stage and the rows below the dome (`background_gap`). Inside those (or over the
+        // whole frame without that triangle), one band over each run of such rings. Every
+        // triangle edge costs lavapipe the 4 x 4 blocks it crosses shaded twice.
+        let frame = [0, 0, self.frame_size.0, self.frame_size.1];
+        let mut band_scissors = vec![frame];
+        if let Some(t) = texels.as_ref().filter(|t| t.fullscreen.is_some()) {
+            let sampled_rings = parts.iter().filter(|(_, level0)| level0 & (1 << t.stage) == 0).map(|(indices, _)| indices.clone());
+            band_scissors = self.rings_box(d, sampled_rings).into_iter().chain(self.background_gap(key)).collect();
+        }
+        if let Some(fullscreen) = texels.as_ref().and_then(|t| t.fullscreen) {
+            let rects = scissor_rects(frame, &band_scissors);
+            rpass.set_pipeline(fullscreen);
             rpass.set_bind_group(1, &d.bind_groups[0], &[]);
-            for &[x, y, w, h] in rects {
+            for &[x, y, w, h] in &rects {
                 rpass.set_scissor_rect(x, y, w, h);
                 rpass.draw(0..3, 0..1);
-                calls += 1;
             }
+            calls += rects.len() as u32;
             self.background_rects.set(self.background_rects.get() + rects.len() as u32);
             rpass.set_scissor_rect(0, 0, self.frame_size.0, self.frame_size.1);
         }
@@ -648,28 +647,20 @@ impl SkyObjectsPass {
         for (indices, level0) in parts {
             rpass.set_bind_group(1, &d.bind_groups[usize::from(level0 & d.level0_able)], &[]);
             match &texels {
-                Some((stage, without, (_, mesh))) if level0 & (1 << stage) != 0 => {
-                    rpass.set_pipeline(without);
+                Some(t) if level0 & (1 << t.stage) != 0 => {
+                    rpass.set_pipeline(t.without);
                     // The grid's indices: six per cell, `segments` cells per ring.
-                    let per_ring = mesh.segments.max(1) * 6;
+                    let per_ring = t.mesh.segments.max(1) * 6;
                     let rings = (indices.start / per_ring) as usize..(indices.end / per_ring) as usize;
                     if self.bands_on {
-                        rpass.set_index_buffer(mesh.bands.slice(..), wgpu::IndexFormat::Uint32);
-                        let band = mesh.band(rings.clone());
-                        match full_frame {
-                            Some(_) => {
-                                for &[x, y, w, h] in &boxed {
-                                    rpass.set_scissor_rect(x, y, w, h);
-                                    rpass.draw_indexed(band.clone(), 0, 0..1);
-                                    calls += 1;
-                                }
-                                rpass.set_scissor_rect(0, 0, self.frame_size.0, self.frame_size.1);
-                            }
-                            None => {
-                                rpass.draw_indexed(band, 0, 0..1);
-                                calls += 1;
-                            }
+                        rpass.set_index_buffer(t.mesh.bands.slice(..), wgpu::IndexFormat::Uint32);
+                        let band = t.mesh.band(rings.clone());
+                        for &[x, y, w, h] in &band_scissors {
+                            rpass.set_scissor_rect(x, y, w, h);
+                            rpass.draw_indexed(band.clone(), 0, 0..1);
                         }
+                        rpass.set_scissor_rect(0, 0, self.frame_size.0, self.frame_size.1);
+                        calls += band_scissors.len() as u32;
                         rpass.set_index_buffer(d.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
                     } else {
                         rpass.draw_indexed(indices.clone(), 0, 0..1);
@@ -684,14 +675,14 @@ impl SkyObjectsPass {
                 }
             }
         }
-        if let (Some((_, _, (pipeline, mesh))), false) = (&texels, texel_rings.is_empty()) {
-            rpass.set_pipeline(pipeline);
+        if let (Some(t), false) = (&texels, texel_rings.is_empty()) {
+            rpass.set_pipeline(t.polygons);
             rpass.set_bind_group(1, &d.bind_groups[0], &[]);
-            rpass.set_vertex_buffer(0, mesh.vertices.slice(..));
-            rpass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+            rpass.set_vertex_buffer(0, t.mesh.vertices.slice(..));
+            rpass.set_index_buffer(t.mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
             let shown = self.frame_camera.cone_test(self.frame_size.0 as f32 / self.frame_size.1.max(1) as f32);
             for rings in texel_rings {
-                for indices in mesh.ring_indices(rings, &shown) {
+                for indices in t.mesh.ring_indices(rings, &shown) {
                     self.texel_triangles.set(self.texel_triangles.get() + (indices.end - indices.start) / 3);
                     rpass.draw_indexed(indices, 0, 0..1);
                     calls += 1;
@@ -699,14 +690,6 @@ impl SkyObjectsPass {
             }
         }
         calls
-    }
-
-    /// The pipeline drawing `e` placed as `placement` without its sparse stage as one triangle
-    /// over the frame, if built.
-    fn fullscreen_without(&self, e: &Visible, target: Target, placement: Placement) -> Option<&wgpu::RenderPipeline> {
-        let stage = self.draws.current.as_ref()?.objects[e.index][e.version].texels.as_ref()?.0;
-        let without = Self::without_texel_stage(&self.entry_key(e, target, placement)?, stage)?;
-        self.fullscreen_pipelines.get(&without)?.as_ref()
     }
 
     /// The frame's pixels (x, y, width, height) that hold the grid rings of `d` whose triangles
@@ -724,7 +707,7 @@ impl SkyObjectsPass {
             // The rings' region is bounded by its top and bottom rows' chords and the meridians
             // between: its projection lies in the box of those rows' vertices.
             for row in [indices.start / per_ring, indices.end.div_ceil(per_ring)] {
-                let elevation = top_deg + (bottom_deg - top_deg) * row.min(rings) as f32 / rings as f32;
+                let elevation = super::mesh::row_elevation_deg(top_deg, bottom_deg, rings, row.min(rings));
                 for s in 0..segments {
                     let dir = crate::sky::eval::direction(s as f32 / segments as f32 * 360.0, elevation);
                     let clip = clip_from_sky * dir.extend(1.0);
@@ -762,15 +745,16 @@ impl SkyObjectsPass {
         })
     }
 
-    /// Draw `e` placed as `placement` with its sparse stage texel by texel this frame: the stage,
-    /// the pipeline drawing the rest, and the polygons' pipeline and mesh.
-    fn texel_draw(&self, e: &Visible, target: Target, placement: Placement) -> Option<(usize, &wgpu::RenderPipeline, (&wgpu::RenderPipeline, &GpuTexelMesh))> {
+    /// Draw `e` placed as `placement` with its sparse stage texel by texel this frame.
+    fn texel_draw(&self, e: &Visible, target: Target, placement: Placement) -> Option<TexelDraw<'_>> {
         let d = &self.draws.current.as_ref()?.objects[e.index][e.version];
         let (stage, mesh) = d.texels.as_ref().filter(|_| self.texels_on)?;
         let key = self.entry_key(e, target, placement)?;
-        let without = self.variants.get(&Self::without_texel_stage(&key, *stage)?)?.as_ref()?;
+        let without_key = Self::without_texel_stage(&key, *stage)?;
+        let without = self.variants.get(&without_key)?.as_ref()?;
         let polygons = self.texel_pipelines.get(&key)?.as_ref()?;
-        Some((*stage, without, (polygons, mesh.as_ref())))
+        let fullscreen = self.fullscreen_pipelines.get(&without_key).and_then(Option::as_ref).filter(|_| self.bands_on);
+        Some(TexelDraw { stage: *stage, without, fullscreen, polygons, mesh })
     }
 
     /// Whether draw `e` can be one of a pair: a whole alpha-blended layer in a reduced buffer.
@@ -968,6 +952,19 @@ impl SkyObjectsPass {
 }
 
 /// Entry points (vertex, fragment) of one draw's pipelines and of a pair's.
+/// A background draw with its sparse stage texel by texel this frame ([`SkyObjectsPass::texel_draw`]).
+struct TexelDraw<'a> {
+    /// The stage the polygons stand for.
+    stage: usize,
+    /// The draw without the stage, on the grid or its bands.
+    without: &'a wgpu::RenderPipeline,
+    /// The same as one triangle over the frame ([`super::RenderOptions::grid_bands`]), if built.
+    fullscreen: Option<&'a wgpu::RenderPipeline>,
+    /// The polygons' pipeline and mesh.
+    polygons: &'a wgpu::RenderPipeline,
+    mesh: &'a GpuTexelMesh,
+}
+
 const MAIN: (&str, &str) = ("vs_main", "fs_main");
 const PAIR: (&str, &str) = ("vs_pair", "fs_pair");
 const TEXELS: (&str, &str) = ("vs_texels", "fs_texels");
@@ -1151,7 +1148,8 @@ impl Pass for SkyObjectsPass {
                         // Blended by its alpha with every term black and transparent this frame (a
                         // night-only card by day), the draw's material is 0 and leaves every
                         // buffer as it is: not drawn.
-                        let dark = self.keys.get(&(of.index, v.version)).filter(|_| cx.options.skips.dark_stages).is_some_and(|key| {
+                        let key = self.keys.get(&(of.index, v.version));
+                        let dark = key.filter(|_| cx.options.skips.dark_stages).is_some_and(|key| {
                             let count = (key.count as usize).min(MAX_STAGES);
                             d.blend != BlendMode::Opaque && !key.live[..count].iter().any(|&live| live)
                         });
@@ -1160,7 +1158,7 @@ impl Pass for SkyObjectsPass {
                             continue;
                         }
                         let dome = matches!(d.shape, Shape::Dome { .. } | Shape::DomeBand { .. });
-                        let Some(key) = self.keys.get(&(of.index, v.version)).filter(|_| reduce_domes && dome) else {
+                        let Some(key) = key.filter(|_| reduce_domes && dome) else {
                             self.visible.push(entry);
                             continue;
                         };
