@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Installs what skytune needs from Debian on a fresh machine: Vulkan loader, Mesa's lavapipe
-# (software Vulkan, used headless and in CI), Xvfb and the X11 libraries winit loads at run time,
+# (software Vulkan, used headless and in CI), Xvfb, xwd (x11-apps: the window tests read the
+# screen back through it) and the X11 libraries winit loads at run time,
 # and a C++ compiler for the FLIP image-difference library (nv-flip builds it from source).
 # Idempotent: does nothing when everything is present.
 set -euo pipefail
 
-packages=(g++ mesa-vulkan-drivers libvulkan1 xvfb xauth libxkbcommon-x11-0 libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon0)
+packages=(g++ mesa-vulkan-drivers libvulkan1 xvfb xauth x11-apps libxkbcommon-x11-0 libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon0)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -19,6 +19,7 @@ use std::sync::Mutex;
 use crate::atmosphere::dome::{self, DomeDir, Haze};
 use crate::atmosphere::{Atmosphere, Rgb};
 use crate::modelbench::{self, Evaluator, FitTarget, Method, Prepared};
+use crate::progress::{Job, Phase};
 use crate::sky::resolved::{SkyModel, SkyModelKind};
 use crate::sky::Sky;
 
@@ -133,23 +134,39 @@ fn hash_of(x: &impl std::fmt::Debug) -> u64 {
 /// Paths per direction of references computed for atmospheres outside the benchmark.
 pub const CUSTOM_REFERENCE_PATHS: u32 = 256;
 
-/// The reference over the benchmark's dome for `atm` at `suns`: the committed dataset when `atm`
-/// is one of the benchmark's atmospheres, else computed (and cached on disk).
-pub fn reference_for(atm: &Atmosphere, suns: &[f64]) -> anyhow::Result<Vec<Vec<Rgb>>> {
+/// The committed or cached reference for `atm` at `suns`, if there is one (no computing).
+fn known_reference(atm: &Atmosphere, suns: &[f64]) -> Option<anyhow::Result<Vec<Vec<Rgb>>>> {
     if let Some(haze) = Haze::of(atm) {
-        let committed = dome::committed_reference()?;
-        return suns.iter().map(|s| committed.sun(haze, *s).map(|r| r.radiance.clone()).ok_or_else(|| anyhow::anyhow!("the committed reference lacks sun {s}"))).collect();
+        let committed = match dome::committed_reference() {
+            Ok(c) => c,
+            Err(e) => return Some(Err(e.into())),
+        };
+        return Some(suns.iter().map(|s| committed.sun(haze, *s).map(|r| r.radiance.clone()).ok_or_else(|| anyhow::anyhow!("the committed reference lacks sun {s}"))).collect());
     }
+    let text = reference_file(atm, suns).and_then(|f| std::fs::read_to_string(f).ok())?;
+    let rows: Vec<Vec<Rgb>> = text.lines().map(|l| l.split(';').map(|v| parse_rgb(v).unwrap_or([f64::NAN; 3])).collect()).collect();
+    (rows.len() == suns.len() && rows.iter().flatten().flatten().all(|v| v.is_finite())).then_some(Ok(rows))
+}
+
+/// Where the reference computed for `atm` at `suns` is cached.
+fn reference_file(atm: &Atmosphere, suns: &[f64]) -> Option<PathBuf> {
     let key = hash_of(&(atm, suns, CUSTOM_REFERENCE_PATHS, dome::ReferenceDome::header(CUSTOM_REFERENCE_PATHS, dome::BENCH_DOME)));
-    let file = cache_dir().map(|d| d.join(format!("reference-{key:016x}.csv")));
-    if let Some(text) = file.as_ref().and_then(|f| std::fs::read_to_string(f).ok()) {
-        let rows: Vec<Vec<Rgb>> = text.lines().map(|l| l.split(';').map(|v| parse_rgb(v).unwrap_or([f64::NAN; 3])).collect()).collect();
-        if rows.len() == suns.len() && rows.iter().flatten().flatten().all(|v| v.is_finite()) {
-            return Ok(rows);
-        }
+    cache_dir().map(|d| d.join(format!("reference-{key:016x}.csv")))
+}
+
+/// The reference over the benchmark's dome for `atm` at `suns`: the committed dataset when `atm`
+/// is one of the benchmark's atmospheres, else computed (a minute or more on two cores; reported
+/// through `phase`, stopped when its job is cancelled) and cached on disk.
+pub fn reference_for(atm: &Atmosphere, suns: &[f64], phase: Phase<'_>) -> anyhow::Result<Vec<Vec<Rgb>>> {
+    if let Some(known) = known_reference(atm, suns) {
+        return known;
     }
+    let file = reference_file(atm, suns);
     log::info!("auto model: computing the reference for this atmosphere at {} sun elevations (once; cached)", suns.len());
-    let domes = dome::compute_domes(&[*atm], suns, dome::BENCH_DOME, CUSTOM_REFERENCE_PATHS, dome::REFERENCE_SEED, &|_, _| {});
+    let domes = dome::compute_domes(&[*atm], suns, dome::BENCH_DOME, CUSTOM_REFERENCE_PATHS, dome::REFERENCE_SEED, &|done, total| {
+        phase.report(done, total);
+        phase.job.check()
+    })?;
     let rows: Vec<Vec<Rgb>> = domes.into_iter().map(|d| d.2).collect();
     if let Some(f) = file {
         let text: String = rows.iter().map(|r| r.iter().map(|c| format!("{:e},{:e},{:e}", c[0], c[1], c[2])).collect::<Vec<_>>().join(";") + "\n").collect();
@@ -168,14 +185,36 @@ fn parse_rgb(s: &str) -> Option<Rgb> {
     (v.len() == 3).then(|| [v[0], v[1], v[2]])
 }
 
-/// Every candidate's worst error over the sky's conditions, measured on `ev`, cheapest first.
-pub fn score(sky: &Sky, ev: &Evaluator<'_>) -> anyhow::Result<Vec<Scored>> {
+/// Share of a pick's progress that computing one reference takes (measuring the candidates
+/// against it is the rest): about what the two cost on a software adapter.
+const REFERENCE_SHARE: f64 = 0.85;
+
+/// Every candidate's worst error over the sky's conditions, measured on `ev`, cheapest first;
+/// progress and cancellation through `job`.
+pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Scored>> {
     let suns = sky_suns(sky);
     let atmospheres = sky_atmospheres(sky);
     let dirs: Vec<DomeDir> = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
-    let references: Vec<Vec<Vec<Rgb>>> = atmospheres.iter().map(|a| reference_for(a, &suns)).collect::<anyhow::Result<_>>()?;
+    let to_compute = atmospheres.iter().filter(|a| known_reference(a, &suns).is_none()).count();
+    let reference_share = if to_compute == 0 { 0.0 } else { REFERENCE_SHARE };
+    let mut computed = 0;
+    let mut references: Vec<Vec<Vec<Rgb>>> = Vec::new();
+    for a in &atmospheres {
+        let start = reference_share * computed as f64 / to_compute.max(1) as f64;
+        if known_reference(a, &suns).is_none() {
+            job.set_stage(format!("computing the reference for weather step {} of {}", references.len() + 1, atmospheres.len()));
+            computed += 1;
+        }
+        references.push(reference_for(a, &suns, job.phase(start, reference_share / to_compute.max(1) as f64))?);
+    }
+    let candidates = candidates();
+    let measuring = job.phase(reference_share, 1.0 - reference_share);
     let mut scored = Vec::new();
-    for (point, cost_ms) in candidates() {
+    for (n, (point, cost_ms)) in candidates.iter().enumerate() {
+        job.check()?;
+        job.set_stage(format!("measuring {}", point.id));
+        measuring.report(n, candidates.len());
+        let (point, cost_ms) = (point.clone(), *cost_ms);
         let mut worst = 0.0f64;
         let mut turbidity = 0.0;
         for (w, (atm, refs)) in atmospheres.iter().zip(&references).enumerate() {
@@ -198,6 +237,7 @@ pub fn score(sky: &Sky, ev: &Evaluator<'_>) -> anyhow::Result<Vec<Scored>> {
         }
         scored.push(Scored { id: point.id.clone(), method: point.method, turbidity, de2000: worst, cost_ms });
     }
+    measuring.report(1, 1);
     anyhow::ensure!(!scored.is_empty(), "no candidate model has a cost in the committed benchmark (docs/models.csv)");
     Ok(scored)
 }
@@ -219,15 +259,20 @@ pub fn choose(scored: &[Scored], budget: Budget, suns_deg: Vec<f64>) -> Pick {
 /// Scores already measured in this process, by everything they depend on.
 static SCORES: Mutex<Vec<(u64, Vec<Scored>)>> = Mutex::new(Vec::new());
 
-/// Every candidate's score for `sky`: from this process's cache, the disk cache, or measured on `ctx`.
-pub fn score_cached(sky: &Sky, ctx: &crate::render::GpuContext) -> anyhow::Result<Vec<Scored>> {
-    let key = hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&modelbench::COMMITTED_CSV), dome::ReferenceDome::header(dome::COMMITTED_PATHS, dome::BENCH_DOME)));
+/// The key of `sky`'s scores: everything they depend on.
+fn scores_key(sky: &Sky) -> u64 {
+    hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&modelbench::COMMITTED_CSV), dome::ReferenceDome::header(dome::COMMITTED_PATHS, dome::BENCH_DOME)))
+}
+
+/// `sky`'s scores if this process or the disk cache already holds them (no measuring).
+fn known_scores(sky: &Sky) -> Option<Vec<Scored>> {
+    let key = scores_key(sky);
     if let Some((_, s)) = SCORES.lock().unwrap_or_else(|p| p.into_inner()).iter().find(|(k, _)| *k == key) {
-        return Ok(s.clone());
+        return Some(s.clone());
     }
-    let file = cache_dir().map(|d| d.join(format!("auto-{key:016x}.csv")));
+    let file = cache_dir().map(|d| d.join(format!("auto-{key:016x}.csv")))?;
     let points = modelbench::points();
-    let from_disk: Option<Vec<Scored>> = file.as_ref().and_then(|f| std::fs::read_to_string(f).ok()).and_then(|text| {
+    let from_disk: Option<Vec<Scored>> = std::fs::read_to_string(&file).ok().and_then(|text| {
         text.lines()
             .map(|line| {
                 let f: Vec<&str> = line.split(',').collect();
@@ -237,36 +282,48 @@ pub fn score_cached(sky: &Sky, ctx: &crate::render::GpuContext) -> anyhow::Resul
             })
             .collect()
     });
-    let scored = match from_disk.filter(|s| !s.is_empty()) {
-        Some(s) => s,
-        None => {
-            let s = score(sky, &Evaluator::new(ctx)?)?;
-            if let Some(f) = &file {
-                let text: String = s.iter().map(|x| format!("{},{},{},{}\n", x.id, x.turbidity, x.de2000, x.cost_ms)).collect();
-                if let Some(dir) = f.parent() {
-                    let _ = std::fs::create_dir_all(dir);
-                }
-                if let Err(e) = crate::fsx::write_atomic(f, text.as_bytes()) {
-                    log::warn!("auto model: cannot cache the scores: {e}");
-                }
-            }
-            s
-        }
-    };
+    let scored = from_disk.filter(|s| !s.is_empty())?;
     SCORES.lock().unwrap_or_else(|p| p.into_inner()).push((key, scored.clone()));
-    Ok(scored)
+    Some(scored)
+}
+
+/// Every candidate's score for `sky`: from this process's cache, the disk cache, or measured on
+/// `ctx` (seconds to minutes for a new atmosphere; progress and cancellation through `job`).
+pub fn score_cached(sky: &Sky, ctx: &crate::render::GpuContext, job: &Job) -> anyhow::Result<Vec<Scored>> {
+    if let Some(s) = known_scores(sky) {
+        job.set_fraction(1.0);
+        return Ok(s);
+    }
+    let key = scores_key(sky);
+    let s = score(sky, &Evaluator::new(ctx)?, job)?;
+    if let Some(f) = cache_dir().map(|d| d.join(format!("auto-{key:016x}.csv"))) {
+        let text: String = s.iter().map(|x| format!("{},{},{},{}\n", x.id, x.turbidity, x.de2000, x.cost_ms)).collect();
+        if let Some(dir) = f.parent() {
+            let _ = std::fs::create_dir_all(dir);
+        }
+        if let Err(e) = crate::fsx::write_atomic(&f, text.as_bytes()) {
+            log::warn!("auto model: cannot cache the scores: {e}");
+        }
+    }
+    SCORES.lock().unwrap_or_else(|p| p.into_inner()).push((key, s.clone()));
+    Ok(s)
+}
+
+/// The pick for `sky` if it is known without measuring (cached in this process or on disk).
+pub fn known_pick(sky: &Sky, budget: Budget) -> Option<Pick> {
+    known_scores(sky).map(|s| choose(&s, budget, sky_suns(sky)))
 }
 
 /// The pick for `sky` within `budget` (scores cached per atmospheres and sun range).
-pub fn pick_cached(sky: &Sky, budget: Budget, ctx: &crate::render::GpuContext) -> anyhow::Result<Pick> {
-    Ok(choose(&score_cached(sky, ctx)?, budget, sky_suns(sky)))
+pub fn pick_cached(sky: &Sky, budget: Budget, ctx: &crate::render::GpuContext, job: &Job) -> anyhow::Result<Pick> {
+    Ok(choose(&score_cached(sky, ctx, job)?, budget, sky_suns(sky)))
 }
 
 /// Resolves `kind = "auto"`: replaces the sky's model with the pick. Returns the pick, or `None`
 /// for skies that name their model.
-pub fn resolve(sky: &mut Sky, ctx: &crate::render::GpuContext) -> anyhow::Result<Option<Pick>> {
+pub fn resolve(sky: &mut Sky, ctx: &crate::render::GpuContext, job: &Job) -> anyhow::Result<Option<Pick>> {
     let Some(budget) = sky.auto_model else { return Ok(None) };
-    let p = pick_cached(sky, budget, ctx)?;
+    let p = pick_cached(sky, budget, ctx, job)?;
     sky.model = p.model(&sky.model);
     Ok(Some(p))
 }

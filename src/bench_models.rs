@@ -7,31 +7,17 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::cli::{self, ModelBenchArgs};
 use skytune::atmosphere::dome::{self, DomeError, Haze, ReferenceDome};
 use skytune::atmosphere::reference::Case;
 use skytune::atmosphere::LutSettings;
 use skytune::modelbench::{self, ChartRow, Evaluator, FitTarget, Method, Point, Prepared, SunRow};
+use skytune::progress::Reporter;
 use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
 use skytune::sky::{FrameInput, Sky};
-
-/// A progress bar on stderr; without a terminal (CI) it redraws at most every 5 s, so a log gets
-/// a line now and then rather than nothing.
-pub fn progress_bar(len: u64, what: &str) -> ProgressBar {
-    let bar = ProgressBar::with_draw_target(Some(len), if console_like() { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::stderr_with_hz(1) });
-    bar.set_style(ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}").expect("valid template").progress_chars("=> "));
-    bar.set_message(what.to_string());
-    bar
-}
-
-fn console_like() -> bool {
-    use std::io::IsTerminal;
-    std::io::stderr().is_terminal()
-}
 
 /// The reference over the benchmark's dome: read from `path`, or computed (minutes) and written.
 pub fn reference_dome(path: &Path, paths: u32) -> anyhow::Result<ReferenceDome> {
@@ -44,11 +30,12 @@ pub fn reference_dome(path: &Path, paths: u32) -> anyhow::Result<ReferenceDome> 
             _ => log::warn!("{e}; computing the reference dome (once, minutes)"),
         },
     }
-    let bar = progress_bar(0, "reference");
+    let bar = Reporter::new(0, "reference");
     let reference = ReferenceDome::compute(&Haze::ALL, &dome::SUN_ELEVATIONS_DEG, dome::BENCH_DOME, paths, &|done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
-    });
+        Ok(())
+    })?;
     bar.finish();
     reference.save(path).with_context(|| format!("writing {}", path.display()))?;
     Ok(reference)
@@ -166,7 +153,7 @@ pub fn run(args: &ModelBenchArgs) -> anyhow::Result<()> {
     let dirs = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
 
     // Accuracy.
-    let bar = progress_bar((points.len() * hazes.len()) as u64, "accuracy");
+    let bar = Reporter::new((points.len() * hazes.len()) as u64, "accuracy");
     let mut by_sun: Vec<SunRow> = Vec::new();
     let mut fits: Vec<(String, Haze, modelbench::Fit)> = Vec::new();
     let mut build_ms = vec![Vec::new(); points.len()];

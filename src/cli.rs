@@ -362,6 +362,15 @@ pub struct AppArgs {
     /// Open the compare view with B: last-good, model=NAME, tier=N, hour=H, weather=W or snapshot=NAME.
     #[arg(long)]
     pub compare: Option<String>,
+    /// Time of day to start at, game hours (default 17.5).
+    #[arg(long)]
+    pub hour: Option<f32>,
+    /// Weather to start at, 0 (clear) .. 1 (storm) (default 0.1).
+    #[arg(long)]
+    pub weather: Option<f32>,
+    /// Preset view to start with: south (default), east, west, north, zenith.
+    #[arg(long)]
+    pub view: Option<String>,
 }
 
 /// `bench` and its subcommands.

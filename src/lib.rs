@@ -7,6 +7,7 @@
 //! - [`compare`]: differences between two renders (FLIP and channel figures, heat maps, layouts).
 //! - [`fsx`]: writes through a temporary file and a rename.
 //! - [`live`]: hot reload of sky files.
+//! - [`progress`]: progress and cancellation of long work, and how it is shown on stderr.
 //! - [`soak`]: long runs with random changes and reloads, measuring memory growth.
 //! - [`snapshot`]: snapshots of a sky's files for before/after comparisons.
 //! - [`watch`]: file watching, shared by sky and shader hot reload.
@@ -20,6 +21,7 @@ pub mod export;
 pub mod fsx;
 pub mod live;
 pub mod modelbench;
+pub mod progress;
 pub mod render;
 pub mod sky;
 pub mod snapshot;

@@ -41,6 +41,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             shader_dir: cli.app.shader_dir,
             compare: cli.app.compare,
             soak: cli.app.soak,
+            hour: cli.app.hour,
+            weather: cli.app.weather,
+            view: cli.app.view,
         }),
         Some(Command::Render(args)) => render(&args),
         Some(Command::Check { sky }) => check(&sky),
@@ -220,23 +223,22 @@ fn reference_radiance(args: &cli::RadianceArgs, atm: skytune::atmosphere::Atmosp
     use skytune::atmosphere::reference::{Estimate, Reference, ReferenceSettings};
     let settings = ReferenceSettings { max_order: args.max_order, paths: args.paths, seed: args.seed, ..Default::default() };
     let model = Reference::new(atm, settings);
-    let done = std::sync::atomic::AtomicUsize::new(0);
+    let bar = skytune::progress::Reporter::new(list.len() as u64, "radiance");
     let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).min(list.len().max(1));
     let chunk = list.len().div_ceil(workers).max(1);
     let mut estimates = vec![Estimate { single: [0.0; 3], all: [0.0; 3], std_err: [0.0; 3] }; list.len()];
     std::thread::scope(|scope| {
         for (cases, out) in list.chunks(chunk).zip(estimates.chunks_mut(chunk)) {
-            let (model, done, total) = (&model, &done, list.len());
+            let (model, bar) = (&model, &bar);
             scope.spawn(move || {
                 for (c, o) in cases.iter().zip(out.iter_mut()) {
                     *o = model.estimate(c);
-                    let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    eprint!("\rradiance: {n}/{total} cases");
+                    bar.inc(1);
                 }
             });
         }
     });
-    eprintln!();
+    bar.finish();
     let worst = estimates.iter().flat_map(|e| (0..3).map(move |c| e.std_err[c] / e.all[c].max(1e-30))).fold(0.0, f64::max);
     let comment = format!(
         "model reference: max order {}, {} paths per case, seed {}; largest relative standard error of a value {:.2e}",
@@ -472,7 +474,7 @@ fn render(args: &RenderArgs) -> anyhow::Result<()> {
     let (w, h) = cli::parse_size(&args.size)?;
     let ctx = GpuContext::headless(adapter(args.frame.cpu))?;
     println!("adapter: {}", ctx.adapter_line());
-    if let Some(pick) = skytune::auto_model::resolve(&mut sky, &ctx)? {
+    if let Some(pick) = skytune::progress::run_reported("auto model", |job| skytune::auto_model::resolve(&mut sky, &ctx, job))? {
         println!("{}", pick.describe());
     }
     let mut headless = Headless::new(ctx, w, h)?;
@@ -503,7 +505,7 @@ fn check(path: &Path) -> anyhow::Result<()> {
     print!("{}", summary(&sky));
     if let Some(budget) = sky.auto_model {
         let ctx = GpuContext::headless(AdapterChoice::from_env())?;
-        let pick = skytune::auto_model::pick_cached(&sky, budget, &ctx)?;
+        let pick = skytune::progress::run_reported("auto model", |job| skytune::auto_model::pick_cached(&sky, budget, &ctx, job))?;
         println!("  {}", pick.describe());
         println!("  measured at sun elevations {:?} degrees, over {} weather step(s)", pick.suns_deg, skytune::auto_model::sky_atmospheres(&sky).len());
     }

@@ -14,7 +14,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     let ev = Evaluator::new(&ctx)?;
     let mut results: Vec<(SweptModel, Counters, f64)> = Vec::new();
     for model in SweptModel::ALL {
-        let bar = crate::bench_models::progress_bar(args.count as u64, model.name());
+        let bar = skytune::progress::Reporter::new(args.count as u64, model.name());
         let t = std::time::Instant::now();
         let counters = sweep::sweep(&ev, model, args.count, args.seed, &mut |n| bar.inc(n as u64))?;
         bar.finish();

@@ -12,6 +12,11 @@ use skytune::sky::builtin::default_sky;
 use skytune::sky::FrameInput;
 
 fn run_panels(controls: &mut Controls, events: Vec<egui::Event>) -> Vec<UiAction> {
+    run_panels_at(controls, events, (1280.0, 800.0)).actions
+}
+
+/// The panels laid out in a window of `size` points; their actions and the sky's rectangle.
+fn run_panels_at(controls: &mut Controls, events: Vec<egui::Event>, size: (f32, f32)) -> ui::UiOutput {
     let sky = default_sky();
     let mut input = FrameInput::new(controls.hour, controls.weather);
     input.tier = controls.tier;
@@ -45,19 +50,38 @@ fn run_panels(controls: &mut Controls, events: Vec<egui::Event>) -> Vec<UiAction
         device_lost: true,
         floor_ms: Some(6.0),
         auto_model: Some("auto model: lut-default (test)".into()),
+        auto_progress: Some((0.4, "computing the reference for weather step 1 of 2".into())),
         auto_point: Some("lut-default".into()),
     };
     let ctx = egui::Context::default();
-    let mut actions = Vec::new();
+    let mut output = None;
     // Two passes: egui lays out on the first and answers clicks on the second.
     for events in [Vec::new(), events] {
-        let raw = egui::RawInput { screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(1280.0, 800.0))), events, ..Default::default() };
-        let mut out = ctx.run_ui(raw, |ui| actions = ui::draw(ui, controls, &info, None));
+        let raw = egui::RawInput { screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(size.0, size.1))), events, ..Default::default() };
+        let mut out = ctx.run_ui(raw, |ui| output = Some(ui::draw(ui, controls, &info, None)));
         // Nothing is painted in this test: the font atlas upload is dropped on purpose.
         out.textures_delta.clear();
         assert!(!out.shapes.is_empty(), "the panels drew nothing");
     }
-    actions
+    output.expect("the panels ran")
+}
+
+#[test]
+fn the_panels_leave_the_sky_most_of_the_window_with_every_section_open() {
+    for size in [(800.0, 600.0), (1280.0, 720.0), (1920.0, 1080.0)] {
+        let mut c = Controls::default();
+        // Every section open, the long statistics among them: none may widen its panel.
+        c.layout.open_sections = ["sky_file", "model_chart", "view", "glare", "times", "skipped", "switches"].map(String::from).to_vec();
+        let out = run_panels_at(&mut c, Vec::new(), size);
+        let share = out.sky_rect.area() / (size.0 * size.1);
+        // The errors panel (this test shows one) takes height too; the side panels no more than their share.
+        assert!(out.sky_rect.width() >= size.0 * (1.0 - skytune::app::layout::PANELS_MAX_FRACTION) - 1.0, "{size:?}: {:?}", out.sky_rect);
+        assert!(share >= 0.6 * (1.0 - skytune::app::layout::ERRORS_MAX_FRACTION), "{size:?}: the sky has {share:.2} of the window");
+        // Tab hides every panel: the sky takes the whole width.
+        c.layout.toggle_hidden();
+        let hidden = run_panels_at(&mut c, Vec::new(), size);
+        assert_eq!(hidden.sky_rect.width(), size.0, "{size:?}");
+    }
 }
 
 #[test]
@@ -135,25 +159,10 @@ fn contact_sheet_covers_the_grid() {
     assert_eq!(sheet.image.get_pixel(35, 12).0, [3, 2, 0, 255]);
 }
 
-/// Starts Xvfb on a display it picks itself (`-displayfd`), so parallel tests never collide.
-fn xvfb() -> Option<(std::process::Child, String)> {
-    use std::io::BufRead;
-    let mut child = Command::new("Xvfb")
-        .args(["-displayfd", "1", "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .ok()?;
-    let mut line = String::new();
-    std::io::BufReader::new(child.stdout.take()?).read_line(&mut line).ok()?;
-    let n: u32 = line.trim().parse().ok()?;
-    Some((child, format!(":{n}")))
-}
-
 /// Runs the window under its own Xvfb with `config` as its settings file and `RUST_LOG=info`;
 /// `customise` adds the arguments and environment. Returns the output and its stderr.
 fn in_window(config: &std::path::Path, customise: impl FnOnce(&mut Command)) -> (std::process::Output, String) {
-    let (mut server, display) = xvfb().expect("Xvfb is required: run scripts/setup.sh");
+    let (mut server, display) = common::xvfb((1024, 768)).expect("Xvfb is required: run scripts/setup.sh");
     let mut command = Command::new(env!("CARGO_BIN_EXE_skytune"));
     command.env("DISPLAY", &display).env("SKYTUNE_CONFIG", config).env("RUST_LOG", "info");
     customise(&mut command);
@@ -177,11 +186,15 @@ fn window_starts_renders_screenshots_and_exits_under_xvfb() {
     let shot = std::fs::read_dir(shots.path()).unwrap().filter_map(|e| e.ok()).map(|e| e.path()).find(|p| p.extension().is_some_and(|x| x == "png")).expect("a screenshot");
     assert!(shot.file_name().unwrap().to_string_lossy().starts_with("default_17.50h_w0.10"), "{}", shot.display());
     let img = image::open(&shot).unwrap().to_rgba8();
-    assert_eq!(img.dimensions(), (1280, 720));
+    // The screenshot is the sky view, at its size: the part of the 1280x720 window the panels leave.
+    let view = stderr.lines().rfind(|l| l.contains("sky view: ")).unwrap_or_else(|| panic!("no sky view logged: {stderr}"));
+    assert!(view.contains(&format!("width {} height {} of a 1280x720 window", img.width(), img.height())), "{view}: the screenshot is {:?}", img.dimensions());
+    assert!(img.width() >= 1280 * 6 / 10 && img.height() == 720, "{:?}", img.dimensions());
     // A real sky: the top is not black, and the image is not one flat colour.
-    let top = img.get_pixel(640, 40).0;
+    let (cx, bottom) = (img.width() / 2, img.height() - 20);
+    let top = img.get_pixel(cx, 40).0;
     assert!(top[0] as u32 + top[1] as u32 + top[2] as u32 > 60, "{top:?}");
-    assert_ne!(img.get_pixel(640, 40), img.get_pixel(640, 700));
+    assert_ne!(img.get_pixel(cx, 40), img.get_pixel(cx, bottom));
     // The window remembered its size and the sky it showed.
     let state = std::fs::read_to_string(&config).unwrap();
     assert!(state.contains("window_size") && state.contains("sky.toml"), "{state}");

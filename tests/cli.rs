@@ -171,6 +171,35 @@ fn radiance_answers_every_case_and_locates_bad_rows() {
 }
 
 #[test]
+fn radiance_progress_in_a_log_is_whole_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = dir.path().join("cases.csv");
+    let mut text = String::from("camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg\n");
+    let count = 48;
+    for k in 0..count {
+        text.push_str(&format!("0.2,0.3,{},{},{}\n", k as i32 % 12 - 6, k % 9 * 10, k * 15 % 180));
+    }
+    std::fs::write(&cases, text).unwrap();
+    let log = dir.path().join("stderr.txt");
+    let o = skytune()
+        .args(["radiance", "--model", "reference", "--paths", "256", "--cases"])
+        .arg(&cases)
+        .arg("--out")
+        .arg(dir.path().join("out.csv"))
+        .stderr(std::fs::File::create(&log).unwrap())
+        .output()
+        .unwrap();
+    let stderr = std::fs::read_to_string(&log).unwrap();
+    assert!(o.status.success(), "{stderr}");
+    // Not a terminal: no bar, no carriage returns; a line now and then and a summary, each whole.
+    assert!(!stderr.contains('\r'), "{stderr:?}");
+    assert!(stderr.ends_with('\n'), "{stderr:?}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert!(lines.len() < count, "{} lines for {count} cases: {stderr}", lines.len());
+    assert!(lines.iter().any(|l| l.starts_with("radiance: done, 48 in ")), "a summary line: {stderr}");
+}
+
+#[test]
 fn new_sky_refuses_an_existing_folder_and_writes_never_leave_half_files() {
     let dir = tempfile::tempdir().unwrap();
     let target = dir.path().join("my_sky");

@@ -84,6 +84,9 @@ impl App {
             let _ = gpu.ctx.device.poll(wgpu::PollType::Poll);
         }
         self.apply_reloads();
+        let last_frame = Duration::from_secs_f32(self.frame_times.back().copied().unwrap_or(0.0) / 1000.0);
+        self.auto.poll(last_frame, self.live.generation);
+        self.update_title();
         self.step_soak();
         if let Err(e) = self.step_contact_sheet() {
             self.sheet = None;
@@ -142,19 +145,27 @@ impl App {
         Ok(())
     }
 
+    /// Sets the window's title when what it says changed.
+    fn update_title(&mut self) {
+        let title = self.window_title();
+        if title != self.title {
+            if let Some(gpu) = &self.gpu {
+                gpu.window.set_title(&title);
+            }
+            self.title = title;
+        }
+    }
+
     /// Swaps in a sky the loader finished, and rebuilds pipelines after a shader edit.
     fn apply_reloads(&mut self) {
         if let Some(ReloadEvent::Reloaded) = self.live.poll() {
             if let Some(gpu) = self.gpu.as_mut() {
                 match gpu.renderer.set_sky(&gpu.ctx, self.live.sky()) {
-                    Ok(()) => {
-                        self.gpu_error = None;
-                        gpu.window.set_title(&format!("skytune - {}", self.live.sky().name));
-                    }
+                    Ok(()) => self.gpu_error = None,
                     Err(e) => self.gpu_error = Some(format!("GPU upload failed, keeping the previous sky: {e}")),
                 }
             }
-            self.resolve_auto_model();
+            self.request_auto_model();
         }
         if self.shaders_changed.swap(false, Ordering::AcqRel) {
             self.reload_shaders();
@@ -180,8 +191,9 @@ impl App {
     /// The frame the controls describe (no clock yet).
     fn frame_input(&self) -> FrameInput {
         let c = &self.controls;
-        // The panel's choice wins; else an auto sky's pick; else the sky file's model.
-        let auto = self.auto_pick.as_ref().and_then(|p| p.as_ref().ok()).map(|p| p.model(&self.live.sky().model));
+        // The panel's choice wins; else an auto sky's pick (the last good one while a new one is
+        // measured); else the sky file's model.
+        let auto = self.auto.model(&self.live.sky().model);
         FrameInput { game_hours: c.game_hours, tier: c.tier, disabled: c.disabled.clone(), sky_model: c.sky_model.or(auto), ..FrameInput::new(c.hour, c.weather) }
     }
 
@@ -242,8 +254,9 @@ impl App {
             compare: None,
             device_lost: gpu.ctx.lost_reason().is_some(),
             floor_ms: gpu.floor_ms(self.clock.frames()),
-            auto_model: self.auto_pick.as_ref().map(|p| p.as_ref().map(|p| p.describe()).unwrap_or_else(|e| e.clone())),
-            auto_point: self.auto_pick.as_ref().and_then(|p| p.as_ref().ok()).map(|p| p.chosen.id.clone()),
+            auto_model: self.auto.describe(sky),
+            auto_progress: self.auto.progress(),
+            auto_point: self.auto.point(),
         };
         let compare = self.controls.compare.open.then(|| {
             let c = &self.controls.compare;
@@ -258,14 +271,15 @@ impl App {
             }
         });
         let info = UiInfo { compare, ..info };
-        let mut actions = Vec::new();
+        let mut out = None;
         let controls = &mut self.controls;
-        let full = gpu.egui_state.egui_ctx().clone().run_ui(raw, |ui| actions = ui::draw(ui, controls, &info, inspector_id));
+        let full = gpu.egui_state.egui_ctx().clone().run_ui(raw, |ui| out = Some(ui::draw(ui, controls, &info, inspector_id)));
         gpu.egui_state.handle_platform_output(&gpu.window, full.platform_output);
         let pixels_per_point = full.pixels_per_point;
         let jobs = gpu.egui_state.egui_ctx().tessellate(full.shapes, pixels_per_point);
         let frees = gpu.update_ui_textures(full.textures_delta);
-        Some((actions, UiPaint { jobs, frees, pixels_per_point }))
+        let out = out?;
+        Some((out.actions, UiPaint { jobs, frees, pixels_per_point, sky_rect: out.sky_rect }))
     }
 
     /// Carries out one action of the panels.
@@ -302,6 +316,7 @@ impl App {
         let hpd = self.live.sky().hours_per_day;
         match key {
             Key::Named(NamedKey::Space) => c.playing = !c.playing,
+            Key::Named(NamedKey::Tab) => c.layout.toggle_hidden(),
             Key::Named(NamedKey::F1) => c.show_help = !c.show_help,
             Key::Named(NamedKey::F5) => self.live.request_reload(),
             Key::Named(NamedKey::F6) => self.reload_shaders(),
@@ -431,7 +446,7 @@ impl App {
     fn screenshot(&mut self) -> anyhow::Result<PathBuf> {
         let input = self.frame_input();
         let path = free_path(&self.shots_dir(), &screenshot_name(&self.live.sky().name, input.hour, input.weather))?;
-        let size = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU yet"))?.size();
+        let size = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU yet"))?.sky_size();
         let img = self.capture_image(&input, size)?;
         crate::fsx::save_png(&img, &path)?;
         Ok(path)

@@ -6,11 +6,16 @@
 //! - [`window`]: the GPU side of the window;
 //! - [`capture`]: screenshots and contact sheets (through [`crate::render::Headless`]);
 //! - [`compare`]: the compare view (two renders, their difference) and snapshots;
-//! - [`ui`]: the panels.
+//! - [`auto_pick`]: `kind = "auto"` measured on a worker, the window rendering meanwhile;
+//! - [`layout`]: panel widths and sections, the sky view's rectangle;
+//! - [`ui`]: the panels; [`diagnostics`]: their statistics section.
 
+pub mod auto_pick;
 pub mod capture;
 pub mod compare;
+pub mod diagnostics;
 pub mod frame;
+pub mod layout;
 pub mod settings;
 pub mod ui;
 pub mod window;
@@ -58,6 +63,12 @@ pub struct AppConfig {
     pub compare: Option<String>,
     /// Soak mode (see `skytune --help`).
     pub soak: bool,
+    /// Time of day to start at, game hours (None: the panel's default).
+    pub hour: Option<f32>,
+    /// Weather to start at, 0..1.
+    pub weather: Option<f32>,
+    /// Preset view to start with (`south`, `zenith`, ...).
+    pub view: Option<String>,
 }
 
 /// Whether a display server is reachable (X11 or Wayland).
@@ -93,7 +104,18 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
     if let SkySpec::File(p) | SkySpec::Continent { path: p, .. } = &spec {
         settings.opened(p.clone());
     }
-    let mut controls = Controls::default();
+    let mut controls = Controls { layout: settings.panels.clone(), ..Controls::default() };
+    if let Some(h) = config.hour {
+        anyhow::ensure!(h.is_finite() && (0.0..live.sky().hours_per_day).contains(&h), "--hour: expected 0 to {}, found {h}", live.sky().hours_per_day);
+        (controls.hour, controls.game_hours) = (h, h as f64);
+    }
+    if let Some(w) = config.weather {
+        anyhow::ensure!((0.0..=1.0).contains(&w), "--weather: expected 0 to 1, found {w}");
+        controls.weather = w;
+    }
+    if let Some(v) = &config.view {
+        controls.camera = crate::render::Camera::preset(v).ok_or_else(|| anyhow!("--view: unknown view \"{v}\"; expected south, east, west, north or zenith"))?;
+    }
     if let Some(t) = config.tier {
         controls.tier = Tier::new(t).ok_or_else(|| anyhow!("--tier: expected 4, 2 or 1, found {t}"))?;
     }
@@ -127,9 +149,11 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         soak,
         test_lose_device_at: std::env::var("SKYTUNE_TEST_LOSE_DEVICE_AT").ok().and_then(|v| v.parse().ok()),
         snapshots: Vec::new(),
-        auto_pick: None,
+        auto: auto_pick::AutoPicker::default(),
+        title: String::new(),
     };
     event_loop.run_app(&mut app).context("running the window")?;
+    app.settings.panels = app.controls.layout.clone();
     app.settings.save();
     match app.error {
         Some(e) => Err(e),
@@ -181,8 +205,10 @@ pub struct App {
     test_lose_device_at: Option<u64>,
     /// Snapshots of the sky file shown (refreshed when the compare view opens and after saving one).
     snapshots: Vec<crate::snapshot::Snapshot>,
-    /// `kind = "auto"`: what was picked for the sky shown, or why nothing could be.
-    auto_pick: Option<Result<crate::auto_model::Pick, String>>,
+    /// `kind = "auto"`: the pick for the sky shown, measured on a worker.
+    auto: auto_pick::AutoPicker,
+    /// The window's title as last set.
+    title: String,
 }
 
 impl App {
@@ -201,26 +227,34 @@ impl App {
             self.watch_shaders(dir.clone());
         }
         let adapter = if self.config.cpu { AdapterChoice::Cpu } else { AdapterChoice::from_env() };
-        let title = format!("skytune - {}", self.live.sky().name);
-        let (gpu, shader_error) = WindowGpu::new(event_loop, &title, self.settings.window_size, adapter, library, self.live.sky())?;
+        self.title = self.window_title();
+        let (gpu, shader_error) = WindowGpu::new(event_loop, &self.title, self.settings.window_size, adapter, library, self.live.sky())?;
         self.shader_error = shader_error;
         self.gpu = Some(gpu);
         self.refresh_snapshots();
-        self.resolve_auto_model();
+        self.request_auto_model();
         Ok(())
     }
 
-    /// Picks the model of a `kind = "auto"` sky (cached per atmosphere and budget; the first pick
-    /// for a new atmosphere measures every candidate, seconds to minutes).
-    fn resolve_auto_model(&mut self) {
-        let sky = self.live.sky();
-        self.auto_pick = match (sky.auto_model, self.gpu.as_ref()) {
-            (Some(budget), Some(gpu)) => Some(crate::auto_model::pick_cached(sky, budget, &gpu.ctx).map_err(|e| format!("auto model: {e:#}"))),
-            _ => None,
-        };
-        if let Some(Ok(p)) = &self.auto_pick {
-            log::info!("{}", p.describe());
+    /// Asks for the model of a `kind = "auto"` sky: at once when cached, else measured on a worker
+    /// (the first pick for a new atmosphere measures every candidate, a minute or more).
+    fn request_auto_model(&mut self) {
+        if let Some(gpu) = self.gpu.as_ref() {
+            self.auto.request(self.live.sky(), self.live.generation, &gpu.ctx);
         }
+    }
+
+    /// The window's title: the sky's name, and a marker while its file fails to load or an auto
+    /// pick is measured.
+    fn window_title(&self) -> String {
+        let mut title = format!("skytune - {}", self.live.sky().name);
+        if self.live.error.is_some() {
+            title.push_str(" [reload failed: showing the last good sky]");
+        }
+        if self.auto.is_measuring() {
+            title.push_str(" [measuring the auto model]");
+        }
+        title
     }
 
     /// Watches the shader folder with the same facility as the sky files.
@@ -272,7 +306,7 @@ impl ApplicationHandler for App {
                 if let Some((x, y)) = self.drag {
                     if x.is_finite() {
                         let c = &mut self.controls.camera;
-                        let per_px = c.fov_y_deg / gpu.surface_config.height.max(1) as f32;
+                        let per_px = c.fov_y_deg / gpu.sky_view.height.max(1) as f32;
                         c.yaw_deg = (c.yaw_deg - (position.x - x) as f32 * per_px).rem_euclid(360.0);
                         c.pitch_deg = (c.pitch_deg + (position.y - y) as f32 * per_px).clamp(-89.0, 89.0);
                     }

@@ -14,11 +14,13 @@ pub struct Settings {
     pub last_sky: Option<PathBuf>,
     /// Recently opened sky files, most recent first.
     pub recent: Vec<PathBuf>,
+    /// Panel widths, which panels and sections are open.
+    pub panels: super::layout::PanelLayout,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Self { window_size: [1280, 720], last_sky: None, recent: Vec::new() }
+        Self { window_size: [1280, 720], last_sky: None, recent: Vec::new(), panels: Default::default() }
     }
 }
 
@@ -45,7 +47,8 @@ impl Settings {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return (Self::default(), None),
             Err(e) => format!("cannot read it: {e}"),
             Ok(bytes) => match std::str::from_utf8(&bytes).map_err(|e| e.to_string()).and_then(|t| toml::from_str::<Settings>(t).map_err(|e| e.to_string())) {
-                Ok(s) if s.window_size.iter().all(|v| (1..=16384).contains(v)) => return (s, None),
+                Ok(s) if s.window_size.iter().all(|v| (1..=16384).contains(v)) && s.panels_are_sane() => return (s, None),
+                Ok(s) if !s.panels_are_sane() => format!("panels {:?} has widths outside 0..=16384", s.panels),
                 Ok(s) => format!("window_size {:?} is out of range 1..=16384", s.window_size),
                 Err(e) => e.trim().to_string(),
             },
@@ -66,6 +69,10 @@ impl Settings {
         if let Err(e) = result {
             log::warn!("cannot save {}: {e}", path.display());
         }
+    }
+
+    fn panels_are_sane(&self) -> bool {
+        [self.panels.left_width, self.panels.right_width].iter().all(|w| w.is_finite() && (0.0..=16384.0).contains(w))
     }
 
     /// Records an opened sky file.

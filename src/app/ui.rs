@@ -17,6 +17,8 @@ use crate::sky::load::SEASONS;
 use crate::sky::resolved::{ColorMode, SkyModel, SkyModelKind, ToneMapper};
 use crate::sky::{Rgba, Sky};
 
+use super::layout::{around, PanelLayout, SkyViewport, ERRORS_MAX_FRACTION};
+
 /// Everything the user controls from the panels and the keyboard.
 #[derive(Debug, Clone)]
 pub struct Controls {
@@ -62,6 +64,8 @@ pub struct Controls {
     pub particle_time_s: f64,
     /// Bursts asked for with the burst buttons, recent ones.
     pub bursts: Vec<crate::sky::particles::Burst>,
+    /// Panel widths, which panels and sections are open (kept with the window state).
+    pub layout: PanelLayout,
 }
 
 impl Controls {
@@ -100,6 +104,7 @@ impl Default for Controls {
             particle_time_s: 0.0,
             bursts: Vec::new(),
             skips_baseline_ms: None,
+            layout: PanelLayout::default(),
         }
     }
 }
@@ -192,14 +197,18 @@ pub struct UiInfo<'a> {
     pub device_lost: bool,
     /// The fill-rate floor at the window's size, ms (see `render::baseline`), once measured.
     pub floor_ms: Option<f32>,
-    /// `kind = "auto"`: the pick (model, error, cost, runner-up), or why there is none.
+    /// `kind = "auto"`: the pick (model, error, cost, runner-up), what is shown meanwhile, or why
+    /// there is none.
     pub auto_model: Option<String>,
+    /// `kind = "auto"`: progress (0..1) and stage of the pick being measured on a worker.
+    pub auto_progress: Option<(f32, String)>,
     /// `kind = "auto"`: the picked point's id on the benchmark chart.
     pub auto_point: Option<String>,
 }
 
 /// Keyboard shortcuts, shown in the help overlay.
-pub const SHORTCUTS: [(&str, &str); 15] = [
+pub const SHORTCUTS: [(&str, &str); 16] = [
+    ("Tab", "hide / show the panels"),
     ("Space", "play / pause time"),
     ("[ / ]", "hour -0.25 / +0.25"),
     ("- / =", "weather -0.05 / +0.05"),
@@ -224,165 +233,260 @@ fn swatch(ui: &mut egui::Ui, c: Rgba) {
     ui.painter().rect_stroke(rect, 2.0, egui::Stroke::new(1.0, Color32::GRAY), egui::StrokeKind::Inside);
 }
 
-/// Builds every panel for one frame and returns the actions the user asked for.
-pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_texture: Option<egui::TextureId>) -> Vec<UiAction> {
+/// What the panels produced: the user's actions and where the sky shows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UiOutput {
+    /// Actions for the app to carry out.
+    pub actions: Vec<UiAction>,
+    /// The part of the window the panels leave to the sky, points, on whole pixels.
+    pub sky_rect: egui::Rect,
+}
+
+/// A collapsible section whose open state lives in the controls' layout (so it is remembered),
+/// under `key`; `body` gets the controls back.
+pub fn section<R>(ui: &mut egui::Ui, c: &mut Controls, key: &str, title: impl Into<egui::WidgetText>, body: impl FnOnce(&mut egui::Ui, &mut Controls) -> R) -> Option<R> {
+    let open = c.layout.is_open(key);
+    let response = egui::CollapsingHeader::new(title).id_salt(key).open(Some(open)).show(ui, |ui| body(ui, c));
+    if response.header_response.clicked() {
+        c.layout.set_open(key, !open);
+    }
+    response.body_returned
+}
+
+/// Sliders as wide as leaves room for their value and label in the panel's width: a wider one
+/// would widen what the text below wraps at, past the panel's edge.
+fn fit_sliders(ui: &mut egui::Ui) {
+    ui.spacing_mut().slider_width = (ui.available_width() - 150.0).clamp(40.0, 200.0);
+}
+
+/// A panel's header: the title and a button that hides the panel.
+fn panel_header(ui: &mut egui::Ui, title: &str, open: &mut bool) {
+    ui.horizontal(|ui| {
+        ui.heading(title);
+        ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+            if ui.small_button("hide").on_hover_text("hide this panel (Tab hides and shows every panel)").clicked() {
+                *open = false;
+            }
+        });
+    });
+}
+
+/// Builds every panel for one frame; returns the actions the user asked for and the sky's part
+/// of the window. The side panels share at most `layout::PANELS_MAX_FRACTION` of the width.
+pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_texture: Option<egui::TextureId>) -> UiOutput {
     let mut actions = Vec::new();
     let sky = info.sky;
-    egui::Panel::left("controls").default_size(300.0).show(ui, |ui| {
-        egui::ScrollArea::vertical().show(ui, |ui| {
-            ui.heading(&sky.name);
-            ui.label(RichText::new(info.source).small());
-            ui.label(RichText::new(info.adapter).small().weak());
-            ui.separator();
+    // Painted first, so under the panels: the window outside the sky (set once the panels are laid out).
+    let background = ui.painter().add(egui::Shape::Noop);
+    let screen = ui.max_rect();
+    let (left_min, left_max) = c.layout.left_range(screen.width());
+    let mut left_open = c.layout.shows_left();
+    let left =
+        egui::Panel::left("controls").default_size(c.layout.left_width.clamp(left_min, left_max)).size_range(left_min..=left_max).show_collapsible(ui, &mut left_open, |ui| {
+            let mut open = true;
+            panel_header(ui, &sky.name, &mut open);
+            egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+                fit_sliders(ui);
+                ui.label(RichText::new(info.source).small());
+                ui.label(RichText::new(info.adapter).small().weak());
+                ui.separator();
 
-            ui.collapsing("Sky file", |ui| {
-                ui.horizontal(|ui| {
-                    ui.text_edit_singleline(&mut c.path_input).on_hover_text("path of a sky or continent file");
-                    if ui.button("Open").clicked() && !c.path_input.trim().is_empty() {
-                        actions.push(UiAction::Open(PathBuf::from(c.path_input.trim())));
-                    }
-                });
-                ui.horizontal(|ui| {
-                    if ui.button("Built-in sky").clicked() {
-                        actions.push(UiAction::OpenBuiltin);
-                    }
-                    if ui.button("Reload (F5)").clicked() {
-                        actions.push(UiAction::Reload);
-                    }
-                    if ui.button("Shaders (F6)").clicked() {
-                        actions.push(UiAction::ReloadShaders);
-                    }
-                });
-                for p in info.recent {
-                    if ui.link(p.display().to_string()).clicked() {
-                        actions.push(UiAction::Open(p.clone()));
-                    }
-                }
-                ui.label(RichText::new("Tip: drop a sky file onto the window.").small().weak());
-                if info.continent {
-                    let mut season = c.season;
-                    egui::ComboBox::from_label("season").selected_text(SEASONS[season]).show_ui(ui, |ui| {
-                        for (i, s) in SEASONS.iter().enumerate() {
-                            ui.selectable_value(&mut season, i, *s);
+                section(ui, c, "sky_file", "Sky file", |ui, c| {
+                    ui.horizontal(|ui| {
+                        let width = (ui.available_width() - 60.0).max(60.0);
+                        ui.add(egui::TextEdit::singleline(&mut c.path_input).desired_width(width)).on_hover_text("path of a sky or continent file");
+                        if ui.button("Open").clicked() && !c.path_input.trim().is_empty() {
+                            actions.push(UiAction::Open(PathBuf::from(c.path_input.trim())));
                         }
                     });
-                    if season != c.season {
-                        c.season = season;
-                        actions.push(UiAction::Season(season));
+                    ui.horizontal_wrapped(|ui| {
+                        if ui.button("Built-in sky").clicked() {
+                            actions.push(UiAction::OpenBuiltin);
+                        }
+                        if ui.button("Reload (F5)").clicked() {
+                            actions.push(UiAction::Reload);
+                        }
+                        if ui.button("Shaders (F6)").clicked() {
+                            actions.push(UiAction::ReloadShaders);
+                        }
+                    });
+                    for p in info.recent {
+                        if ui.link(p.display().to_string()).clicked() {
+                            actions.push(UiAction::Open(p.clone()));
+                        }
                     }
-                }
-            });
+                    ui.label(RichText::new("Tip: drop a sky file onto the window.").small().weak());
+                    if info.continent {
+                        let mut season = c.season;
+                        egui::ComboBox::from_label("season").selected_text(SEASONS[season]).show_ui(ui, |ui| {
+                            for (i, s) in SEASONS.iter().enumerate() {
+                                ui.selectable_value(&mut season, i, *s);
+                            }
+                        });
+                        if season != c.season {
+                            c.season = season;
+                            actions.push(UiAction::Season(season));
+                        }
+                    }
+                });
 
-            ui.separator();
-            ui.add(egui::Slider::new(&mut c.hour, 0.0..=sky.hours_per_day - 0.001).text("hour").fixed_decimals(2));
-            ui.horizontal(|ui| {
+                ui.separator();
+                ui.add(egui::Slider::new(&mut c.hour, 0.0..=sky.hours_per_day - 0.001).text("hour").fixed_decimals(2));
                 if ui.button(if c.playing { "Pause" } else { "Play" }).clicked() {
                     c.playing = !c.playing;
                 }
                 ui.add(egui::Slider::new(&mut c.speed, 0.0..=4.0).text("game h/s"));
-            });
-            ui.add(egui::Slider::new(&mut c.weather, 0.0..=1.0).text("weather").fixed_decimals(2));
-            if !sky.weather_names.is_empty() {
-                let n = sky.weather_names.len();
-                let i = ((c.weather * (n - 1) as f32).round() as usize).min(n - 1);
-                ui.label(format!("weather step: {} ({})", sky.weather_names[i], sky.weather_names.join(" / ")));
-            }
-
-            ui.separator();
-            ui.horizontal(|ui| {
-                ui.label("GPU tier:");
-                for t in Tier::ALL {
-                    ui.radio_value(&mut c.tier, t, if t.stages() == 1 { "1 stage".to_string() } else { format!("{} stages", t.stages()) });
+                ui.add(egui::Slider::new(&mut c.weather, 0.0..=1.0).text("weather").fixed_decimals(2));
+                if !sky.weather_names.is_empty() {
+                    let n = sky.weather_names.len();
+                    let i = ((c.weather * (n - 1) as f32).round() as usize).min(n - 1);
+                    ui.label(format!("weather step: {} ({})", sky.weather_names[i], sky.weather_names.join(" / ")));
                 }
-            });
-            if let Some(line) = &info.auto_model {
-                ui.label(line);
-            }
-            sky_model_controls(ui, c, info.sky);
-            let current = info.auto_point.clone().filter(|_| c.sky_model.is_none()).or_else(|| crate::modelbench::point_for(&c.sky_model.unwrap_or(info.sky.model)));
-            ui.collapsing("speed against accuracy (skytune bench models)", |ui| model_chart(ui, current.as_deref()));
-            if let Some(p) = info.model_progress {
-                ui.add(egui::ProgressBar::new(p).show_percentage().text("computing the sky in the background"));
-            }
 
-            ui.collapsing("View", |ui| {
-                ui.add(egui::Slider::new(&mut c.camera.fov_y_deg, 10.0..=120.0).text("fov"));
-                ui.add(egui::Slider::new(&mut c.camera.yaw_deg, 0.0..=360.0).text("yaw"));
-                ui.add(egui::Slider::new(&mut c.camera.pitch_deg, -89.0..=89.0).text("pitch"));
+                ui.separator();
                 ui.horizontal_wrapped(|ui| {
-                    for (name, yaw, pitch) in PRESETS {
-                        if ui.button(name).clicked() {
-                            c.camera.yaw_deg = yaw;
-                            c.camera.pitch_deg = pitch;
-                        }
+                    ui.label("GPU tier:");
+                    for t in Tier::ALL {
+                        ui.radio_value(&mut c.tier, t, if t.stages() == 1 { "1 stage".to_string() } else { format!("{} stages", t.stages()) });
                     }
                 });
-                ui.checkbox(&mut c.options.scene, "main-scene stand-in");
-                ui.checkbox(&mut c.options.depth_split, "depth-range split (scene [0, 0.95], sky [0.99, 1])");
-                ui.checkbox(&mut c.options.glare, "sun glare");
-            });
-
-            ui.collapsing("Sun glare", |ui| match info.glare {
-                Some(g) => {
-                    ui.label(format!("V = {}  T = {}", g.visible_samples, g.total_samples));
-                    ui.label(format!("visibility V/T = {:.3}", g.ratio));
-                    ui.label(format!("intensity = {:.3}", g.intensity));
-                    ui.label(format!("last result waited {} frame(s); {} frames without result", g.frames_waited, g.frames_without_result));
-                    ui.checkbox(&mut c.freeze_glare, "freeze the visibility ratio");
+                if let Some(line) = &info.auto_model {
+                    ui.label(line);
                 }
-                None => {
-                    ui.label("this sky has no [glare]");
+                if let Some((p, stage)) = &info.auto_progress {
+                    ui.add(egui::ProgressBar::new(*p).show_percentage());
+                    ui.label(RichText::new(stage).small());
                 }
-            });
-
-            ui.separator();
-            ui.horizontal(|ui| {
-                if ui.button("Screenshot (F12)").clicked() {
-                    actions.push(UiAction::Screenshot);
+                sky_model_controls(ui, c, info.sky);
+                let current = info.auto_point.clone().filter(|_| c.sky_model.is_none()).or_else(|| crate::modelbench::point_for(&c.sky_model.unwrap_or(info.sky.model)));
+                section(ui, c, "model_chart", "Speed against accuracy", |ui, _| model_chart(ui, current.as_deref()));
+                if let Some(p) = info.model_progress {
+                    ui.add(egui::ProgressBar::new(p).show_percentage().text("computing the sky in the background"));
                 }
-                if ui.button("Contact sheet").clicked() && info.sheet_progress.is_none() {
-                    actions.push(UiAction::ContactSheet);
+
+                section(ui, c, "view", "View", |ui, c| {
+                    ui.add(egui::Slider::new(&mut c.camera.fov_y_deg, 10.0..=120.0).text("fov"));
+                    ui.add(egui::Slider::new(&mut c.camera.yaw_deg, 0.0..=360.0).text("yaw"));
+                    ui.add(egui::Slider::new(&mut c.camera.pitch_deg, -89.0..=89.0).text("pitch"));
+                    ui.horizontal_wrapped(|ui| {
+                        for (name, yaw, pitch) in PRESETS {
+                            if ui.button(name).clicked() {
+                                c.camera.yaw_deg = yaw;
+                                c.camera.pitch_deg = pitch;
+                            }
+                        }
+                    });
+                    ui.checkbox(&mut c.options.scene, "main-scene stand-in");
+                    ui.checkbox(&mut c.options.depth_split, "depth-range split (scene [0, 0.95], sky [0.99, 1])");
+                    ui.checkbox(&mut c.options.glare, "sun glare");
+                });
+
+                section(ui, c, "glare", "Sun glare", |ui, c| match info.glare {
+                    Some(g) => {
+                        ui.label(format!("V = {}  T = {}", g.visible_samples, g.total_samples));
+                        ui.label(format!("visibility V/T = {:.3}", g.ratio));
+                        ui.label(format!("intensity = {:.3}", g.intensity));
+                        ui.label(format!("last result waited {} frame(s); {} frames without result", g.frames_waited, g.frames_without_result));
+                        ui.checkbox(&mut c.freeze_glare, "freeze the visibility ratio");
+                    }
+                    None => {
+                        ui.label("this sky has no [glare]");
+                    }
+                });
+
+                ui.separator();
+                ui.horizontal_wrapped(|ui| {
+                    if ui.button("Screenshot (F12)").clicked() {
+                        actions.push(UiAction::Screenshot);
+                    }
+                    if ui.button("Contact sheet").clicked() && info.sheet_progress.is_none() {
+                        actions.push(UiAction::ContactSheet);
+                    }
+                });
+                ui.horizontal_wrapped(|ui| {
+                    ui.add(egui::DragValue::new(&mut c.sheet_grid.0).range(1..=24).prefix("hours "));
+                    ui.add(egui::DragValue::new(&mut c.sheet_grid.1).range(1..=8).prefix("weathers "));
+                });
+                if let Some((done, total)) = info.sheet_progress {
+                    ui.add(egui::ProgressBar::new(done as f32 / total.max(1) as f32).text(format!("contact sheet {done}/{total}")));
                 }
-            });
-            ui.horizontal(|ui| {
-                ui.add(egui::DragValue::new(&mut c.sheet_grid.0).range(1..=24).prefix("hours "));
-                ui.add(egui::DragValue::new(&mut c.sheet_grid.1).range(1..=8).prefix("weathers "));
-            });
-            if let Some((done, total)) = info.sheet_progress {
-                ui.add(egui::ProgressBar::new(done as f32 / total.max(1) as f32).text(format!("contact sheet {done}/{total}")));
-            }
-            if !info.last_capture.is_empty() {
-                ui.label(RichText::new(info.last_capture).small());
-            }
+                if !info.last_capture.is_empty() {
+                    ui.label(RichText::new(info.last_capture).small());
+                }
 
-            ui.separator();
-            if ui.button(if c.compare.open { "Close compare (F7)" } else { "Compare (F7)" }).clicked() {
-                c.compare.open = !c.compare.open;
-                actions.push(UiAction::RefreshSnapshots);
-            }
+                ui.separator();
+                if ui.button(if c.compare.open { "Close compare (F7)" } else { "Compare (F7)" }).clicked() {
+                    c.compare.open = !c.compare.open;
+                    actions.push(UiAction::RefreshSnapshots);
+                }
 
-            ui.separator();
-            stats(ui, c, info);
+                ui.separator();
+                super::diagnostics::stats(ui, c, info);
+            });
+            open
         });
-    });
+    let left_width = match &left {
+        Some(r) if r.inner => {
+            c.layout.left_width = r.response.rect.width();
+            r.response.rect.width()
+        }
+        Some(r) => r.response.rect.width(),
+        None => 0.0,
+    };
+    let left_hidden_by_button = left.as_ref().is_some_and(|r| !r.inner);
+    if left_open != c.layout.shows_left() || left_hidden_by_button {
+        // The panel's own button, or a drag on its edge, opened or closed it.
+        c.layout.left_open = left_open && !left_hidden_by_button;
+        c.layout.hidden &= !c.layout.left_open;
+    }
     if let Some(info) = &info.compare {
         compare_window(ui, c, info, &mut actions);
     }
 
-    egui::Panel::right("objects").default_size(280.0).show(ui, |ui| {
-        egui::ScrollArea::vertical().show(ui, |ui| objects(ui, c, info));
-    });
+    let (right_min, right_max) = c.layout.right_range(screen.width(), left_width);
+    let mut right_open = c.layout.shows_right();
+    let right = egui::Panel::right("objects").default_size(c.layout.right_width.clamp(right_min, right_max)).size_range(right_min..=right_max).show_collapsible(
+        ui,
+        &mut right_open,
+        |ui| {
+            let mut open = true;
+            panel_header(ui, "Objects", &mut open);
+            egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+                fit_sliders(ui);
+                objects(ui, c, info)
+            });
+            open
+        },
+    );
+    let right_hidden_by_button = right.as_ref().is_some_and(|r| !r.inner);
+    if let Some(r) = right.as_ref().filter(|r| r.inner) {
+        c.layout.right_width = r.response.rect.width();
+    }
+    if right_open != c.layout.shows_right() || right_hidden_by_button {
+        c.layout.right_open = right_open && !right_hidden_by_button;
+        c.layout.hidden &= !c.layout.right_open;
+    }
 
     if !info.errors.is_empty() {
-        egui::Panel::bottom("errors").show(ui, |ui| {
-            for e in info.errors {
-                ui.colored_label(Color32::from_rgb(255, 110, 110), e);
-            }
-            if info.device_lost && ui.button("Recreate the GPU device").clicked() {
-                actions.push(UiAction::RecreateDevice);
-            }
+        egui::Panel::bottom("errors").max_size(screen.height() * ERRORS_MAX_FRACTION).show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                for e in info.errors {
+                    ui.colored_label(Color32::from_rgb(255, 110, 110), e);
+                }
+                if info.device_lost && ui.button("Recreate the GPU device").clicked() {
+                    actions.push(UiAction::RecreateDevice);
+                }
+            });
         });
     }
+
+    // What the panels leave is the sky's, on whole pixels so the sky's copy and the paint around
+    // it meet without a gap.
+    let ppp = ui.ctx().pixels_per_point();
+    let surface = ((screen.width() * ppp).round() as u32, (screen.height() * ppp).round() as u32);
+    let sky_rect = SkyViewport::from_points(ui.available_rect_before_wrap(), ppp, surface).to_points(ppp);
+    let fill = ui.visuals().panel_fill;
+    ui.painter().set(background, egui::Shape::Vec(around(screen, sky_rect).into_iter().map(|r| egui::Shape::rect_filled(r, 0.0, fill)).collect()));
 
     if let (Some(target), Some(tex)) = (c.inspect.clone(), inspector_texture) {
         let mut open = true;
@@ -418,41 +522,7 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
             });
         });
     }
-    actions
-}
-
-fn stats(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
-    let times: Vec<[f64; 2]> = info.frame_times_ms.iter().enumerate().map(|(i, t)| [i as f64, *t as f64]).collect();
-    let last = info.frame_times_ms.back().copied().unwrap_or(0.0);
-    let mut sorted: Vec<f32> = info.frame_times_ms.iter().copied().collect();
-    sorted.sort_by(f32::total_cmp);
-    let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
-    ui.label(format!("frame {last:.1} ms (median {median:.1} ms, {:.0} fps)", if median > 0.0 { 1000.0 / median } else { 0.0 }));
-    egui_plot::Plot::new("frame_times").height(70.0).show_axes([false, true]).allow_drag(false).allow_zoom(false).allow_scroll(false).show(ui, |p| {
-        p.line(egui_plot::Line::new("frame ms", times));
-    });
-    let section = |ui: &mut egui::Ui, title: &str, rows: &[(&str, f32)]| {
-        if !rows.is_empty() {
-            ui.label(title);
-            for (name, ms) in rows {
-                ui.label(format!("  {name}: {ms:.2} ms"));
-            }
-        }
-    };
-    section(ui, "GPU time per phase (timestamp queries):", info.gpu_ms);
-    if let Some(floor) = info.floor_ms.filter(|f| *f > 0.0 && !info.gpu_ms.is_empty()) {
-        let sky: f32 = info.gpu_ms.iter().map(|(_, ms)| ms).sum();
-        ui.label(format!("fill-limit ratio {:.1} (sky {sky:.2} ms / floor {floor:.2} ms: one full-screen pass sampling one texture)", sky / floor))
-            .on_hover_text("skytune bench frame measures it for every sky; the goal is 3");
-    }
-    section(ui, "CPU time per frame section:", info.cpu_ms);
-    let s = info.stats;
-    ui.label(format!("draw calls {}, objects drawn {}, hidden {}, stars {} of {}", s.draw_calls, s.objects_drawn, s.objects_hidden, s.stars_drawn, s.stars));
-    ui.label(format!("texture stages skipped (black this frame): {}", s.stages_skipped));
-    skips(ui, c, info);
-    if let Some(g) = info.glare {
-        ui.label(format!("sun visibility {:.3}, glare intensity {:.3}", g.ratio, g.intensity));
-    }
+    UiOutput { actions, sky_rect }
 }
 
 /// Label of a sky model in the selector.
@@ -505,95 +575,12 @@ fn model_chart(ui: &mut egui::Ui, current: Option<&str>) {
     };
 }
 
-/// What the renderer skipped this frame, a switch per skip, and what switching skips off costs:
-/// the median frame time now against the median when they were last all on.
-fn skips(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
-    let s = info.stats;
-    let mut skipped = vec![
-        format!("{} objects hidden by their ref colour", s.objects_ref_hidden),
-        format!("{} below the horizon behind the scene", s.objects_below_horizon),
-        format!("{} dome layers out of view", s.objects_off_screen),
-        format!("{} black texture stages", s.stages_skipped),
-        format!("{} blended draws black and transparent", s.draws_dark),
-        format!("mip selection of {} stages no pixel minifies", s.stages_level0),
-    ];
-    if s.stars_skipped {
-        skipped.push("the star field (transparent)".into());
-    }
-    if s.tables_skipped {
-        skipped.push("the lut tables' rebuild (unchanged)".into());
-    }
-    if s.map_skipped {
-        skipped.push("the sky-view map (unchanged)".into());
-    }
-    ui.label(format!("skipped this frame: {}", skipped.join(", ")));
-    ui.horizontal(|ui| {
-        ui.label("dome layers at");
-        for r in crate::render::DomeResolution::ALL {
-            ui.radio_value(&mut c.options.dome_resolution, r, r.name());
-        }
-        let runs: Vec<String> = s.reduced_runs.iter().map(|d| format!("1/{d}")).collect();
-        ui.label(format!(
-            "resolution ({} of {} objects in reduced buffers: {})",
-            s.objects_reduced,
-            s.objects_drawn,
-            if runs.is_empty() { "none".into() } else { runs.join(", ") }
-        ));
-        ui.checkbox(&mut c.options.join_runs, format!("join the first runs ({} composites)", s.composites));
-        ui.add_enabled(
-            c.options.join_runs,
-            egui::Checkbox::new(&mut c.options.seed_joined, format!("seed the second run with the first ({})", if s.seeded { "this frame" } else { "not this frame" })),
-        );
-        ui.checkbox(&mut c.options.additive_first, format!("additive draws under the background ({})", s.drawn_first));
-        ui.add_enabled(
-            c.options.additive_first,
-            egui::Checkbox::new(&mut c.options.fuse_background, format!("one of them as the background ({})", if s.background_fused { "this frame" } else { "not this frame" })),
-        );
-        ui.add_enabled(
-            c.options.join_runs && c.options.seed_joined,
-            egui::Checkbox::new(&mut c.options.fold_seed, format!("its first layer over the seed ({})", if s.seed_folded { "this frame" } else { "not this frame" })),
-        );
-        ui.checkbox(&mut c.options.flash_in_run, format!("lightning flash in a run ({})", if s.joined_runs_only > 0 { "this frame" } else { "not this frame" }));
-        ui.checkbox(&mut c.options.pair_layers, format!("two alpha layers at once ({} pairs)", s.layers_paired));
-        ui.checkbox(&mut c.options.texel_quads, format!("sparse stars texel by texel ({} triangles)", s.texel_triangles));
-        ui.add_enabled(c.options.texel_quads, egui::Checkbox::new(&mut c.options.grid_bands, format!("the background there on one triangle ({} rectangles)", s.background_rects)));
-    });
-    let median = |v: &VecDeque<f32>| {
-        let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();
-        x.sort_by(f32::total_cmp);
-        x.get(x.len() / 2).copied()
-    };
-    let before = c.options.skips;
-    let k = &mut c.options.skips;
-    ui.horizontal(|ui| {
-        ui.checkbox(&mut k.dark_stages, "skip black stages");
-        ui.checkbox(&mut k.invisible_stars, "skip transparent stars");
-        ui.checkbox(&mut k.unchanged_tables, "skip unchanged tables and map");
-        ui.checkbox(&mut k.below_horizon, "skip objects behind the scene");
-        ui.checkbox(&mut k.off_screen, "skip dome layers and scene out of view");
-        ui.checkbox(&mut k.unneeded_mips, "skip unneeded mip selection");
-        ui.checkbox(&mut k.covered_clears, "skip clears the background covers");
-    });
-    let all_on = c.options.skips == crate::render::Skips::default();
-    if before == crate::render::Skips::default() && !all_on {
-        // Switching a skip off: remember what frames cost with every skip on.
-        c.skips_baseline_ms = median(info.frame_times_ms);
-    }
-    match (all_on, c.skips_baseline_ms, median(info.frame_times_ms)) {
-        (false, Some(with), Some(now)) => {
-            ui.label(format!("these skips save {:.2} ms per frame here (median frame {now:.2} ms without them, {with:.2} ms with all skips)", now - with));
-        }
-        _ => {
-            ui.label("switch a skip off to measure what it saves in this view");
-        }
-    }
-}
-
 /// The skydome colour source: every model, switchable live, and the physical models' settings.
 fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
     let mut model = c.sky_model.unwrap_or(sky.model);
     let before = model;
-    egui::ComboBox::from_label("sky model").selected_text(model_label(model.kind)).show_ui(ui, |ui| {
+    ui.label("sky model:");
+    egui::ComboBox::from_id_salt("sky_model").selected_text(model_label(model.kind)).show_ui(ui, |ui| {
         for kind in SkyModelKind::ALL {
             ui.selectable_value(&mut model.kind, kind, model_label(kind));
         }
@@ -604,14 +591,14 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
         ui.checkbox(&mut model.auto_exposure, "automatic exposure (EV below compensates)");
         ui.checkbox(&mut model.drive_scene, "light the scene from the model (fog, ambient, sun)");
         ui.add(egui::Slider::new(&mut model.exposure_ev, -4.0..=12.0).text("exposure (EV)"));
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             ui.label("tone mapper:");
             for t in ToneMapper::ALL {
                 ui.radio_value(&mut model.tone_mapper, t, t.name());
             }
         });
         if model.kind == SkyModelKind::Single {
-            ui.horizontal(|ui| {
+            ui.horizontal_wrapped(|ui| {
                 ui.label("optical depth:");
                 ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Erf, "erf");
                 ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Numerical, "numerical");
@@ -652,7 +639,7 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
 /// Braun and Cohen's parameters: the paper's presets, light factors and ramps.
 fn linear_controls(ui: &mut egui::Ui, p: &mut crate::atmosphere::analytic::LinearParams) {
     use crate::atmosphere::analytic::{LinearParams, Ramp, LINEAR_PRESETS};
-    ui.horizontal(|ui| {
+    ui.horizontal_wrapped(|ui| {
         ui.label("preset:");
         for (name, _, _) in LINEAR_PRESETS {
             if ui.small_button(name).clicked() {
@@ -664,7 +651,7 @@ fn linear_controls(ui: &mut egui::Ui, p: &mut crate::atmosphere::analytic::Linea
         }
     });
     for (label, values) in [("min", &mut p.min), ("max", &mut p.max)] {
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             ui.label(label);
             for v in values.iter_mut() {
                 ui.add(egui::DragValue::new(v).range(0.0..=255.0));
@@ -675,7 +662,7 @@ fn linear_controls(ui: &mut egui::Ui, p: &mut crate::atmosphere::analytic::Linea
     ui.add(egui::Slider::new(&mut p.sunrise_hour, 0.0..=day).text("sunrise starts (h)"));
     ui.add(egui::Slider::new(&mut p.sunset_hour, 0.0..=day).text("sunset starts (h)"));
     ui.add(egui::Slider::new(&mut p.ramp_hours, 0.1..=day / 4.0).text("ramp (h)"));
-    ui.horizontal(|ui| {
+    ui.horizontal_wrapped(|ui| {
         ui.radio_value(&mut p.ramp, Ramp::Linear, "linear ramp");
         ui.radio_value(&mut p.ramp, Ramp::Exponential, "exponential ramp");
     });
@@ -693,7 +680,7 @@ fn particles(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     for (index, e) in sky.emitters.iter().enumerate() {
         let f = info.frame.particles.emitters.iter().find(|f| f.emitter == index);
         let mut on = !c.disabled.contains(&e.name);
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             if ui.checkbox(&mut on, "").changed() {
                 if on {
                     c.disabled.retain(|n| n != &e.name);
@@ -721,7 +708,6 @@ fn particles(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
 }
 
 fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
-    ui.heading("Objects");
     let sky = info.sky;
     for of in &info.frame.objects {
         let o = &sky.objects[of.index];
@@ -742,7 +728,7 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
             .sum();
         let status = if of.versions.is_err() && living > 0 { format!("{status}; its {living} particles live on until they die") } else { status };
         let color = if of.versions.is_ok() { Color32::LIGHT_GREEN } else { Color32::from_rgb(230, 170, 90) };
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             if ui.checkbox(&mut on, "").changed() {
                 if on {
                     c.disabled.retain(|n| n != &o.name);
@@ -759,7 +745,7 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         if let Ok(versions) = &of.versions {
             for p in versions {
                 let version = if p.version == 0 { &o.standard } else { &o.fallback[p.version - 1] };
-                ui.horizontal(|ui| {
+                ui.horizontal_wrapped(|ui| {
                     swatch(ui, p.diffuse);
                     inspect_button(ui, c, &version.diffuse, format!("{}.{}diffuse", o.name, version_label(p.version)));
                     for (k, col) in version.constants.iter().enumerate() {

@@ -7,8 +7,9 @@ use anyhow::Context as _;
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
+use super::layout::SkyViewport;
 use crate::render::headless::depth_view;
-use crate::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions, RenderTarget, ShaderLibrary, SkyRenderer};
+use crate::render::{AdapterChoice, Camera, GpuContext, Headless, Offscreen, RenderOptions, RenderTarget, ShaderLibrary, SkyRenderer};
 use crate::sky::{FrameSky, Sky};
 
 /// What egui produced for one frame, ready to paint.
@@ -17,8 +18,10 @@ pub struct UiPaint {
     pub jobs: Vec<egui::ClippedPrimitive>,
     /// Textures to free after painting.
     pub frees: Vec<egui::TextureId>,
-    /// egui's points per pixel.
+    /// egui's pixels per point.
     pub pixels_per_point: f32,
+    /// The part of the window the panels leave to the sky, points.
+    pub sky_rect: egui::Rect,
 }
 
 /// The window and everything drawn into it.
@@ -43,6 +46,14 @@ pub struct WindowGpu {
     pub inspector: Option<(usize, egui::TextureHandle)>,
     /// The fill-rate floor pass, its target, and its last measurement (ms, frame).
     floor: Option<FloorProbe>,
+    /// Where the sky shows this frame, pixels (the part the panels leave).
+    pub sky_view: SkyViewport,
+    /// The sky's target while it covers part of the window: rendered there at the view's size,
+    /// then copied into the surface.
+    sky_target: Option<Offscreen>,
+    /// The surface can be copied into; without it the sky is drawn over the whole window, under
+    /// the panels.
+    copies_to_surface: bool,
 }
 
 /// The fill-rate floor pass, its target at the window's size, and its last measurement (ms, frame).
@@ -68,8 +79,12 @@ impl WindowGpu {
         let caps = surface.get_capabilities(&ctx.adapter);
         // Colours are display-encoded (as in the 2005 pipeline): prefer a non-sRGB surface.
         let format = caps.formats.iter().copied().find(|f| !f.is_srgb()).unwrap_or(caps.formats[0]);
+        let copies_to_surface = caps.usages.contains(wgpu::TextureUsages::COPY_DST);
+        if !copies_to_surface {
+            log::warn!("the window's surface cannot be copied into: the sky is drawn over the whole window, under the panels");
+        }
         let surface_config = wgpu::SurfaceConfiguration {
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            usage: if copies_to_surface { wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_DST } else { wgpu::TextureUsages::RENDER_ATTACHMENT },
             format,
             width: inner.width.max(1),
             height: inner.height.max(1),
@@ -97,7 +112,24 @@ impl WindowGpu {
         );
         let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, format, egui_wgpu::RendererOptions::default());
         let depth = depth_view(&ctx.device, surface_config.width, surface_config.height);
-        Ok((Self { window, surface, surface_config, ctx, renderer, depth, egui_state, egui_renderer, capture: None, inspector: None, floor: None }, shader_error))
+        let sky_view = SkyViewport::full((surface_config.width, surface_config.height));
+        let gpu = Self {
+            window,
+            surface,
+            surface_config,
+            ctx,
+            renderer,
+            depth,
+            egui_state,
+            egui_renderer,
+            capture: None,
+            inspector: None,
+            floor: None,
+            sky_view,
+            sky_target: None,
+            copies_to_surface,
+        };
+        Ok((gpu, shader_error))
     }
 
     /// Follows a new window size (a zero size, minimised, keeps the old surface; sizes beyond
@@ -117,6 +149,11 @@ impl WindowGpu {
     /// Surface size, pixels.
     pub fn size(&self) -> (u32, u32) {
         (self.surface_config.width, self.surface_config.height)
+    }
+
+    /// The sky view's size, pixels: what screenshots and the fill-rate floor are taken at.
+    pub fn sky_size(&self) -> (u32, u32) {
+        (self.sky_view.width, self.sky_view.height)
     }
 
     /// Rebuilds the window's pipelines; the capture renderer rebuilds from the same sources on
@@ -153,7 +190,7 @@ impl WindowGpu {
     /// The fill-rate floor at the window's size (ms), measured again every 300 frames (a few ms
     /// of blocking on a software rasteriser, rarely).
     pub fn floor_ms(&mut self, frame: u64) -> Option<f32> {
-        let (w, h) = self.size();
+        let (w, h) = self.sky_size();
         let stale = match &self.floor {
             Some((_, target, last)) => (target.width, target.height) != (w, h) || last.is_none_or(|(_, at)| frame >= at + 300),
             None => frame > 10,
@@ -203,8 +240,34 @@ impl WindowGpu {
         };
         let view = surface_texture.texture.create_view(&Default::default());
         let size = self.size();
+        let sky_view = if self.copies_to_surface { SkyViewport::from_points(ui.sky_rect, ui.pixels_per_point, size) } else { SkyViewport::full(size) };
+        if sky_view != self.sky_view {
+            log::info!("sky view: x {} y {} width {} height {} of a {}x{} window", sky_view.x, sky_view.y, sky_view.width, sky_view.height, size.0, size.1);
+            self.sky_view = sky_view;
+        }
         let mut encoder = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("App::frame") });
-        self.renderer.render(&self.ctx, &mut encoder, &RenderTarget { color: &view, depth: &self.depth, size }, frame, camera, options);
+        if sky_view.is_full(size) {
+            self.sky_target = None;
+            self.renderer.render(&self.ctx, &mut encoder, &RenderTarget { color: &view, depth: &self.depth, size }, frame, camera, options);
+        } else {
+            // The sky at the view's own size (its aspect, its pixels), then into its place.
+            let (w, h) = (sky_view.width, sky_view.height);
+            if self.sky_target.as_ref().is_none_or(|t| (t.width, t.height) != (w, h)) {
+                self.sky_target = Some(Offscreen::with_format(&self.ctx.device, w, h, self.surface_config.format, "App::sky_view"));
+            }
+            let target = self.sky_target.as_ref().expect("made above");
+            self.renderer.render(&self.ctx, &mut encoder, &target.target(), frame, camera, options);
+            encoder.copy_texture_to_texture(
+                target.color.as_image_copy(),
+                wgpu::TexelCopyTextureInfo {
+                    texture: &surface_texture.texture,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d { x: sky_view.x, y: sky_view.y, z: 0 },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+            );
+        }
         let screen = egui_wgpu::ScreenDescriptor { size_in_pixels: [size.0, size.1], pixels_per_point: ui.pixels_per_point };
         let extra = self.egui_renderer.update_buffers(&self.ctx.device, &self.ctx.queue, &mut encoder, &ui.jobs, &screen);
         {

@@ -14,6 +14,7 @@ use deltae::{DEMethod, DeltaE, LabValue, XyzValue};
 
 use super::reference::{Case, Reference, ReferenceSettings};
 use super::{Atmosphere, Rgb};
+use crate::progress::Cancelled;
 
 /// One view direction of the dome and the solid angle it stands for.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -283,17 +284,23 @@ pub enum ReferenceDomeError {
     },
 }
 
+/// One dome of [`compute_domes`]: (atmosphere index, sun elevation in degrees, radiance and
+/// standard error per direction).
+pub type DomeEstimate = (usize, f64, Vec<Rgb>, Vec<Rgb>);
+
 /// The reference's radiance and standard error over a dome for every (atmosphere, sun) pair, on
 /// every core: (atmosphere index, sun elevation, radiance, standard error) in the order of the
 /// pairs. Jobs are handed out one direction at a time: low suns cost ten times more than high ones.
+/// `progress` hears (done, total) after each direction; an `Err` from it stops every worker at its
+/// next direction and is returned (nothing partial is).
 pub fn compute_domes(
     atmospheres: &[Atmosphere],
     suns_deg: &[f64],
     dome: (usize, usize),
     paths: u32,
     seed: u64,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Vec<(usize, f64, Vec<Rgb>, Vec<Rgb>)> {
+    progress: &(dyn Fn(usize, usize) -> Result<(), Cancelled> + Sync),
+) -> Result<Vec<DomeEstimate>, Cancelled> {
     let dirs = dome_directions(dome.0, dome.1);
     let mut jobs: Vec<(usize, f64, Case)> = Vec::new();
     for k in 0..atmospheres.len() {
@@ -305,26 +312,36 @@ pub fn compute_domes(
     let done = std::sync::atomic::AtomicUsize::new(0);
     let next = std::sync::atomic::AtomicUsize::new(0);
     let results = std::sync::Mutex::new(vec![None; jobs.len()]);
+    let stopped = std::sync::atomic::AtomicBool::new(false);
     let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
     std::thread::scope(|scope| {
         for _ in 0..workers {
             scope.spawn(|| loop {
+                if stopped.load(std::sync::atomic::Ordering::Relaxed) {
+                    break;
+                }
                 let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 let Some((k, _, case)) = jobs.get(i) else { break };
                 let e = references[*k].estimate(case);
                 results.lock().unwrap_or_else(|p| p.into_inner())[i] = Some(e);
-                progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, jobs.len());
+                if progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, jobs.len()).is_err() {
+                    stopped.store(true, std::sync::atomic::Ordering::Relaxed);
+                }
             });
         }
     });
+    if stopped.into_inner() {
+        return Err(Cancelled);
+    }
     let results = results.into_inner().unwrap_or_else(|p| p.into_inner());
-    jobs.chunks(dirs.len().max(1))
+    Ok(jobs
+        .chunks(dirs.len().max(1))
         .zip(results.chunks(dirs.len().max(1)))
         .map(|(chunk, estimates)| {
             let estimates: Vec<_> = estimates.iter().flatten().collect();
             (chunk[0].0, chunk[0].1, estimates.iter().map(|e| e.all).collect(), estimates.iter().map(|e| e.std_err).collect())
         })
-        .collect()
+        .collect())
 }
 
 /// The benchmark's reference dataset as committed (assets/reference_dome.csv, embedded).
@@ -353,11 +370,17 @@ impl ReferenceDome {
 
     /// Computes the reference for every (haze, sun) pair on every core; `progress(done, total)`
     /// is called from the workers after each direction.
-    pub fn compute(hazes: &[Haze], suns_deg: &[f64], dome: (usize, usize), paths: u32, progress: &(dyn Fn(usize, usize) + Sync)) -> Self {
+    pub fn compute(
+        hazes: &[Haze],
+        suns_deg: &[f64],
+        dome: (usize, usize),
+        paths: u32,
+        progress: &(dyn Fn(usize, usize) -> Result<(), Cancelled> + Sync),
+    ) -> Result<Self, Cancelled> {
         let atmospheres: Vec<Atmosphere> = hazes.iter().map(|h| h.atmosphere()).collect();
-        let domes = compute_domes(&atmospheres, suns_deg, dome, paths, REFERENCE_SEED, progress);
+        let domes = compute_domes(&atmospheres, suns_deg, dome, paths, REFERENCE_SEED, progress)?;
         let suns = domes.into_iter().map(|(k, sun_elev_deg, radiance, std_err)| ReferenceSun { haze: hazes[k], sun_elev_deg, radiance, std_err }).collect();
-        Self { paths, dome, suns }
+        Ok(Self { paths, dome, suns })
     }
 
     /// The dome for an atmosphere and sun elevation, if computed.

@@ -39,13 +39,18 @@ pub fn depth_view(device: &wgpu::Device, width: u32, height: u32) -> wgpu::Textu
 impl Offscreen {
     /// Creates a target.
     pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+        Self::with_format(device, width, height, OFFSCREEN_FORMAT, "Offscreen::color")
+    }
+
+    /// Creates a target of another colour format (the window's sky view, in the surface's).
+    pub fn with_format(device: &wgpu::Device, width: u32, height: u32, format: wgpu::TextureFormat, label: &str) -> Self {
         let color = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("Offscreen::color"),
+            label: Some(label),
             size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: OFFSCREEN_FORMAT,
+            format,
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });

@@ -93,3 +93,63 @@ pub fn copy_shaders(dst: &Path) {
     }
     copy(&Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders"), dst);
 }
+
+/// Starts Xvfb with one screen of `size` on a display it picks itself (`-displayfd`), so parallel
+/// tests never collide. Returns the server and its `DISPLAY`.
+pub fn xvfb(size: (u32, u32)) -> Option<(std::process::Child, String)> {
+    use std::io::BufRead;
+    let mut child = std::process::Command::new("Xvfb")
+        .args(["-displayfd", "1", "-screen", "0", &format!("{}x{}x24", size.0, size.1), "-nolisten", "tcp"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .ok()?;
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take()?).read_line(&mut line).ok()?;
+    let n: u32 = line.trim().parse().ok()?;
+    Some((child, format!(":{n}")))
+}
+
+/// What the X server shows on `display`: the root window's pixels, through `xwd` (x11-apps).
+pub fn x_screenshot(display: &str) -> Result<image::RgbaImage, String> {
+    let out = std::process::Command::new("xwd").args(["-root", "-silent", "-display", display]).output().map_err(|e| format!("running xwd (x11-apps): {e}"))?;
+    if !out.status.success() {
+        return Err(format!("xwd failed: {}", String::from_utf8_lossy(&out.stderr)));
+    }
+    read_xwd(&out.stdout)
+}
+
+/// Decodes an XWD image (X Window Dump, version 7) of 24 or 32 bits per pixel in ZPixmap format,
+/// as `xwd` writes the screens of Xvfb.
+pub fn read_xwd(bytes: &[u8]) -> Result<image::RgbaImage, String> {
+    let field =
+        |i: usize| -> Result<u32, String> { bytes.get(i * 4..i * 4 + 4).map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]])).ok_or_else(|| "xwd: short header".to_string()) };
+    let (header_size, version, format) = (field(0)? as usize, field(1)?, field(2)?);
+    if version != 7 || format != 2 {
+        return Err(format!("xwd: version {version}, format {format}: expected 7 and ZPixmap (2)"));
+    }
+    let (width, height, byte_order, bits_per_pixel, bytes_per_line) = (field(4)?, field(5)?, field(7)?, field(11)?, field(12)? as usize);
+    let masks = [field(14)?, field(15)?, field(16)?];
+    let colours = field(19)? as usize;
+    if bits_per_pixel != 32 && bits_per_pixel != 24 {
+        return Err(format!("xwd: {bits_per_pixel} bits per pixel"));
+    }
+    let data = header_size + colours * 12;
+    let step = bits_per_pixel as usize / 8;
+    if bytes.len() < data + bytes_per_line * height as usize {
+        return Err("xwd: short image data".into());
+    }
+    let mut img = image::RgbaImage::new(width, height);
+    for y in 0..height as usize {
+        for x in 0..width as usize {
+            let at = data + y * bytes_per_line + x * step;
+            let mut b = [0u8; 4];
+            b[..step].copy_from_slice(&bytes[at..at + step]);
+            // byte_order 0: least significant byte first.
+            let v = if byte_order == 0 { u32::from_le_bytes(b) } else { u32::from_be_bytes(b) >> (32 - bits_per_pixel) };
+            let channel = |m: u32| ((v & m) >> m.trailing_zeros()) as u8;
+            img.put_pixel(x as u32, y as u32, image::Rgba([channel(masks[0]), channel(masks[1]), channel(masks[2]), 255]));
+        }
+    }
+    Ok(img)
+}
