@@ -259,8 +259,9 @@ pub fn choose(scored: &[Scored], budget: Budget, suns_deg: Vec<f64>) -> Pick {
 /// Scores already measured in this process, by everything they depend on.
 static SCORES: Mutex<Vec<(u64, Vec<Scored>)>> = Mutex::new(Vec::new());
 
-/// The key of `sky`'s scores: everything they depend on.
-fn scores_key(sky: &Sky) -> u64 {
+/// The key of `sky`'s scores: everything they depend on (its atmospheres and sun range, the
+/// committed benchmark), not its budget or anything else in the file.
+pub fn scores_key(sky: &Sky) -> u64 {
     hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&modelbench::COMMITTED_CSV), dome::ReferenceDome::header(dome::COMMITTED_PATHS, dome::BENCH_DOME)))
 }
 

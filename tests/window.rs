@@ -79,7 +79,13 @@ impl Drop for Window {
 fn numbers(line: &str, keys: &[&str]) -> Vec<f64> {
     keys.iter()
         .map(|k| {
-            let at = line.find(&format!(" {k} ")).unwrap_or_else(|| panic!("no {k} in {line}")) + k.len() + 2;
+            // The key as a word: `y` is not the end of `sky`, `longest` may follow a bracket.
+            let word = format!("{k} ");
+            let at = line
+                .match_indices(&word)
+                .find(|(i, _)| line[..*i].chars().next_back().is_none_or(|c| !c.is_alphanumeric()))
+                .map(|(i, _)| i + word.len())
+                .unwrap_or_else(|| panic!("no {k} in {line}"));
             line[at..].split(|c: char| !(c.is_ascii_digit() || c == '.')).next().and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("no number after {k} in {line}"))
         })
         .collect()
@@ -153,4 +159,30 @@ fn an_auto_sky_keeps_the_window_drawing_while_its_pick_is_measured() {
     again.wait_for("rendered 3 frames", Duration::from_secs(120));
     assert!(!again.log().contains("measuring the candidates"), "{}", again.log());
     drop(dir);
+}
+
+#[test]
+fn a_reload_that_changes_the_atmosphere_cancels_the_pick_under_way() {
+    let (_dir, sky_file) = common::default_sky_folder();
+    let base = std::fs::read_to_string(&sky_file).unwrap();
+    let with_mie = |mie: f64| format!("{base}\n[sky_model]\nkind = \"auto\"\n\n[atmosphere]\nmie_scattering_per_km = {mie:e}\nmie_extinction_per_km = {:e}\n", mie * 1.11);
+    std::fs::write(&sky_file, with_mie(14e-3)).unwrap();
+    let cache = tempfile::tempdir().unwrap();
+    let mut window = Window::start((480, 270), (1024, 768), cache.path(), &[sky_file.to_str().unwrap()]);
+    window.wait_for("auto model: measuring the candidates", Duration::from_secs(120));
+    // The artist edits the atmosphere while the pick is measured.
+    std::thread::sleep(Duration::from_secs(2));
+    skytune::fsx::write_atomic(&sky_file, with_mie(15e-3).as_bytes()).unwrap();
+    window.wait_for("is cancelled", Duration::from_secs(60));
+    let stopped = window.wait_for("stopped measuring for a superseded version", Duration::from_secs(60));
+    assert!(numbers(&stopped, &["after"])[0] < 60.0, "the old measurement stopped promptly: {stopped}");
+    let log = window.log();
+    assert_eq!(log.matches("auto model: measuring the candidates").count(), 2, "the new version is measured: {log}");
+    // A change that leaves the atmosphere as it is (a bitmap's name here: any other key) keeps the
+    // measurement running.
+    let edited = std::fs::read_to_string(&sky_file).unwrap().replacen("name = ", "name = \"renamed\"\n# was: ", 1);
+    skytune::fsx::write_atomic(&sky_file, edited.as_bytes()).unwrap();
+    window.wait_for("reloaded sky \"renamed\"", Duration::from_secs(60));
+    std::thread::sleep(Duration::from_secs(1));
+    assert_eq!(window.log().matches("is cancelled").count(), 1, "{}", window.log());
 }

@@ -1,14 +1,16 @@
 //! `kind = "auto"` in the window: the pick for a new atmosphere measures every candidate against
 //! a reference computed for it (a minute or more on two cores), so it runs on a worker thread.
 //! The window keeps rendering with the last good model meanwhile, shows the worker's progress,
-//! and swaps the pick in when it arrives; a reload that supersedes a running pick cancels it and
-//! drops whatever it would have returned.
+//! and swaps the pick in when it arrives. A reload that changes what is measured (an atmosphere,
+//! the sun's range) cancels a running pick and drops whatever it would have returned; one that
+//! changes anything else (a bitmap, the budget) lets it run on, and the pick is chosen from its
+//! scores for the sky shown when they arrive.
 
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::auto_model::{self, Pick};
+use crate::auto_model::{self, Pick, Scored};
 use crate::progress::Job;
 use crate::render::GpuContext;
 use crate::sky::resolved::SkyModel;
@@ -17,8 +19,11 @@ use crate::sky::Sky;
 /// A pick being measured on the worker.
 struct Pending {
     job: Arc<Job>,
-    result: Receiver<Result<Pick, String>>,
-    /// The sky generation it was asked for.
+    result: Receiver<Result<Vec<Scored>, String>>,
+    /// What it measures ([`auto_model::scores_key`]).
+    key: u64,
+    /// The latest version of the sky it measures for, and its generation.
+    sky: Arc<Sky>,
     generation: u64,
     started: Instant,
     /// Longest frame of the window while it ran.
@@ -44,11 +49,18 @@ impl AutoPicker {
     /// or on disk) apply at once; otherwise a worker measures it on `ctx`. Cancels a pick still
     /// running for an earlier version. Skies that name their model need no pick.
     pub fn request(&mut self, sky: &Arc<Sky>, generation: u64, ctx: &GpuContext) {
-        if let Some(p) = self.pending.take() {
+        let key = sky.auto_model.map(|_| auto_model::scores_key(sky));
+        if let Some(p) = self.pending.as_mut() {
+            if Some(p.key) == key {
+                // Same atmospheres and suns: the measurement under way serves this version too.
+                (p.sky, p.generation) = (sky.clone(), generation);
+                return;
+            }
             p.job.cancel();
-            log::info!("auto model: the sky changed; the pick under way for the previous version is cancelled");
+            self.pending = None;
+            log::info!("auto model: the sky's atmosphere changed; the pick under way for the previous version is cancelled");
         }
-        let Some(budget) = sky.auto_model else {
+        let (Some(budget), Some(key)) = (sky.auto_model, key) else {
             self.result = None;
             return;
         };
@@ -59,17 +71,22 @@ impl AutoPicker {
         }
         let job = Arc::new(Job::new());
         let (send, result) = mpsc::channel();
-        let (sky, ctx, worker_job) = (sky.clone(), ctx.clone(), job.clone());
+        let (worker_sky, ctx, worker_job) = (sky.clone(), ctx.clone(), job.clone());
         let spawned = std::thread::Builder::new().name("auto-pick".into()).spawn(move || {
             lower_priority();
-            let out = auto_model::pick_cached(&sky, budget, &ctx, &worker_job);
-            // A cancelled pick has nobody waiting: its receiver may be gone.
+            let started = Instant::now();
+            let out = auto_model::score_cached(&worker_sky, &ctx, &worker_job);
+            if worker_job.is_cancelled() {
+                // Nobody waits for a cancelled pick: its receiver is gone.
+                log::info!("auto model: stopped measuring for a superseded version of the sky after {:.1} s", started.elapsed().as_secs_f64());
+                return;
+            }
             let _ = send.send(out.map_err(|e| format!("auto model: {e:#}")));
         });
         match spawned {
             Ok(_) => {
                 log::info!("auto model: measuring the candidates for this sky's atmosphere on a worker (once; cached)");
-                self.pending = Some(Pending { job, result, generation, started: Instant::now(), longest_frame: Duration::ZERO, frames: 0 });
+                self.pending = Some(Pending { job, result, key, sky: sky.clone(), generation, started: Instant::now(), longest_frame: Duration::ZERO, frames: 0 });
             }
             Err(e) => self.result = Some(Err(format!("auto model: cannot start its worker: {e}"))),
         }
@@ -91,9 +108,15 @@ impl AutoPicker {
         };
         let p = self.pending.take().expect("pending above");
         if p.generation != generation {
-            // Asked for a version of the sky no longer shown (request cancels those; belt and braces).
+            // Measured for a version of the sky no longer shown (a request updates or cancels
+            // these; belt and braces).
             return false;
         }
+        let result = match (result, p.sky.auto_model) {
+            (Ok(scores), Some(budget)) => Ok(auto_model::choose(&scores, budget, auto_model::sky_suns(&p.sky))),
+            (Ok(_), None) => Err("auto model: the sky no longer asks for one".to_string()),
+            (Err(e), _) => Err(e),
+        };
         match &result {
             Ok(pick) => log::info!(
                 "auto model: picked after {:.1} s on a worker, while the window drew {} frames (longest {:.0} ms after the first {WARM_UP_FRAMES}): {}",

@@ -271,6 +271,196 @@ fn panel_header(ui: &mut egui::Ui, title: &str, open: &mut bool) {
     });
 }
 
+/// Which side panel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Side {
+    /// The controls.
+    Left,
+    /// The objects.
+    Right,
+}
+
+/// A side panel: resizable within `range` (points), hidden by its button or a drag past its edge
+/// (and shown again by a drag or Tab), its width and state kept in the layout; `contents` scroll
+/// inside it. Returns its width this frame (0 when hidden).
+fn side_panel(ui: &mut egui::Ui, c: &mut Controls, side: Side, range: (f32, f32), title: &str, contents: impl FnOnce(&mut egui::Ui, &mut Controls)) -> f32 {
+    let (panel, width, shown) = match side {
+        Side::Left => (egui::Panel::left("controls"), c.layout.left_width, c.layout.shows_left()),
+        Side::Right => (egui::Panel::right("objects"), c.layout.right_width, c.layout.shows_right()),
+    };
+    let mut open = shown;
+    let response = panel.default_size(width.clamp(range.0, range.1)).size_range(range.0..=range.1).show_collapsible(ui, &mut open, |ui| {
+        let mut keep = true;
+        panel_header(ui, title, &mut keep);
+        egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+            fit_sliders(ui);
+            contents(ui, c)
+        });
+        keep
+    });
+    let drawn = response.as_ref().map_or(0.0, |r| r.response.rect.width());
+    let hidden_by_button = response.as_ref().is_some_and(|r| !r.inner);
+    let (stored_width, stored_open) = match side {
+        Side::Left => (&mut c.layout.left_width, &mut c.layout.left_open),
+        Side::Right => (&mut c.layout.right_width, &mut c.layout.right_open),
+    };
+    if response.as_ref().is_some_and(|r| r.inner) {
+        *stored_width = drawn;
+    }
+    if open != shown || hidden_by_button {
+        // Its own button, or a drag on its edge, opened or closed it.
+        *stored_open = open && !hidden_by_button;
+        let opened = *stored_open;
+        c.layout.hidden &= !opened;
+    }
+    drawn
+}
+
+/// The controls panel's contents: the sky file, time and weather, tier and model, view, glare,
+/// captures, compare, and the statistics.
+fn controls_panel(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, actions: &mut Vec<UiAction>) {
+    let sky = info.sky;
+    ui.label(RichText::new(info.source).small());
+    ui.label(RichText::new(info.adapter).small().weak());
+    ui.separator();
+
+    section(ui, c, "sky_file", "Sky file", |ui, c| {
+        ui.horizontal(|ui| {
+            let width = (ui.available_width() - 60.0).max(60.0);
+            ui.add(egui::TextEdit::singleline(&mut c.path_input).desired_width(width)).on_hover_text("path of a sky or continent file");
+            if ui.button("Open").clicked() && !c.path_input.trim().is_empty() {
+                actions.push(UiAction::Open(PathBuf::from(c.path_input.trim())));
+            }
+        });
+        ui.horizontal_wrapped(|ui| {
+            if ui.button("Built-in sky").clicked() {
+                actions.push(UiAction::OpenBuiltin);
+            }
+            if ui.button("Reload (F5)").clicked() {
+                actions.push(UiAction::Reload);
+            }
+            if ui.button("Shaders (F6)").clicked() {
+                actions.push(UiAction::ReloadShaders);
+            }
+        });
+        for p in info.recent {
+            if ui.link(p.display().to_string()).clicked() {
+                actions.push(UiAction::Open(p.clone()));
+            }
+        }
+        ui.label(RichText::new("Tip: drop a sky file onto the window.").small().weak());
+        if info.continent {
+            let mut season = c.season;
+            egui::ComboBox::from_label("season").selected_text(SEASONS[season]).show_ui(ui, |ui| {
+                for (i, s) in SEASONS.iter().enumerate() {
+                    ui.selectable_value(&mut season, i, *s);
+                }
+            });
+            if season != c.season {
+                c.season = season;
+                actions.push(UiAction::Season(season));
+            }
+        }
+    });
+
+    ui.separator();
+    ui.add(egui::Slider::new(&mut c.hour, 0.0..=sky.hours_per_day - 0.001).text("hour").fixed_decimals(2));
+    if ui.button(if c.playing { "Pause" } else { "Play" }).clicked() {
+        c.playing = !c.playing;
+    }
+    ui.add(egui::Slider::new(&mut c.speed, 0.0..=4.0).text("game h/s"));
+    ui.add(egui::Slider::new(&mut c.weather, 0.0..=1.0).text("weather").fixed_decimals(2));
+    if !sky.weather_names.is_empty() {
+        let n = sky.weather_names.len();
+        let i = ((c.weather * (n - 1) as f32).round() as usize).min(n - 1);
+        ui.label(format!("weather step: {} ({})", sky.weather_names[i], sky.weather_names.join(" / ")));
+    }
+
+    ui.separator();
+    ui.horizontal_wrapped(|ui| {
+        ui.label("GPU tier:");
+        for t in Tier::ALL {
+            ui.radio_value(&mut c.tier, t, if t.stages() == 1 { "1 stage".to_string() } else { format!("{} stages", t.stages()) });
+        }
+    });
+    if let Some(line) = &info.auto_model {
+        ui.label(line);
+    }
+    if let Some((p, stage)) = &info.auto_progress {
+        ui.add(egui::ProgressBar::new(*p).show_percentage());
+        ui.label(RichText::new(stage).small());
+    }
+    sky_model_controls(ui, c, info.sky);
+    let current = info.auto_point.clone().filter(|_| c.sky_model.is_none()).or_else(|| crate::modelbench::point_for(&c.sky_model.unwrap_or(info.sky.model)));
+    section(ui, c, "model_chart", "Speed against accuracy", |ui, _| model_chart(ui, current.as_deref()));
+    if let Some(p) = info.model_progress {
+        ui.add(egui::ProgressBar::new(p).show_percentage().text("computing the sky in the background"));
+    }
+
+    section(ui, c, "view", "View", |ui, c| {
+        ui.add(egui::Slider::new(&mut c.camera.fov_y_deg, 10.0..=120.0).text("fov"));
+        ui.add(egui::Slider::new(&mut c.camera.yaw_deg, 0.0..=360.0).text("yaw"));
+        ui.add(egui::Slider::new(&mut c.camera.pitch_deg, -89.0..=89.0).text("pitch"));
+        ui.horizontal_wrapped(|ui| {
+            for (name, yaw, pitch) in PRESETS {
+                if ui.button(name).clicked() {
+                    c.camera.yaw_deg = yaw;
+                    c.camera.pitch_deg = pitch;
+                }
+            }
+        });
+        ui.checkbox(&mut c.options.scene, "main-scene stand-in");
+        ui.checkbox(&mut c.options.depth_split, "depth-range split (scene [0, 0.95], sky [0.99, 1])");
+        ui.checkbox(&mut c.options.glare, "sun glare");
+    });
+
+    section(ui, c, "glare", "Sun glare", |ui, c| match info.glare {
+        Some(g) => {
+            ui.label(format!("V = {}  T = {}", g.visible_samples, g.total_samples));
+            ui.label(format!("visibility V/T = {:.3}", g.ratio));
+            ui.label(format!("intensity = {:.3}", g.intensity));
+            ui.label(format!("last result waited {} frame(s); {} frames without result", g.frames_waited, g.frames_without_result));
+            ui.checkbox(&mut c.freeze_glare, "freeze the visibility ratio");
+        }
+        None => {
+            ui.label("this sky has no [glare]");
+        }
+    });
+
+    captures(ui, c, info, actions);
+    ui.separator();
+    super::diagnostics::stats(ui, c, info);
+}
+
+/// Screenshots, contact sheets and the compare view's switch.
+fn captures(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, actions: &mut Vec<UiAction>) {
+    ui.separator();
+    ui.horizontal_wrapped(|ui| {
+        if ui.button("Screenshot (F12)").clicked() {
+            actions.push(UiAction::Screenshot);
+        }
+        if ui.button("Contact sheet").clicked() && info.sheet_progress.is_none() {
+            actions.push(UiAction::ContactSheet);
+        }
+    });
+    ui.horizontal_wrapped(|ui| {
+        ui.add(egui::DragValue::new(&mut c.sheet_grid.0).range(1..=24).prefix("hours "));
+        ui.add(egui::DragValue::new(&mut c.sheet_grid.1).range(1..=8).prefix("weathers "));
+    });
+    if let Some((done, total)) = info.sheet_progress {
+        ui.add(egui::ProgressBar::new(done as f32 / total.max(1) as f32).text(format!("contact sheet {done}/{total}")));
+    }
+    if !info.last_capture.is_empty() {
+        ui.label(RichText::new(info.last_capture).small());
+    }
+
+    ui.separator();
+    if ui.button(if c.compare.open { "Close compare (F7)" } else { "Compare (F7)" }).clicked() {
+        c.compare.open = !c.compare.open;
+        actions.push(UiAction::RefreshSnapshots);
+    }
+}
+
 /// Builds every panel for one frame; returns the actions the user asked for and the sky's part
 /// of the window. The side panels share at most `layout::PANELS_MAX_FRACTION` of the width.
 pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_texture: Option<egui::TextureId>) -> UiOutput {
@@ -280,192 +470,12 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
     let background = ui.painter().add(egui::Shape::Noop);
     let screen = ui.max_rect();
     let (left_min, left_max) = c.layout.left_range(screen.width());
-    let mut left_open = c.layout.shows_left();
-    let left =
-        egui::Panel::left("controls").default_size(c.layout.left_width.clamp(left_min, left_max)).size_range(left_min..=left_max).show_collapsible(ui, &mut left_open, |ui| {
-            let mut open = true;
-            panel_header(ui, &sky.name, &mut open);
-            egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
-                fit_sliders(ui);
-                ui.label(RichText::new(info.source).small());
-                ui.label(RichText::new(info.adapter).small().weak());
-                ui.separator();
-
-                section(ui, c, "sky_file", "Sky file", |ui, c| {
-                    ui.horizontal(|ui| {
-                        let width = (ui.available_width() - 60.0).max(60.0);
-                        ui.add(egui::TextEdit::singleline(&mut c.path_input).desired_width(width)).on_hover_text("path of a sky or continent file");
-                        if ui.button("Open").clicked() && !c.path_input.trim().is_empty() {
-                            actions.push(UiAction::Open(PathBuf::from(c.path_input.trim())));
-                        }
-                    });
-                    ui.horizontal_wrapped(|ui| {
-                        if ui.button("Built-in sky").clicked() {
-                            actions.push(UiAction::OpenBuiltin);
-                        }
-                        if ui.button("Reload (F5)").clicked() {
-                            actions.push(UiAction::Reload);
-                        }
-                        if ui.button("Shaders (F6)").clicked() {
-                            actions.push(UiAction::ReloadShaders);
-                        }
-                    });
-                    for p in info.recent {
-                        if ui.link(p.display().to_string()).clicked() {
-                            actions.push(UiAction::Open(p.clone()));
-                        }
-                    }
-                    ui.label(RichText::new("Tip: drop a sky file onto the window.").small().weak());
-                    if info.continent {
-                        let mut season = c.season;
-                        egui::ComboBox::from_label("season").selected_text(SEASONS[season]).show_ui(ui, |ui| {
-                            for (i, s) in SEASONS.iter().enumerate() {
-                                ui.selectable_value(&mut season, i, *s);
-                            }
-                        });
-                        if season != c.season {
-                            c.season = season;
-                            actions.push(UiAction::Season(season));
-                        }
-                    }
-                });
-
-                ui.separator();
-                ui.add(egui::Slider::new(&mut c.hour, 0.0..=sky.hours_per_day - 0.001).text("hour").fixed_decimals(2));
-                if ui.button(if c.playing { "Pause" } else { "Play" }).clicked() {
-                    c.playing = !c.playing;
-                }
-                ui.add(egui::Slider::new(&mut c.speed, 0.0..=4.0).text("game h/s"));
-                ui.add(egui::Slider::new(&mut c.weather, 0.0..=1.0).text("weather").fixed_decimals(2));
-                if !sky.weather_names.is_empty() {
-                    let n = sky.weather_names.len();
-                    let i = ((c.weather * (n - 1) as f32).round() as usize).min(n - 1);
-                    ui.label(format!("weather step: {} ({})", sky.weather_names[i], sky.weather_names.join(" / ")));
-                }
-
-                ui.separator();
-                ui.horizontal_wrapped(|ui| {
-                    ui.label("GPU tier:");
-                    for t in Tier::ALL {
-                        ui.radio_value(&mut c.tier, t, if t.stages() == 1 { "1 stage".to_string() } else { format!("{} stages", t.stages()) });
-                    }
-                });
-                if let Some(line) = &info.auto_model {
-                    ui.label(line);
-                }
-                if let Some((p, stage)) = &info.auto_progress {
-                    ui.add(egui::ProgressBar::new(*p).show_percentage());
-                    ui.label(RichText::new(stage).small());
-                }
-                sky_model_controls(ui, c, info.sky);
-                let current = info.auto_point.clone().filter(|_| c.sky_model.is_none()).or_else(|| crate::modelbench::point_for(&c.sky_model.unwrap_or(info.sky.model)));
-                section(ui, c, "model_chart", "Speed against accuracy", |ui, _| model_chart(ui, current.as_deref()));
-                if let Some(p) = info.model_progress {
-                    ui.add(egui::ProgressBar::new(p).show_percentage().text("computing the sky in the background"));
-                }
-
-                section(ui, c, "view", "View", |ui, c| {
-                    ui.add(egui::Slider::new(&mut c.camera.fov_y_deg, 10.0..=120.0).text("fov"));
-                    ui.add(egui::Slider::new(&mut c.camera.yaw_deg, 0.0..=360.0).text("yaw"));
-                    ui.add(egui::Slider::new(&mut c.camera.pitch_deg, -89.0..=89.0).text("pitch"));
-                    ui.horizontal_wrapped(|ui| {
-                        for (name, yaw, pitch) in PRESETS {
-                            if ui.button(name).clicked() {
-                                c.camera.yaw_deg = yaw;
-                                c.camera.pitch_deg = pitch;
-                            }
-                        }
-                    });
-                    ui.checkbox(&mut c.options.scene, "main-scene stand-in");
-                    ui.checkbox(&mut c.options.depth_split, "depth-range split (scene [0, 0.95], sky [0.99, 1])");
-                    ui.checkbox(&mut c.options.glare, "sun glare");
-                });
-
-                section(ui, c, "glare", "Sun glare", |ui, c| match info.glare {
-                    Some(g) => {
-                        ui.label(format!("V = {}  T = {}", g.visible_samples, g.total_samples));
-                        ui.label(format!("visibility V/T = {:.3}", g.ratio));
-                        ui.label(format!("intensity = {:.3}", g.intensity));
-                        ui.label(format!("last result waited {} frame(s); {} frames without result", g.frames_waited, g.frames_without_result));
-                        ui.checkbox(&mut c.freeze_glare, "freeze the visibility ratio");
-                    }
-                    None => {
-                        ui.label("this sky has no [glare]");
-                    }
-                });
-
-                ui.separator();
-                ui.horizontal_wrapped(|ui| {
-                    if ui.button("Screenshot (F12)").clicked() {
-                        actions.push(UiAction::Screenshot);
-                    }
-                    if ui.button("Contact sheet").clicked() && info.sheet_progress.is_none() {
-                        actions.push(UiAction::ContactSheet);
-                    }
-                });
-                ui.horizontal_wrapped(|ui| {
-                    ui.add(egui::DragValue::new(&mut c.sheet_grid.0).range(1..=24).prefix("hours "));
-                    ui.add(egui::DragValue::new(&mut c.sheet_grid.1).range(1..=8).prefix("weathers "));
-                });
-                if let Some((done, total)) = info.sheet_progress {
-                    ui.add(egui::ProgressBar::new(done as f32 / total.max(1) as f32).text(format!("contact sheet {done}/{total}")));
-                }
-                if !info.last_capture.is_empty() {
-                    ui.label(RichText::new(info.last_capture).small());
-                }
-
-                ui.separator();
-                if ui.button(if c.compare.open { "Close compare (F7)" } else { "Compare (F7)" }).clicked() {
-                    c.compare.open = !c.compare.open;
-                    actions.push(UiAction::RefreshSnapshots);
-                }
-
-                ui.separator();
-                super::diagnostics::stats(ui, c, info);
-            });
-            open
-        });
-    let left_width = match &left {
-        Some(r) if r.inner => {
-            c.layout.left_width = r.response.rect.width();
-            r.response.rect.width()
-        }
-        Some(r) => r.response.rect.width(),
-        None => 0.0,
-    };
-    let left_hidden_by_button = left.as_ref().is_some_and(|r| !r.inner);
-    if left_open != c.layout.shows_left() || left_hidden_by_button {
-        // The panel's own button, or a drag on its edge, opened or closed it.
-        c.layout.left_open = left_open && !left_hidden_by_button;
-        c.layout.hidden &= !c.layout.left_open;
-    }
+    let left_width = side_panel(ui, c, Side::Left, (left_min, left_max), &sky.name, |ui, c| controls_panel(ui, c, info, &mut actions));
     if let Some(info) = &info.compare {
         compare_window(ui, c, info, &mut actions);
     }
-
     let (right_min, right_max) = c.layout.right_range(screen.width(), left_width);
-    let mut right_open = c.layout.shows_right();
-    let right = egui::Panel::right("objects").default_size(c.layout.right_width.clamp(right_min, right_max)).size_range(right_min..=right_max).show_collapsible(
-        ui,
-        &mut right_open,
-        |ui| {
-            let mut open = true;
-            panel_header(ui, "Objects", &mut open);
-            egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
-                fit_sliders(ui);
-                objects(ui, c, info)
-            });
-            open
-        },
-    );
-    let right_hidden_by_button = right.as_ref().is_some_and(|r| !r.inner);
-    if let Some(r) = right.as_ref().filter(|r| r.inner) {
-        c.layout.right_width = r.response.rect.width();
-    }
-    if right_open != c.layout.shows_right() || right_hidden_by_button {
-        c.layout.right_open = right_open && !right_hidden_by_button;
-        c.layout.hidden &= !c.layout.right_open;
-    }
+    side_panel(ui, c, Side::Right, (right_min, right_max), "Objects", |ui, c| objects(ui, c, info));
 
     if !info.errors.is_empty() {
         egui::Panel::bottom("errors").max_size(screen.height() * ERRORS_MAX_FRACTION).show(ui, |ui| {

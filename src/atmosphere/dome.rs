@@ -456,3 +456,30 @@ impl ReferenceDome {
         Ok(Self { paths, dome, suns })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cancelled_dome_stops_early_and_returns_nothing_partial() {
+        let atm = [Atmosphere::default()];
+        let calls = std::sync::atomic::AtomicUsize::new(0);
+        let out = compute_domes(&atm, &[-6.0, 30.0], BENCH_DOME, 8, REFERENCE_SEED, &|done, _| {
+            calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if done >= 3 {
+                Err(Cancelled)
+            } else {
+                Ok(())
+            }
+        });
+        assert_eq!(out, Err(Cancelled));
+        let directions = 2 * dome_directions(BENCH_DOME.0, BENCH_DOME.1).len();
+        // Each worker finishes the direction it holds, then stops.
+        let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
+        assert!(calls.into_inner() <= 3 + workers, "stopped early, of {directions}");
+        let whole = compute_domes(&atm, &[30.0], (2, 3), 8, REFERENCE_SEED, &|_, _| Ok(())).expect("not cancelled");
+        assert_eq!(whole.len(), 1);
+        assert_eq!(whole[0].2.len(), dome_directions(2, 3).len());
+    }
+}
