@@ -154,13 +154,10 @@ fn reference_file(atm: &Atmosphere, suns: &[f64]) -> Option<PathBuf> {
     cache_dir().map(|d| d.join(format!("reference-{key:016x}.csv")))
 }
 
-/// The reference over the benchmark's dome for `atm` at `suns`: the committed dataset when `atm`
-/// is one of the benchmark's atmospheres, else computed (a minute or more on two cores; reported
-/// through `phase`, stopped when its job is cancelled) and cached on disk.
-pub fn reference_for(atm: &Atmosphere, suns: &[f64], phase: Phase<'_>) -> anyhow::Result<Vec<Vec<Rgb>>> {
-    if let Some(known) = known_reference(atm, suns) {
-        return known;
-    }
+/// Computes the reference over the benchmark's dome for an atmosphere no dataset holds (a minute
+/// or more on two cores; reported through `phase`, stopped when its job is cancelled), and caches
+/// it on disk.
+fn compute_reference(atm: &Atmosphere, suns: &[f64], phase: Phase<'_>) -> anyhow::Result<Vec<Vec<Rgb>>> {
     let file = reference_file(atm, suns);
     log::info!("auto model: computing the reference for this atmosphere at {} sun elevations (once; cached)", suns.len());
     let domes = dome::compute_domes(&[*atm], suns, dome::BENCH_DOME, CUSTOM_REFERENCE_PATHS, dome::REFERENCE_SEED, &|done, total| {
@@ -195,17 +192,23 @@ pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Sco
     let suns = sky_suns(sky);
     let atmospheres = sky_atmospheres(sky);
     let dirs: Vec<DomeDir> = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
-    let to_compute = atmospheres.iter().filter(|a| known_reference(a, &suns).is_none()).count();
+    // Read once: the committed dataset is parsed, a cached one read from disk.
+    let known: Vec<_> = atmospheres.iter().map(|a| known_reference(a, &suns)).collect();
+    let to_compute = known.iter().filter(|k| k.is_none()).count();
     let reference_share = if to_compute == 0 { 0.0 } else { REFERENCE_SHARE };
+    let share_each = reference_share / to_compute.max(1) as f64;
     let mut computed = 0;
     let mut references: Vec<Vec<Vec<Rgb>>> = Vec::new();
-    for a in &atmospheres {
-        let start = reference_share * computed as f64 / to_compute.max(1) as f64;
-        if known_reference(a, &suns).is_none() {
-            job.set_stage(format!("computing the reference for weather step {} of {}", references.len() + 1, atmospheres.len()));
-            computed += 1;
-        }
-        references.push(reference_for(a, &suns, job.phase(start, reference_share / to_compute.max(1) as f64))?);
+    for (w, (a, k)) in atmospheres.iter().zip(known).enumerate() {
+        let reference = match k {
+            Some(r) => r?,
+            None => {
+                job.set_stage(format!("computing the reference for weather step {} of {}", w + 1, atmospheres.len()));
+                computed += 1;
+                compute_reference(a, &suns, job.phase(share_each * (computed - 1) as f64, share_each))?
+            }
+        };
+        references.push(reference);
     }
     let candidates = candidates();
     let measuring = job.phase(reference_share, 1.0 - reference_share);
@@ -214,7 +217,6 @@ pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Sco
         job.check()?;
         job.set_stage(format!("measuring {}", point.id));
         measuring.report(n, candidates.len());
-        let (point, cost_ms) = (point.clone(), *cost_ms);
         let mut worst = 0.0f64;
         let mut turbidity = 0.0;
         for (w, (atm, refs)) in atmospheres.iter().zip(&references).enumerate() {
@@ -235,7 +237,7 @@ pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Sco
                 worst = worst.max(dome::dome_error(&dirs, r, &model).de_mean);
             }
         }
-        scored.push(Scored { id: point.id.clone(), method: point.method, turbidity, de2000: worst, cost_ms });
+        scored.push(Scored { id: point.id.clone(), method: point.method, turbidity, de2000: worst, cost_ms: *cost_ms });
     }
     measuring.report(1, 1);
     anyhow::ensure!(!scored.is_empty(), "no candidate model has a cost in the committed benchmark (docs/models.csv)");
@@ -265,13 +267,18 @@ pub fn scores_key(sky: &Sky) -> u64 {
     hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&modelbench::COMMITTED_CSV), dome::ReferenceDome::header(dome::COMMITTED_PATHS, dome::BENCH_DOME)))
 }
 
+/// Where the scores of `key` are cached.
+fn scores_file(key: u64) -> Option<PathBuf> {
+    cache_dir().map(|d| d.join(format!("auto-{key:016x}.csv")))
+}
+
 /// `sky`'s scores if this process or the disk cache already holds them (no measuring).
 fn known_scores(sky: &Sky) -> Option<Vec<Scored>> {
     let key = scores_key(sky);
     if let Some((_, s)) = SCORES.lock().unwrap_or_else(|p| p.into_inner()).iter().find(|(k, _)| *k == key) {
         return Some(s.clone());
     }
-    let file = cache_dir().map(|d| d.join(format!("auto-{key:016x}.csv")))?;
+    let file = scores_file(key)?;
     let points = modelbench::points();
     let from_disk: Option<Vec<Scored>> = std::fs::read_to_string(&file).ok().and_then(|text| {
         text.lines()
@@ -297,7 +304,7 @@ pub fn score_cached(sky: &Sky, ctx: &crate::render::GpuContext, job: &Job) -> an
     }
     let key = scores_key(sky);
     let s = score(sky, &Evaluator::new(ctx)?, job)?;
-    if let Some(f) = cache_dir().map(|d| d.join(format!("auto-{key:016x}.csv"))) {
+    if let Some(f) = scores_file(key) {
         let text: String = s.iter().map(|x| format!("{},{},{},{}\n", x.id, x.turbidity, x.de2000, x.cost_ms)).collect();
         if let Some(dir) = f.parent() {
             let _ = std::fs::create_dir_all(dir);

@@ -259,7 +259,7 @@ pub fn spec_for(path: Option<&Path>, season: Option<&str>) -> anyhow::Result<Sky
 pub fn frame_from_args(f: &FrameArgs) -> anyhow::Result<(FrameInput, Camera)> {
     let tier = Tier::new(f.tier).ok_or_else(|| anyhow!("--tier: expected 4, 2 or 1, found {}", f.tier))?;
     anyhow::ensure!(f.hour.is_finite() && f.weather.is_finite(), "--hour and --weather must be finite numbers");
-    let mut camera = Camera::preset(&f.view).ok_or_else(|| anyhow!("--view: unknown view \"{}\"; expected south, east, west, north or zenith", f.view))?;
+    let mut camera = Camera::preset_arg(&f.view).map_err(|e| anyhow!(e))?;
     if let Some(y) = f.yaw {
         camera.yaw_deg = y;
     }

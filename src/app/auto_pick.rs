@@ -46,8 +46,9 @@ pub struct AutoPicker {
 
 impl AutoPicker {
     /// Asks for the pick of `sky` (generation `generation`): known picks (cached in this process
-    /// or on disk) apply at once; otherwise a worker measures it on `ctx`. Cancels a pick still
-    /// running for an earlier version. Skies that name their model need no pick.
+    /// or on disk) apply at once; otherwise a worker measures it on `ctx`. A pick still running
+    /// for an earlier version goes on when it measures the same atmospheres and suns, else it is
+    /// cancelled. Skies that name their model need no pick.
     pub fn request(&mut self, sky: &Arc<Sky>, generation: u64, ctx: &GpuContext) {
         let key = sky.auto_model.map(|_| auto_model::scores_key(sky));
         if let Some(p) = self.pending.as_mut() {

@@ -114,7 +114,7 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         controls.weather = w;
     }
     if let Some(v) = &config.view {
-        controls.camera = crate::render::Camera::preset(v).ok_or_else(|| anyhow!("--view: unknown view \"{v}\"; expected south, east, west, north or zenith"))?;
+        controls.camera = crate::render::Camera::preset_arg(v).map_err(|e| anyhow!(e))?;
     }
     if let Some(t) = config.tier {
         controls.tier = Tier::new(t).ok_or_else(|| anyhow!("--tier: expected 4, 2 or 1, found {t}"))?;

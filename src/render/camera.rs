@@ -36,6 +36,11 @@ impl Camera {
         PRESETS.iter().find(|p| p.0 == name).map(|&(_, yaw, pitch)| Camera { yaw_deg: yaw, pitch_deg: pitch, ..Camera::default() })
     }
 
+    /// A preset view by name, or an error naming `--view` and the presets (the CLI and the window).
+    pub fn preset_arg(name: &str) -> Result<Camera, String> {
+        Self::preset(name).ok_or_else(|| format!("--view: unknown view \"{name}\"; expected {}", PRESETS.map(|p| p.0).join(", ")))
+    }
+
     /// Unit view direction.
     pub fn forward(&self) -> Vec3 {
         if let Some((forward, _)) = self.look {
