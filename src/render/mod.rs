@@ -24,6 +24,7 @@ pub mod sky_objects;
 pub mod sky_view;
 pub mod stage_fold;
 pub mod stars;
+pub mod strategy;
 pub mod texel_quads;
 pub mod textures;
 pub mod timing;
@@ -37,6 +38,7 @@ pub use pass::{Pass, Phase, PASSES};
 pub use reduced_layers::{Divisor, DomeResolution};
 pub use renderer::{release_freed_memory, FrameStats, RenderOptions, RenderTarget, Skips, SkyRenderer, UploadStats, SCENE_DEPTH, SKY_DEPTH};
 pub use shaders::ShaderLibrary;
+pub use strategy::FillStrategy;
 
 /// Colour format of the HDR target that frames of a physical sky model draw into (exposed linear
 /// radiance; the display phase tone-maps it into the display target).

@@ -9,6 +9,7 @@ use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SharedResource
 use super::reduced_layers::{Divisor, DomeResolution};
 use super::reduced_layers::{Joining, ReducedLayersPass};
 use super::shaders::{self, ShaderLibrary};
+use super::strategy::FillStrategy;
 use super::textures::TextureCache;
 use super::timing::GpuTimer;
 use super::GpuContext;
@@ -108,6 +109,25 @@ impl Default for RenderOptions {
             pair_layers: true,
             texel_quads: true,
             grid_bands: true,
+        }
+    }
+}
+
+impl RenderOptions {
+    /// These options filling the sky's pixels with `strategy`.
+    pub fn with_strategy(self, strategy: FillStrategy) -> Self {
+        Self {
+            dome_resolution: strategy.dome_resolution,
+            join_runs: strategy.joins_runs(),
+            seed_joined: strategy.seeds_joined(),
+            fold_seed: strategy.folds_seed(),
+            additive_first: strategy.additive_first(),
+            fuse_background: strategy.fuses_background(),
+            texel_quads: strategy.texel_polygons(),
+            grid_bands: strategy.grid_bands(),
+            flash_in_run: strategy.flash_in_run(),
+            pair_layers: strategy.pairs_layers(),
+            ..self
         }
     }
 }

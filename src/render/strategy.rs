@@ -1,0 +1,254 @@
+//! How the sky's pixels are filled: the renderer's tricks that pay on one kind of adapter and
+//! not necessarily on another, as one value with named presets.
+//!
+//! Each trick was measured on lavapipe, a software rasteriser, where a full-screen pass costs
+//! about a millisecond and shading is paid per 4 x 4 block (docs/performance-notes.md). On a
+//! hardware GPU the same tricks may cost more than they save, or blur what need not be blurred,
+//! so the default strategy follows the adapter's device type ([`FillStrategy::for_device`]).
+//! The switches that depend on each other are one enum each: only valid combinations exist.
+
+pub use super::reduced_layers::DomeResolution;
+
+/// How the first runs of reduced dome layers reach the frame (with dome layers in reduced
+/// buffers; nothing to join otherwise).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RunJoining {
+    /// One composite per run.
+    Separate,
+    /// The first runs (the skydome's, the clouds', and the fog's after a lightning bolt) are
+    /// composited at once, and the billboards between them drawn afterwards, corrected by the
+    /// runs above them (the same picture, one full-screen pass less per run joined); the joined
+    /// runs are combined in passes of their own.
+    Combined,
+    /// As `Combined`, and with two runs joined the second run's buffer starts as the first run's
+    /// colour instead of nothing, so that its layers leave the two runs' combination there (one
+    /// pass at reduced resolution less). Where the first run is the finer one, or with more runs
+    /// joined: combined as with `Combined`.
+    Seeded,
+    /// As `Seeded`, and the seeded buffer's first layer, when a dome that can, is drawn over the
+    /// lower run's colour itself, replacing the clear colour, and the seeding pass only fills the
+    /// rows below that dome: one reduced-resolution pass less, for one sample of the lower run.
+    SeededFolded,
+}
+
+/// What is drawn onto the cleared frame before the background (the first run of reduced dome
+/// layers) is composited over it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum UnderBackground {
+    /// Nothing: the additive draws after the background are drawn in the sky phase,
+    /// depth-tested, each sampling the run above it.
+    Nothing,
+    /// The additive draws that follow the background (the skydome's fine stars, the star field)
+    /// go first onto the cleared frame, neither depth-tested nor corrected by a run, and the
+    /// background is composited over them (the same sums; the scene drawn next covers what it
+    /// hides).
+    Additive,
+    /// As `Additive`, and one that covers the frame (the skydome's fine stars looking up) is drawn
+    /// as the background itself, writing the background run's colour plus its term, the others
+    /// added after it: one full-screen pass, neither blended nor depth-tested, in place of that
+    /// draw and the background's blended composite.
+    AdditiveFused,
+}
+
+/// How a sparse texture stage of the fused background (the skydome's stars times their mask:
+/// under 1% of texels lit) is drawn on the display target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SparseStages {
+    /// Sampled everywhere, as every other stage.
+    Sampled,
+    /// Texel by texel where it is sampled from level 0: one small polygon per lit texel adding
+    /// the texel times its bilinear weight ([`super::texel_quads`]), over the background drawn
+    /// without that stage. The same sum as the sample, for the pixels near a lit texel only.
+    TexelPolygons,
+    /// As `TexelPolygons`, and the rest of the background's draw, which then maps nothing from
+    /// the dome's grid, goes as one triangle over the frame scissored round the rings that still
+    /// sample the stage and the rows below the dome, and inside those as one band of quads
+    /// between the rings' chords: the same pixels, without most of the triangle edges whose
+    /// 4 x 4 blocks lavapipe shades twice.
+    TexelPolygonsOnBands,
+}
+
+/// Where the lightning flash (one additive colour over the sky, above every layer) is added.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FlashPlacement {
+    /// Over the whole frame at full resolution.
+    OverFrame,
+    /// With dome layers in reduced buffers: to the run of layers before it, at that run's
+    /// resolution (the same sum; one full-screen blended pass less while a flash lasts). With no
+    /// run before it: over the frame.
+    InRun,
+}
+
+/// How two alpha-blended layers next to each other in a run, on the same mesh (the cloud
+/// layers), are drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LayerPairs {
+    /// One after the other.
+    OneByOne,
+    /// With dome layers in reduced buffers: at once, one shader evaluating both and one blend
+    /// leaving what the two would (one set of triangles and one blend per pixel less).
+    AtOnce,
+}
+
+/// How the sky's pixels are filled: every trick of the renderer that trades work for work, as
+/// one value. [`Self::software`] and [`Self::plain`] are the named presets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FillStrategy {
+    /// Resolution of the dome layers (skydome, galaxy, clouds, fog): below full, each run of
+    /// consecutive dome layers is drawn into a smaller buffer and composited in its place.
+    pub dome_resolution: DomeResolution,
+    /// How the first runs of reduced layers reach the frame.
+    pub runs: RunJoining,
+    /// What goes under the background.
+    pub under_background: UnderBackground,
+    /// How a sparse stage of the fused background is drawn.
+    pub sparse_stages: SparseStages,
+    /// Where the lightning flash is added.
+    pub flash: FlashPlacement,
+    /// How two neighbouring alpha-blended layers of a run are drawn.
+    pub pairs: LayerPairs,
+}
+
+/// The named presets, for the command line and reports.
+pub const PRESETS: [(&str, FillStrategy); 2] = [("software", FillStrategy::software()), ("plain", FillStrategy::plain())];
+
+impl FillStrategy {
+    /// Every trick on: what measured fastest on lavapipe (docs/performance-notes.md), for CPU
+    /// rasterisers.
+    pub const fn software() -> Self {
+        Self {
+            dome_resolution: DomeResolution::Auto,
+            runs: RunJoining::SeededFolded,
+            under_background: UnderBackground::AdditiveFused,
+            sparse_stages: SparseStages::TexelPolygonsOnBands,
+            flash: FlashPlacement::InRun,
+            pairs: LayerPairs::AtOnce,
+        }
+    }
+
+    /// The straightforward path: every dome layer at the frame's resolution, drawn in list order
+    /// one after the other, every stage sampled.
+    pub const fn plain() -> Self {
+        Self {
+            dome_resolution: DomeResolution::Full,
+            runs: RunJoining::Separate,
+            under_background: UnderBackground::Nothing,
+            sparse_stages: SparseStages::Sampled,
+            flash: FlashPlacement::OverFrame,
+            pairs: LayerPairs::OneByOne,
+        }
+    }
+
+    /// The preset for an adapter of this type: `software` on a CPU rasteriser, where its tricks
+    /// were measured to pay, `plain` elsewhere (no trick was measured on a hardware GPU yet:
+    /// docs/performance.md).
+    pub fn for_device(device_type: wgpu::DeviceType) -> Self {
+        match device_type {
+            wgpu::DeviceType::Cpu => Self::software(),
+            _ => Self::plain(),
+        }
+    }
+
+    /// The preset of this name (`software`, `plain`).
+    pub fn preset(name: &str) -> Option<Self> {
+        PRESETS.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
+    }
+
+    /// The preset's name, or `custom` for a strategy that is none of them.
+    pub fn name(&self) -> &'static str {
+        PRESETS.iter().find(|(_, s)| s == self).map_or("custom", |(n, _)| n)
+    }
+
+    /// Whether the first runs are joined (composited at once).
+    pub fn joins_runs(&self) -> bool {
+        self.runs != RunJoining::Separate
+    }
+
+    /// Whether two joined runs are joined by seeding the second's buffer with the first.
+    pub fn seeds_joined(&self) -> bool {
+        matches!(self.runs, RunJoining::Seeded | RunJoining::SeededFolded)
+    }
+
+    /// Whether the seeded buffer's first layer is drawn over the seed itself.
+    pub fn folds_seed(&self) -> bool {
+        self.runs == RunJoining::SeededFolded
+    }
+
+    /// Whether additive draws go under the background.
+    pub fn additive_first(&self) -> bool {
+        self.under_background != UnderBackground::Nothing
+    }
+
+    /// Whether one of the draws under the background may be the background itself.
+    pub fn fuses_background(&self) -> bool {
+        self.under_background == UnderBackground::AdditiveFused
+    }
+
+    /// Whether sparse stages are drawn texel by texel.
+    pub fn texel_polygons(&self) -> bool {
+        self.sparse_stages != SparseStages::Sampled
+    }
+
+    /// Whether the background without its sparse stage goes on one triangle and bands.
+    pub fn grid_bands(&self) -> bool {
+        self.sparse_stages == SparseStages::TexelPolygonsOnBands
+    }
+
+    /// Whether the lightning flash is added to the run before it.
+    pub fn flash_in_run(&self) -> bool {
+        self.flash == FlashPlacement::InRun
+    }
+
+    /// Whether neighbouring alpha-blended layers of a run are drawn at once.
+    pub fn pairs_layers(&self) -> bool {
+        self.pairs == LayerPairs::AtOnce
+    }
+}
+
+impl Default for FillStrategy {
+    /// The software preset: the renderer's pictures and tests are defined on lavapipe.
+    fn default() -> Self {
+        Self::software()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_are_named_and_found_by_name() {
+        for (name, s) in PRESETS {
+            assert_eq!(FillStrategy::preset(name), Some(s));
+            assert_eq!(s.name(), name);
+        }
+        assert_eq!(FillStrategy::preset("fast"), None);
+        let custom = FillStrategy { pairs: LayerPairs::OneByOne, ..FillStrategy::software() };
+        assert_eq!(custom.name(), "custom");
+    }
+
+    #[test]
+    fn each_enum_implies_the_switches_it_stands_for() {
+        let s = |runs| FillStrategy { runs, ..FillStrategy::software() };
+        assert!(!s(RunJoining::Separate).joins_runs() && !s(RunJoining::Separate).seeds_joined());
+        assert!(s(RunJoining::Combined).joins_runs() && !s(RunJoining::Combined).seeds_joined());
+        assert!(s(RunJoining::Seeded).seeds_joined() && !s(RunJoining::Seeded).folds_seed());
+        assert!(s(RunJoining::SeededFolded).joins_runs() && s(RunJoining::SeededFolded).folds_seed());
+        let u = |under_background| FillStrategy { under_background, ..FillStrategy::plain() };
+        assert!(!u(UnderBackground::Nothing).additive_first());
+        assert!(u(UnderBackground::Additive).additive_first() && !u(UnderBackground::Additive).fuses_background());
+        assert!(u(UnderBackground::AdditiveFused).additive_first() && u(UnderBackground::AdditiveFused).fuses_background());
+        let t = |sparse_stages| FillStrategy { sparse_stages, ..FillStrategy::plain() };
+        assert!(!t(SparseStages::Sampled).texel_polygons() && !t(SparseStages::Sampled).grid_bands());
+        assert!(t(SparseStages::TexelPolygons).texel_polygons() && !t(SparseStages::TexelPolygons).grid_bands());
+        assert!(t(SparseStages::TexelPolygonsOnBands).grid_bands());
+    }
+
+    #[test]
+    fn the_adapter_picks_the_preset() {
+        assert_eq!(FillStrategy::for_device(wgpu::DeviceType::Cpu), FillStrategy::software());
+        for t in [wgpu::DeviceType::DiscreteGpu, wgpu::DeviceType::IntegratedGpu, wgpu::DeviceType::VirtualGpu, wgpu::DeviceType::Other] {
+            assert_eq!(FillStrategy::for_device(t), FillStrategy::plain());
+        }
+    }
+}
