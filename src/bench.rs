@@ -9,7 +9,8 @@ use std::time::Instant;
 use anyhow::anyhow;
 
 use crate::cli::{self, BenchArgs};
-use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions, Skips};
+use skytune::render::strategy::{RunJoining, UnderBackground};
+use skytune::render::{AdapterChoice, Camera, FillStrategy, GpuContext, Headless, RenderOptions, Skips};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
 use skytune::sky::{FrameInput, Sky, Tier};
@@ -26,12 +27,9 @@ struct Config {
     skips: Skips,
     /// Hour of the day ([`HOUR`] unless a configuration needs the night's stars).
     hour: f32,
-    /// [`RenderOptions::additive_first`] (on unless a configuration measures it).
-    additive_first: bool,
-    /// [`RenderOptions::fuse_background`] (on unless a configuration measures it).
-    fuse_background: bool,
-    /// [`RenderOptions::seed_joined`] (on unless a configuration measures it).
-    seed_joined: bool,
+    /// The fill strategy: `software` (the default) unless a configuration measures one of its
+    /// choices.
+    strategy: FillStrategy,
     wall_ms: Vec<f32>,
     scene_ms: Vec<f32>,
     sky_ms: Vec<f32>,
@@ -88,9 +86,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         sun_moves: false,
         skips: Skips::default(),
         hour: HOUR,
-        additive_first: true,
-        fuse_background: true,
-        seed_joined: true,
+        strategy: FillStrategy::software(),
         wall_ms: Vec::new(),
         scene_ms: Vec::new(),
         sky_ms: Vec::new(),
@@ -126,10 +122,21 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         Config { skips: Skips { below_horizon: false, ..Skips::default() }, ..mk("horizon, billboards and dome rows behind the scene drawn (skip off)", horizon, true, 4) },
         // The night's additive draws (the skydome's fine stars, the star field) under the background.
         Config { hour: NIGHT, ..mk("night, sky fills the screen", up, true, 4) },
-        Config { hour: NIGHT, additive_first: false, ..mk("night, sky fills the screen, additive draws in the sky phase (additive_first off)", up, true, 4) },
-        Config { hour: NIGHT, fuse_background: false, ..mk("night, sky fills the screen, background composited over the additive draws (fuse_background off)", up, true, 4) },
+        Config {
+            hour: NIGHT,
+            strategy: FillStrategy { under_background: UnderBackground::Nothing, ..FillStrategy::software() },
+            ..mk("night, sky fills the screen, additive draws in the sky phase (nothing under the background)", up, true, 4)
+        },
+        Config {
+            hour: NIGHT,
+            strategy: FillStrategy { under_background: UnderBackground::Additive, ..FillStrategy::software() },
+            ..mk("night, sky fills the screen, background composited over the additive draws (additive draws under it, none fused)", up, true, 4)
+        },
         // The joined runs' combination: the second run's buffer seeded with the first, or a pass of its own.
-        Config { seed_joined: false, ..mk("sky fills the screen, joined runs combined in a pass of their own (seed_joined off)", up, true, 4) },
+        Config {
+            strategy: FillStrategy { runs: RunJoining::Combined, ..FillStrategy::software() },
+            ..mk("sky fills the screen, joined runs combined in a pass of their own (runs joined, not seeded)", up, true, 4)
+        },
         Config { skips: Skips { covered_clears: false, ..Skips::default() }, ..mk("sky fills the screen, frame cleared under the background (skip off)", up, true, 4) },
     ];
     let per_round = args.frames.div_ceil(ROUNDS).max(1);
@@ -138,15 +145,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             let mut input = FrameInput::new(c.hour, WEATHER);
             input.tier = c.tier;
             input.sky_model = Some(SkyModel { kind: c.model, ..sky.model });
-            let options = RenderOptions {
-                depth_split: c.depth_split,
-                glare: false,
-                skips: c.skips,
-                additive_first: c.additive_first,
-                fuse_background: c.fuse_background,
-                seed_joined: c.seed_joined,
-                ..Default::default()
-            };
+            let options = RenderOptions { depth_split: c.depth_split, glare: false, skips: c.skips, strategy: c.strategy, ..Default::default() };
             // Two warm-up frames: pipelines, caches and the timestamp readback of this configuration.
             for i in 0..per_round + 2 {
                 if c.sun_moves {
@@ -257,9 +256,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let _ = writeln!(
         md,
         "- More skips and options, the same way: dome layers and rows of dome triangles out of view not drawn {:.2} ms; stages that no pixel minifies sampled from level 0 {:.2} ms \
-         (sky filling the screen); billboards and dome rows behind the scene not drawn {:.2} ms (horizon); the night's additive draws put under the background (`additive_first`) {:.2} ms (night, sky filling the screen, hour {NIGHT}); \
-         the skydome's fine stars drawn as the background (`fuse_background`) {:.2} ms (the same night frame); \
-         the second joined run's buffer seeded with the first instead of a combining pass (`seed_joined`) {:.2} ms (sky filling the screen); \
+         (sky filling the screen); billboards and dome rows behind the scene not drawn {:.2} ms (horizon); the night's additive draws put under the background (`UnderBackground::Additive`) {:.2} ms (night, sky filling the screen, hour {NIGHT}); \
+         the skydome's fine stars drawn as the background (`UnderBackground::AdditiveFused`) {:.2} ms (the same night frame); \
+         the second joined run's buffer seeded with the first instead of a combining pass (`RunJoining::Seeded`) {:.2} ms (sky filling the screen); \
          the frame's colour not cleared under the background (`covered_clears`; the scene is drawn, so its depth is cleared) {:.2} ms (sky filling the screen).",
         saving(16, 2),
         saving(17, 2),

@@ -13,7 +13,8 @@ use anyhow::{anyhow, Context as _};
 use crate::cli::{self, FrameBenchArgs};
 use skytune::live::{LiveSky, ReloadEvent, SkySpec};
 use skytune::render::baseline::Baseline;
-use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions, ShaderLibrary, OFFSCREEN_FORMAT};
+use skytune::render::strategy::PRESETS;
+use skytune::render::{AdapterChoice, Camera, FillStrategy, GpuContext, Headless, RenderOptions, ShaderLibrary, OFFSCREEN_FORMAT};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::{FrameInput, Sky};
 
@@ -32,6 +33,8 @@ const TIMES: [(f32, f32); 4] = [(12.0, 0.0), (18.5, 0.3), (23.0, 0.0), (15.0, 1.
 /// One measured case.
 struct Case {
     sky: String,
+    /// The fill strategy's preset.
+    strategy: &'static str,
     hour: f32,
     weather: f32,
     view: &'static str,
@@ -41,6 +44,26 @@ struct Case {
     /// sky at the horizon), ms.
     with_scene_ms: f64,
     phases: Vec<(&'static str, f64)>,
+}
+
+/// The renderers and options of one strategy.
+struct Measured {
+    name: &'static str,
+    options: RenderOptions,
+    with_scene: RenderOptions,
+    /// Timed frames (no timestamps recorded).
+    plain: Headless,
+    /// The same frames, recording timestamps for the phase columns.
+    timing: Headless,
+}
+
+/// The frame times of one case and strategy, ms, and the phases' GPU times.
+#[derive(Default)]
+struct Samples {
+    floor_ms: Vec<f64>,
+    sky_ms: Vec<f64>,
+    scene_ms: Vec<f64>,
+    phases: Vec<Vec<(&'static str, f32)>>,
 }
 
 /// Wall time of one frame recorded by `record`, submitted and waited for, ms.
@@ -82,70 +105,127 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     let ctx = GpuContext::headless(if args.cpu { AdapterChoice::Cpu } else { AdapterChoice::from_env() })?;
     let adapter = ctx.adapter_line();
     println!("adapter: {adapter}");
-    let mut hl = Headless::new(ctx.clone(), w, h)?;
-    // The timed frames come from a renderer that records no timestamps (they cost lavapipe about
-    // 3% of a sky frame, and the floor records none); `hl` renders the same frames for the phase
-    // columns.
+    // Each preset measured (both unless `--strategy` names one), side by side in every case; the
+    // adapter's own is the one the summary line is about.
+    let strategies: Vec<(&'static str, FillStrategy)> = match &args.strategy {
+        Some(name) => PRESETS.iter().copied().filter(|(n, _)| n == name).collect(),
+        None => PRESETS.to_vec(),
+    };
+    anyhow::ensure!(!strategies.is_empty(), "{}", FillStrategy::preset_arg(args.strategy.as_deref().unwrap_or_default()).err().unwrap_or_default());
+    let adapter_strategy = FillStrategy::for_device(ctx.adapter.get_info().device_type).name();
+    let summarised = strategies.iter().find(|(n, _)| *n == adapter_strategy).unwrap_or(&strategies[0]).0;
+    // The timed frames come from renderers that record no timestamps (they cost lavapipe about
+    // 3% of a sky frame, and the floor records none); `timing` renders the same frames for the
+    // phase columns. One pair of renderers per strategy: each keeps its own buffers.
     let untimed = ctx.without_timestamps();
-    let mut plain = Headless::new(untimed.clone(), w, h)?;
     let floor = Baseline::new(&ctx.device, &ctx.queue, &ShaderLibrary::embedded(), OFFSCREEN_FORMAT)?;
     let skies = skies(&args.skies)?;
     let views: [(&str, Camera); 2] =
         [("horizon", Camera { yaw_deg: 180.0, pitch_deg: 10.0, ..Camera::default() }), ("zenith", Camera::preset("zenith").ok_or_else(|| anyhow!("no zenith view"))?)];
     // The sky alone, filling the frame (what the goal is about); the frame with the main-scene
     // stand-in is measured beside it, for reference.
-    let options = RenderOptions { dome_resolution: args.dome_resolution, scene: false, ..Default::default() };
-    let with_scene = RenderOptions { scene: true, ..options };
+    let measured: Vec<Measured> = strategies
+        .iter()
+        .map(|&(name, strategy)| {
+            let mut strategy = strategy;
+            if let Some(r) = args.dome_resolution {
+                strategy.dome_resolution = r;
+            }
+            let options = RenderOptions { scene: false, strategy, ..Default::default() };
+            Ok(Measured {
+                name,
+                options,
+                with_scene: RenderOptions { scene: true, ..options },
+                plain: Headless::new(untimed.clone(), w, h)?,
+                timing: Headless::new(ctx.clone(), w, h)?,
+            })
+        })
+        .collect::<anyhow::Result<_>>()?;
+    let mut measured = measured;
 
     let mut cases = Vec::new();
     for (name, sky) in &skies {
-        hl.set_sky(sky)?;
-        plain.set_sky(sky)?;
+        for m in &mut measured {
+            m.plain.set_sky(sky)?;
+            m.timing.set_sky(sky)?;
+        }
         for (hour, weather) in TIMES {
             for (view, camera) in &views {
                 let input = FrameInput::new(hour, weather);
                 let frame = sky.evaluate(&input);
-                let (mut sky_ms, mut floor_ms, mut scene_ms) = (Vec::new(), Vec::new(), Vec::new());
-                let mut phases: Vec<Vec<(&'static str, f32)>> = Vec::new();
+                let mut samples: Vec<Samples> = measured.iter().map(|_| Samples::default()).collect();
                 for i in 0..frames + 2 {
-                    let f = timed(&ctx, |e| floor.record(e, &plain.target.color_view))?;
-                    let target = plain.target.target();
-                    let with = timed(&ctx, |e| plain.renderer.render(&ctx, e, &target, &frame, camera, &with_scene))?;
-                    plain.renderer.after_submit();
-                    let target = plain.target.target();
-                    let s = timed(&ctx, |e| plain.renderer.render(&ctx, e, &target, &frame, camera, &options))?;
-                    plain.renderer.after_submit();
-                    let target = hl.target.target();
-                    timed(&ctx, |e| hl.renderer.render(&ctx, e, &target, &frame, camera, &options))?;
-                    settle(&ctx, &mut hl)?;
-                    if i >= 2 {
-                        floor_ms.push(f);
-                        sky_ms.push(s);
-                        scene_ms.push(with);
-                        phases.push(hl.renderer.gpu_pass_ms().to_vec());
+                    for (m, samples) in measured.iter_mut().zip(&mut samples) {
+                        let target = m.plain.target.target();
+                        let f = timed(&ctx, |e| floor.record(e, target.color))?;
+                        let with = timed(&ctx, |e| m.plain.renderer.render(&ctx, e, &target, &frame, camera, &m.with_scene))?;
+                        m.plain.renderer.after_submit();
+                        let s = timed(&ctx, |e| m.plain.renderer.render(&ctx, e, &target, &frame, camera, &m.options))?;
+                        m.plain.renderer.after_submit();
+                        let target = m.timing.target.target();
+                        timed(&ctx, |e| m.timing.renderer.render(&ctx, e, &target, &frame, camera, &m.options))?;
+                        settle(&ctx, &mut m.timing)?;
+                        if i >= 2 {
+                            samples.floor_ms.push(f);
+                            samples.sky_ms.push(s);
+                            samples.scene_ms.push(with);
+                            samples.phases.push(m.timing.renderer.gpu_pass_ms().to_vec());
+                        }
                     }
                 }
-                let names: Vec<&'static str> = phases.first().map(|p| p.iter().map(|(n, _)| *n).collect()).unwrap_or_default();
-                let phase_medians =
-                    names.iter().map(|n| (*n, median(&phases.iter().filter_map(|p| p.iter().find(|(m, _)| m == n).map(|(_, ms)| *ms as f64)).collect::<Vec<_>>()))).collect();
-                let case =
-                    Case { sky: name.clone(), hour, weather, view, sky_ms: median(&sky_ms), floor_ms: median(&floor_ms), with_scene_ms: median(&scene_ms), phases: phase_medians };
-                println!(
-                    "{:<10} {:>5.1} h weather {:.1} {:<7}: frame {:>8.2} ms, floor {:>6.2} ms, ratio {:>5.1} (with the scene {:>6.2} ms, {:.1})",
-                    case.sky,
-                    hour,
-                    weather,
-                    view,
-                    case.sky_ms,
-                    case.floor_ms,
-                    case.sky_ms / case.floor_ms,
-                    case.with_scene_ms,
-                    case.with_scene_ms / case.floor_ms
-                );
-                cases.push(case);
+                for (m, samples) in measured.iter().zip(samples) {
+                    let phases = &samples.phases;
+                    let names: Vec<&'static str> = phases.first().map(|p| p.iter().map(|(n, _)| *n).collect()).unwrap_or_default();
+                    let phase_medians =
+                        names.iter().map(|n| (*n, median(&phases.iter().filter_map(|p| p.iter().find(|(m, _)| m == n).map(|(_, ms)| *ms as f64)).collect::<Vec<_>>()))).collect();
+                    let case = Case {
+                        sky: name.clone(),
+                        strategy: m.name,
+                        hour,
+                        weather,
+                        view,
+                        sky_ms: median(&samples.sky_ms),
+                        floor_ms: median(&samples.floor_ms),
+                        with_scene_ms: median(&samples.scene_ms),
+                        phases: phase_medians,
+                    };
+                    println!(
+                        "{:<10} {:<8} {:>5.1} h weather {:.1} {:<7}: frame {:>8.2} ms, floor {:>6.2} ms, ratio {:>5.1} (with the scene {:>6.2} ms, {:.1})",
+                        case.sky,
+                        case.strategy,
+                        hour,
+                        weather,
+                        view,
+                        case.sky_ms,
+                        case.floor_ms,
+                        case.sky_ms / case.floor_ms,
+                        case.with_scene_ms,
+                        case.with_scene_ms / case.floor_ms
+                    );
+                    cases.push(case);
+                }
             }
         }
     }
+    // Per strategy: worst and median ratio, and each case's frame against the summarised one's.
+    let per_strategy: Vec<(&str, f64, f64, f64)> = measured
+        .iter()
+        .map(|m| {
+            let r: Vec<f64> = cases.iter().filter(|c| c.strategy == m.name).map(|c| c.sky_ms / c.floor_ms).collect();
+            let against: Vec<f64> = cases
+                .iter()
+                .filter(|c| c.strategy == m.name)
+                .filter_map(|c| {
+                    cases.iter().find(|o| o.strategy == summarised && (&o.sky, o.hour, o.weather, o.view) == (&c.sky, c.hour, c.weather, c.view)).map(|o| c.sky_ms / o.sky_ms)
+                })
+                .collect();
+            (m.name, r.iter().copied().fold(0.0, f64::max), median(&r), median(&against))
+        })
+        .collect();
+    let all_cases = cases;
+    let cases: Vec<&Case> = all_cases.iter().filter(|c| c.strategy == summarised).collect();
+    let options = measured.iter().find(|m| m.name == summarised).map_or_else(RenderOptions::default, |m| m.options);
+    let Measured { mut plain, timing: mut hl, .. } = measured.into_iter().find(|m| m.name == summarised).ok_or_else(|| anyhow!("no renderer for {summarised}"))?;
     let ratios: Vec<f64> = cases.iter().map(|c| c.sky_ms / c.floor_ms).collect();
     let worst = ratios.iter().copied().fold(0.0, f64::max);
     let med = median(&ratios);
@@ -208,37 +288,47 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     let _ = writeln!(md, "- adapter: {adapter}");
     let _ = writeln!(
         md,
-        "- machine: {} logical CPUs; release build; {w}x{h}; {} measured frames per case after 2 warm-up frames; dome layers at {} resolution (`--dome-resolution`)",
+        "- machine: {} logical CPUs; release build; {w}x{h}; {} measured frames per case after 2 warm-up frames; dome layers at {} resolution (`--dome-resolution`); fill strategies {} (`--strategy`), the adapter's own `{adapter_strategy}`",
         std::thread::available_parallelism().map_or(1, |n| n.get()),
         frames,
-        args.dome_resolution.name()
+        args.dome_resolution.map_or("the strategy's", |r| r.name()),
+        strategies.iter().map(|(n, _)| format!("`{n}`")).collect::<Vec<_>>().join(" and ")
     );
     let _ = writeln!(
         md,
         "- method: each frame is recorded, submitted and waited for (wall time: on lavapipe the rasterisation itself). The floor is one render pass that clears the same target (rgba8) and draws one full-screen triangle sampling one 128 x 128 texture (`shaders/baseline.wgsl`); floor and sky frames alternate within each case, and the ratio is sky over floor of the same case. The sky is drawn alone, filling the frame (`scene` off: the goal is the sky's cost); the frame with the main-scene stand-in in front of it (terrain and buildings at the horizon: {stand_in_ms:.1} ms more there, median over the horizon cases) is measured in the same alternation, for reference. The timed frames come from a renderer that records no GPU timestamps (the floor records none, and lavapipe charges a sky frame's timestamps about 3% of its time); the phase columns are timestamp medians of the same sky-alone frame drawn by a second renderer that records them, in the same alternation."
     );
-    let _ = writeln!(md, "\n**fill_limit_ratio worst={worst:.1} median={med:.1}** (goal: 3; with the scene stand-in: worst {scene_worst:.1}, median {scene_med:.1})\n");
+    let _ = writeln!(
+        md,
+        "\n**fill_limit_ratio worst={worst:.1} median={med:.1}** (`{summarised}` strategy; goal: 3; with the scene stand-in: worst {scene_worst:.1}, median {scene_med:.1})\n"
+    );
+    let _ = writeln!(md, "| strategy | worst ratio | median ratio | frame against `{summarised}`, median of the cases |\n|---|---:|---:|---:|");
+    for (name, worst, med, against) in &per_strategy {
+        let _ = writeln!(md, "| {name} | {worst:.2} | {med:.2} | {against:.2} |");
+    }
+    let _ = writeln!(md);
     // Every phase any case drew (rain's and the compute phase's only in some), in the order met.
     let mut phase_names: Vec<&str> = Vec::new();
-    for (n, _) in cases.iter().flat_map(|c| &c.phases) {
+    for (n, _) in all_cases.iter().flat_map(|c| &c.phases) {
         if !phase_names.contains(n) {
             phase_names.push(n);
         }
     }
-    let _ = write!(md, "| sky | hour | weather | view | frame ms | floor ms | ratio | with scene ms | ratio with scene |");
+    let _ = write!(md, "| sky | strategy | hour | weather | view | frame ms | floor ms | ratio | with scene ms | ratio with scene |");
     for n in &phase_names {
         let _ = write!(md, " {n} ms |");
     }
-    let _ = write!(md, "\n|---|---:|---:|---|---:|---:|---:|---:|---:|");
+    let _ = write!(md, "\n|---|---|---:|---:|---|---:|---:|---:|---:|---:|");
     for _ in &phase_names {
         let _ = write!(md, "---:|");
     }
     let _ = writeln!(md);
-    for c in &cases {
+    for c in &all_cases {
         let _ = write!(
             md,
-            "| {} | {} | {} | {} | {:.2} | {:.2} | {:.1} | {:.2} | {:.1} |",
+            "| {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.1} | {:.2} | {:.1} |",
             c.sky,
+            c.strategy,
             c.hour,
             c.weather,
             c.view,
@@ -293,6 +383,9 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     );
     println!("wrote {}", args.out.display());
     println!("with the scene stand-in: worst={scene_worst:.2} median={scene_med:.2}");
+    for (name, worst, med, against) in &per_strategy {
+        println!("strategy {name}: worst={worst:.2} median={med:.2}, frame against {summarised} median {against:.2}");
+    }
     println!("fill_limit_ratio worst={worst:.2} median={med:.2}");
     Ok(())
 }

@@ -264,9 +264,13 @@ pub struct FrameArgs {
     /// coarsest buffer, from half the width and height to an eighth in steps of a quarter pixel,
     /// that still resolves its textures). Layers with finer texture detail than a
     /// half-resolution buffer stay at full resolution (with auto, alpha-blended ones go whole to
-    /// a buffer from 1.5 to 2 where one resolves them).
-    #[arg(long, default_value = "auto", value_parser = parse_dome_resolution)]
-    pub dome_resolution: skytune::render::DomeResolution,
+    /// a buffer from 1.5 to 2 where one resolves them). Default: the fill strategy's.
+    #[arg(long, value_parser = parse_dome_resolution)]
+    pub dome_resolution: Option<skytune::render::DomeResolution>,
+    /// Fill strategy: software (every trick tuned for CPU rasterisers) or plain (dome layers at
+    /// full resolution, drawn one by one). Default: the adapter's (software on a CPU adapter).
+    #[arg(long)]
+    pub strategy: Option<String>,
     /// Render what the environment map sees (objects with visible_in_env_map).
     #[arg(long)]
     pub env_map: bool,
@@ -371,6 +375,10 @@ pub struct AppArgs {
     /// Preset view to start with: south (default), east, west, north, zenith.
     #[arg(long)]
     pub view: Option<String>,
+    /// Fill strategy to start with: software or plain (default: the adapter's; the diagnostics
+    /// panel switches it).
+    #[arg(long)]
+    pub strategy: Option<String>,
 }
 
 /// `bench` and its subcommands.
@@ -498,9 +506,12 @@ pub struct FrameBenchArgs {
     /// Force the software adapter (lavapipe).
     #[arg(long)]
     pub cpu: bool,
-    /// Resolution of the dome layers: full, half, quarter or auto.
-    #[arg(long, default_value = "auto", value_parser = parse_dome_resolution)]
-    pub dome_resolution: skytune::render::DomeResolution,
+    /// Resolution of the dome layers, overriding each strategy's: full, half, quarter or auto.
+    #[arg(long, value_parser = parse_dome_resolution)]
+    pub dome_resolution: Option<skytune::render::DomeResolution>,
+    /// Measure only this fill strategy (software, plain); both by default, side by side.
+    #[arg(long)]
+    pub strategy: Option<String>,
 }
 
 /// Parses a dome resolution name (full, half, quarter, auto).

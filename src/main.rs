@@ -44,6 +44,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             hour: cli.app.hour,
             weather: cli.app.weather,
             view: cli.app.view,
+            strategy: cli.app.strategy,
         }),
         Some(Command::Render(args)) => render(&args),
         Some(Command::Check { sky }) => check(&sky),
@@ -256,6 +257,20 @@ pub fn spec_for(path: Option<&Path>, season: Option<&str>) -> anyhow::Result<Sky
 }
 
 /// Frame input and camera from CLI arguments.
+/// The fill strategy `--strategy` names (the adapter's without it), with `--dome-resolution`'s
+/// resolution where given.
+fn strategy_from_args(f: &FrameArgs, ctx: &GpuContext) -> anyhow::Result<skytune::render::FillStrategy> {
+    use skytune::render::FillStrategy;
+    let mut strategy = match &f.strategy {
+        Some(name) => FillStrategy::preset_arg(name).map_err(|e| anyhow!(e))?,
+        None => FillStrategy::for_device(ctx.adapter.get_info().device_type),
+    };
+    if let Some(r) = f.dome_resolution {
+        strategy.dome_resolution = r;
+    }
+    Ok(strategy)
+}
+
 pub fn frame_from_args(f: &FrameArgs) -> anyhow::Result<(FrameInput, Camera)> {
     let tier = Tier::new(f.tier).ok_or_else(|| anyhow!("--tier: expected 4, 2 or 1, found {}", f.tier))?;
     anyhow::ensure!(f.hour.is_finite() && f.weather.is_finite(), "--hour and --weather must be finite numbers");
@@ -285,7 +300,7 @@ fn adapter(cpu: bool) -> AdapterChoice {
 /// Renders `sky` as `args` says into `args.out`.
 fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyhow::Result<()> {
     let (input, camera) = frame_from_args(&args.frame)?;
-    let options = RenderOptions { scene: !args.frame.no_scene, dome_resolution: args.frame.dome_resolution, ..Default::default() };
+    let options = RenderOptions { scene: !args.frame.no_scene, ..RenderOptions::default().with_strategy(strategy_from_args(&args.frame, &headless.ctx)?) };
     let mut input = input;
     input.sky_model = model_override(sky, &args.frame)?;
     let frame = sky.evaluate(&input);
@@ -426,7 +441,7 @@ fn compare(args: &cli::CompareArgs) -> anyhow::Result<()> {
     let (w, h) = cli::parse_size(&args.size)?;
     let ctx = GpuContext::headless(adapter(args.frame.cpu))?;
     println!("adapter: {}", ctx.adapter_line());
-    let options = RenderOptions { scene: !args.frame.no_scene, glare: !args.no_glare, dome_resolution: args.frame.dome_resolution, ..Default::default() };
+    let options = RenderOptions { scene: !args.frame.no_scene, glare: !args.no_glare, ..RenderOptions::default().with_strategy(strategy_from_args(&args.frame, &ctx)?) };
     let mut images = Vec::new();
     for (label, side) in ["A", "B"].iter().zip(&sides) {
         let path = side.sky.as_deref().or(args.sky.as_deref());

@@ -5,7 +5,8 @@
 
 mod common;
 
-use skytune::render::{Camera, RenderOptions};
+use skytune::render::strategy::FlashPlacement;
+use skytune::render::{Camera, FillStrategy, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::particles::{Burst, ParticleClock};
 use skytune::sky::resolved::{Color, ColorMode, EmitterAttach};
@@ -282,7 +283,8 @@ fn lightning_flash_adds_its_colour_over_the_sky() {
     unlit.particles.flash = 0.0;
     // Drawn over the frame, and added to the run of reduced dome layers before it.
     for in_run in [false, true] {
-        let options = RenderOptions { glare: false, scene: false, flash_in_run: in_run, ..Default::default() };
+        let placement = if in_run { FlashPlacement::InRun } else { FlashPlacement::OverFrame };
+        let options = RenderOptions { glare: false, scene: false, strategy: FillStrategy { flash: placement, ..FillStrategy::software() }, ..Default::default() };
         let mut draw = |frame: &skytune::sky::FrameSky| {
             let mut encoder = h.ctx.device.create_command_encoder(&Default::default());
             h.renderer.render(&h.ctx, &mut encoder, &h.target.target(), frame, &camera, &options);

@@ -4,7 +4,8 @@
 
 mod common;
 
-use skytune::render::{Camera, Divisor, DomeResolution, RenderOptions};
+use skytune::render::strategy::{FlashPlacement, LayerPairs, RunJoining, UnderBackground};
+use skytune::render::{Camera, Divisor, DomeResolution, FillStrategy, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::particles::ParticleClock;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
@@ -17,9 +18,9 @@ fn reduced_dome_layers_stay_close_to_full_resolution() {
     let mut h = common::headless(640, 360);
     h.set_sky(&sky).expect("uploaded");
     let camera = Camera { pitch_deg: 30.0, ..Camera::default() };
-    let full = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
-    let half = RenderOptions { dome_resolution: DomeResolution::Half, ..full };
-    let auto = RenderOptions { dome_resolution: DomeResolution::Auto, ..full };
+    let full = RenderOptions { glare: false, strategy: FillStrategy { dome_resolution: DomeResolution::Full, ..FillStrategy::software() }, ..Default::default() };
+    let half = RenderOptions { strategy: FillStrategy { dome_resolution: DomeResolution::Half, ..full.strategy }, ..full };
+    let auto = RenderOptions { strategy: FillStrategy { dome_resolution: DomeResolution::Auto, ..full.strategy }, ..full };
     let mut lut = FrameInput::new(10.0, 0.3);
     lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
     for (what, input) in [
@@ -31,7 +32,7 @@ fn reduced_dome_layers_stay_close_to_full_resolution() {
         let sharp = h.render(&sky, &input, &camera, &full).expect("rendered");
         assert_eq!(h.renderer.stats.objects_reduced, 0, "{what}: full resolution reduces nothing");
         for options in [half, auto] {
-            let what = format!("{what}, {}", options.dome_resolution.name());
+            let what = format!("{what}, {}", options.strategy.dome_resolution.name());
             let soft = h.render(&sky, &input, &camera, &options).expect("rendered");
             let s = h.renderer.stats.clone();
             assert!(s.objects_reduced >= 2, "{what}: the skydome and a cloud layer go to the reduced buffer ({s:?})");
@@ -51,8 +52,8 @@ fn fine_layers_and_billboards_stay_at_full_resolution() {
     let mut h = common::headless(320, 180);
     h.set_sky(&sky).expect("uploaded");
     let camera = Camera { pitch_deg: 30.0, ..Camera::default() };
-    let half = RenderOptions { glare: false, dome_resolution: DomeResolution::Half, ..Default::default() };
-    let quarter = RenderOptions { dome_resolution: DomeResolution::Quarter, ..half };
+    let half = RenderOptions { glare: false, strategy: FillStrategy { dome_resolution: DomeResolution::Half, ..FillStrategy::software() }, ..Default::default() };
+    let quarter = RenderOptions { strategy: FillStrategy { dome_resolution: DomeResolution::Quarter, ..half.strategy }, ..half };
     // By day the skydome's star stage is black and not sampled: it may go to the buffer.
     h.render(&sky, &FrameInput::new(12.0, 0.0), &camera, &half).expect("rendered");
     let day = h.renderer.stats.objects_reduced;
@@ -78,13 +79,13 @@ fn alpha_layers_too_fine_for_half_resolution_go_whole_to_a_finer_buffer() {
     h.set_sky(&sky).expect("uploaded");
     let camera = Camera { pitch_deg: 40.0, ..Camera::default() };
     let input = FrameInput::new(12.0, 0.6);
-    let full = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
+    let full = RenderOptions { glare: false, strategy: FillStrategy { dome_resolution: DomeResolution::Full, ..FillStrategy::software() }, ..Default::default() };
     let sharp = h.render(&sky, &input, &camera, &full).expect("rendered");
     let at_1_75 = Divisor::at_most(1.75, Divisor::FULL, Divisor::HALF);
-    h.render(&sky, &input, &camera, &RenderOptions { dome_resolution: DomeResolution::Half, ..full }).expect("rendered");
+    h.render(&sky, &input, &camera, &RenderOptions { strategy: FillStrategy { dome_resolution: DomeResolution::Half, ..full.strategy }, ..full }).expect("rendered");
     let half = h.renderer.stats.clone();
     assert!(half.reduced_runs.iter().all(|&d| d == Divisor::HALF), "{half:?}");
-    let soft = h.render(&sky, &input, &camera, &RenderOptions { dome_resolution: DomeResolution::Auto, ..full }).expect("rendered");
+    let soft = h.render(&sky, &input, &camera, &RenderOptions { strategy: FillStrategy { dome_resolution: DomeResolution::Auto, ..full.strategy }, ..full }).expect("rendered");
     let auto = h.renderer.stats.clone();
     assert!(auto.reduced_runs.contains(&at_1_75), "the cloudy layer at 1.75 ({auto:?})");
     assert_eq!(auto.objects_reduced, half.objects_reduced + 1, "one layer more in a buffer, the clear clouds still on the frame ({auto:?})");
@@ -99,7 +100,7 @@ fn runs_join_across_additive_draws_and_coarse_runs_go_to_coarser_buffers() {
     h.set_sky(&sky).expect("uploaded");
     let camera = Camera { pitch_deg: 30.0, ..Camera::default() };
     let night = FrameInput::new(23.0, 0.0);
-    let half = RenderOptions { glare: false, dome_resolution: DomeResolution::Half, ..Default::default() };
+    let half = RenderOptions { glare: false, strategy: FillStrategy { dome_resolution: DomeResolution::Half, ..FillStrategy::software() }, ..Default::default() };
     h.render(&sky, &night, &camera, &half).expect("rendered");
     // Reduced: the skydome's coarse terms, the galaxy and the fog dome. The skydome's fine stars
     // (added at full resolution) sit between the skydome and the galaxy, both additive on top of
@@ -108,7 +109,7 @@ fn runs_join_across_additive_draws_and_coarse_runs_go_to_coarser_buffers() {
     let s = h.renderer.stats.clone();
     assert_eq!((s.objects_reduced, s.reduced_runs.as_slice()), (3, &[Divisor::HALF; 2][..]), "{s:?}");
     // Gradient, halo, galaxy and fog band are coarse enough for a buffer an eighth of the size.
-    let auto = RenderOptions { dome_resolution: DomeResolution::Auto, ..half };
+    let auto = RenderOptions { strategy: FillStrategy { dome_resolution: DomeResolution::Auto, ..half.strategy }, ..half };
     h.render(&sky, &night, &camera, &auto).expect("rendered");
     assert_eq!(h.renderer.stats.reduced_runs, [Divisor::whole(8); 2], "{:?}", h.renderer.stats);
     // A physical sky model's stage keeps its layer's run at half resolution (the sun's aureole).
@@ -127,10 +128,10 @@ fn frame_edges_are_covered_when_the_size_is_no_multiple_of_the_divisor() {
     h.set_sky(&sky).expect("uploaded");
     let camera = Camera { pitch_deg: 40.0, ..Camera::default() };
     let input = FrameInput::new(11.0, 0.0);
-    let full = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
+    let full = RenderOptions { glare: false, strategy: FillStrategy { dome_resolution: DomeResolution::Full, ..FillStrategy::software() }, ..Default::default() };
     let sharp = h.render(&sky, &input, &camera, &full).expect("rendered");
     for resolution in [DomeResolution::Half, DomeResolution::Quarter] {
-        let soft = h.render(&sky, &input, &camera, &RenderOptions { dome_resolution: resolution, ..full }).expect("rendered");
+        let soft = h.render(&sky, &input, &camera, &RenderOptions { strategy: FillStrategy { dome_resolution: resolution, ..full.strategy }, ..full }).expect("rendered");
         assert!(h.renderer.stats.objects_reduced > 0, "{resolution:?}: something is reduced");
         let (w, h_px) = sharp.dimensions();
         let edge = |x: u32, y: u32| (0..3).map(|c| (sharp.get_pixel(x, y)[c] as i32 - soft.get_pixel(x, y)[c] as i32).abs()).max().unwrap_or(0);
@@ -190,7 +191,7 @@ fn joined_runs_give_the_same_picture_with_one_composite_less() {
         let h = if runs == 3 { &mut big } else { &mut h };
         h.set_sky(sky).expect("uploaded");
         let joined = RenderOptions { glare: false, ..Default::default() };
-        let apart = RenderOptions { join_runs: false, ..joined };
+        let apart = RenderOptions { strategy: FillStrategy { runs: RunJoining::Separate, ..joined.strategy }, ..joined };
         let one = h.render(sky, &input, &camera, &joined).expect("rendered");
         let s = h.renderer.stats.clone();
         assert!(s.reduced_runs.len() == runs && s.composites == 1, "{what}: {runs} runs joined ({s:?})");
@@ -211,7 +212,7 @@ fn joined_runs_give_the_same_picture_with_one_composite_less() {
         let seeds = runs == 2 && s.reduced_runs[1] <= s.reduced_runs[0];
         assert_eq!(s.seeded, seeds, "{what}: seeded ({s:?})");
         if seeds {
-            let combined = h.render(sky, &input, &camera, &RenderOptions { seed_joined: false, ..joined }).expect("rendered");
+            let combined = h.render(sky, &input, &camera, &RenderOptions { strategy: FillStrategy { runs: RunJoining::Combined, ..joined.strategy }, ..joined }).expect("rendered");
             assert!(!h.renderer.stats.seeded, "{what}");
             let (d, _) = common::diff(&one, &combined, 2);
             assert!(d.differing < 0.001, "{what}: seeded against combined, {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
@@ -222,7 +223,7 @@ fn joined_runs_give_the_same_picture_with_one_composite_less() {
 #[test]
 fn the_seeded_buffers_first_layer_drawn_over_the_seed_gives_the_same_picture() {
     // The skydome's run seeds the clouds' buffer; the clouds' first layer is drawn over the seed
-    // itself (`fold_seed`) instead of over a seeding pass's output. At the horizon without the
+    // itself (`RunJoining::SeededFolded`) instead of over a seeding pass's output. At the horizon without the
     // scene the frame reaches below the clouds' dome (-5 degrees), where the seeding pass still
     // runs, confined to those rows; looking up it does not run at all.
     let sky = default_sky();
@@ -257,7 +258,7 @@ fn the_seeded_buffers_first_layer_drawn_over_the_seed_gives_the_same_picture() {
 fn folded_and_not(h: &mut skytune::render::Headless, sky: &skytune::sky::Sky, what: &str, (input, camera, options): (&FrameInput, &Camera, &RenderOptions)) {
     let one = h.render(sky, input, camera, options).expect("rendered");
     let s = h.renderer.stats.clone();
-    let two = h.render(sky, input, camera, &RenderOptions { fold_seed: false, ..*options }).expect("rendered");
+    let two = h.render(sky, input, camera, &RenderOptions { strategy: FillStrategy { runs: RunJoining::Seeded, ..options.strategy }, ..*options }).expect("rendered");
     let t = h.renderer.stats.clone();
     assert!(s.seeded && s.seed_folded, "{what}: folded ({s:?})");
     assert!(t.seeded && !t.seed_folded, "{what}: not folded ({t:?})");
@@ -272,7 +273,7 @@ fn additive_draws_under_the_background_give_the_same_picture() {
     // against the same draws depth-tested in the sky phase. Looking up (no scene in view: there
     // they go first) and at the horizon (the scene in view: they stay in the sky phase); by day
     // only billboards would go, and they stay. The skydome's fine stars are the background itself
-    // (`fuse_background`), checked against the composite over them too.
+    // (`UnderBackground::AdditiveFused`), checked against the composite over them too.
     let (sky, mut h) = night_sky_with_shooting_stars();
     let mut lut = FrameInput::new(22.0, 0.2);
     lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
@@ -312,13 +313,16 @@ fn additive_draws_under_the_background_give_the_same_picture() {
         ("noon, looking up", &sky, FrameInput::new(12.0, 0.0), Camera { yaw_deg: 180.0, ..up }, RenderOptions::default(), false, false),
     ] {
         h.set_sky(sky).expect("uploaded");
-        for join_runs in [true, false] {
-            let first = RenderOptions { glare: false, join_runs, ..base };
+        for runs in [RunJoining::SeededFolded, RunJoining::Separate] {
+            let join_runs = runs != RunJoining::Separate;
+            let first = RenderOptions { glare: false, strategy: FillStrategy { runs, ..base.strategy }, ..base };
             let one = h.render(sky, &input, &camera, &first).expect("rendered");
             let (drawn_first, fused) = (h.renderer.stats.drawn_first, h.renderer.stats.background_fused);
             assert_eq!(drawn_first > 0, goes_first, "{what}, joined {join_runs}: {drawn_first} draws first ({:?})", h.renderer.stats);
             assert_eq!(fused, fuses, "{what}, joined {join_runs}: fused {fused} ({:?})", h.renderer.stats);
-            let two = h.render(sky, &input, &camera, &RenderOptions { additive_first: false, ..first }).expect("rendered");
+            let two = h
+                .render(sky, &input, &camera, &RenderOptions { strategy: FillStrategy { under_background: UnderBackground::Nothing, ..first.strategy }, ..first })
+                .expect("rendered");
             assert_eq!(h.renderer.stats.drawn_first, 0);
             assert!(!h.renderer.stats.background_fused);
             // The same sums in another order: rounding of the 8-bit target (and of the
@@ -326,7 +330,9 @@ fn additive_draws_under_the_background_give_the_same_picture() {
             let (d, _) = common::diff(&one, &two, 2);
             assert!(d.differing < 0.001, "{what}, joined {join_runs}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
             if fuses {
-                let composited = h.render(sky, &input, &camera, &RenderOptions { fuse_background: false, ..first }).expect("rendered");
+                let composited = h
+                    .render(sky, &input, &camera, &RenderOptions { strategy: FillStrategy { under_background: UnderBackground::Additive, ..first.strategy }, ..first })
+                    .expect("rendered");
                 assert!(!h.renderer.stats.background_fused && h.renderer.stats.drawn_first == drawn_first);
                 // One rounding less; only where overlapping sprites saturate the 8-bit target
                 // (clamped before or after the background's transmittance) does a pixel move by
@@ -360,7 +366,7 @@ fn the_lightning_flash_added_to_the_run_before_it_gives_the_same_picture() {
         ("lut on the HDR target", &lut, Camera { yaw_deg: 250.0, pitch_deg: 15.0, ..Camera::default() }, false),
     ] {
         let in_run = RenderOptions { glare: false, scene, ..Default::default() };
-        let over = RenderOptions { flash_in_run: false, ..in_run };
+        let over = RenderOptions { strategy: FillStrategy { flash: FlashPlacement::OverFrame, ..in_run.strategy }, ..in_run };
         let one = h.render(&sky, input, &camera, &in_run).expect("rendered");
         let s = h.renderer.stats.clone();
         assert_eq!(s.joined_runs_only, 1, "{what}: the flash joins a run ({s:?})");
@@ -374,7 +380,7 @@ fn the_lightning_flash_added_to_the_run_before_it_gives_the_same_picture() {
 
 #[test]
 fn two_alpha_layers_drawn_at_once_give_the_same_picture() {
-    // Two alpha-blended layers next to each other in a run drawn at once (`pair_layers`): one
+    // Two alpha-blended layers next to each other in a run drawn at once (`LayerPairs::AtOnce`): one
     // shader evaluating both, one blend, against one after the other. The clear and cloudy cloud
     // layers share a mesh; the cloudy and storm layers a shape (the Quake layer on its outline, the
     // pair on the cloudy layer's grid). Over the seed and after a seeding pass, with and without
@@ -388,7 +394,7 @@ fn two_alpha_layers_drawn_at_once_give_the_same_picture() {
     let up = Camera { pitch_deg: 80.0, ..Camera::default() };
     let paired = RenderOptions { glare: false, ..Default::default() };
     let alone = RenderOptions { scene: false, ..paired };
-    let unfolded = RenderOptions { fold_seed: false, ..alone };
+    let unfolded = RenderOptions { strategy: FillStrategy { runs: RunJoining::Seeded, ..alone.strategy }, ..alone };
     let mut lut = FrameInput::new(16.0, 0.5);
     lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
     for (what, input, camera, options) in [
@@ -401,7 +407,7 @@ fn two_alpha_layers_drawn_at_once_give_the_same_picture() {
     ] {
         let one = h.render(&sky, &input, &camera, &options).expect("rendered");
         let s = h.renderer.stats.clone();
-        let two = h.render(&sky, &input, &camera, &RenderOptions { pair_layers: false, ..options }).expect("rendered");
+        let two = h.render(&sky, &input, &camera, &RenderOptions { strategy: FillStrategy { pairs: LayerPairs::OneByOne, ..options.strategy }, ..options }).expect("rendered");
         assert!(s.layers_paired >= 1, "{what}: a pair drawn at once ({s:?})");
         assert_eq!(h.renderer.stats.layers_paired, 0, "{what}");
         // One blend rounds once where two rounded twice.

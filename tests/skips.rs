@@ -3,7 +3,8 @@
 
 mod common;
 
-use skytune::render::{Camera, DomeResolution, FrameStats, Headless, RenderOptions, Skips};
+use skytune::render::strategy::RunJoining;
+use skytune::render::{Camera, DomeResolution, FillStrategy, FrameStats, Headless, RenderOptions, Skips};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
 use skytune::sky::{FrameInput, Sky};
@@ -37,7 +38,7 @@ fn skips_change_no_pixel_and_are_counted() {
     input.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
     // At full resolution: a skipped stage can let a dome layer go to a reduced buffer, which
     // moves pixels by a level or two (tests/reduced_layers.rs bounds that).
-    let on = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
+    let on = RenderOptions { glare: false, strategy: FillStrategy { dome_resolution: DomeResolution::Full, ..FillStrategy::software() }, ..Default::default() };
     let off = RenderOptions {
         skips: Skips { dark_stages: false, invisible_stars: false, unchanged_tables: false, below_horizon: false, off_screen: false, unneeded_mips: false, covered_clears: false },
         ..on
@@ -73,7 +74,7 @@ fn skips_change_no_pixel_and_are_counted() {
     // tests/reduced_layers.rs bounds that).
     let zenith = Camera::preset("zenith").expect("zenith view");
     for resolution in [DomeResolution::Full, DomeResolution::Auto] {
-        let on = RenderOptions { dome_resolution: resolution, join_runs: false, ..on };
+        let on = RenderOptions { strategy: FillStrategy { dome_resolution: resolution, runs: RunJoining::Separate, ..on.strategy }, ..on };
         let off = RenderOptions { skips: Skips { off_screen: false, ..on.skips }, ..on };
         let (s, without) = same_pixels(&mut h, (&sky, &night, &zenith), (&on, &off), 1, |_| format!("{resolution:?}: skipping dome layers out of view"));
         assert!(s.objects_off_screen > 0, "{resolution:?}: {s:?}");
@@ -97,7 +98,12 @@ fn billboards_out_of_the_frame_are_skipped_and_change_no_pixel() {
             for k in 0..16 {
                 let camera = Camera { yaw_deg: k as f32 * 22.5, pitch_deg, ..Camera::default() };
                 for resolution in [DomeResolution::Full, DomeResolution::Auto] {
-                    let on = RenderOptions { glare: false, scene: false, dome_resolution: resolution, join_runs: false, ..Default::default() };
+                    let on = RenderOptions {
+                        glare: false,
+                        scene: false,
+                        strategy: FillStrategy { dome_resolution: resolution, runs: RunJoining::Separate, ..FillStrategy::software() },
+                        ..Default::default()
+                    };
                     let off = RenderOptions { skips: Skips { off_screen: false, ..on.skips }, ..on };
                     let (with, without) = same_pixels(&mut h, (&sky, &input, &camera), (&on, &off), 0, |s| {
                         format!("{camera:?}, {resolution:?}: skipping {} objects out of the frame", s.objects_off_screen)
@@ -129,7 +135,7 @@ fn level0_samplers_change_no_pixel() {
             let at_sun = Camera { yaw_deg, pitch_deg, ..Camera::default() };
             for camera in [Camera::default(), Camera::preset("zenith").expect("zenith view"), at_sun] {
                 for resolution in [DomeResolution::Full, DomeResolution::Auto] {
-                    let on = RenderOptions { glare: false, dome_resolution: resolution, ..Default::default() };
+                    let on = RenderOptions { glare: false, strategy: FillStrategy { dome_resolution: resolution, ..FillStrategy::software() }, ..Default::default() };
                     let off = RenderOptions { skips: Skips { unneeded_mips: false, ..on.skips }, ..on };
                     let (with, without) =
                         same_pixels(&mut h, (&sky, &input, &camera), (&on, &off), 0, |_| format!("{hour} h, weather {weather}, {camera:?}, {resolution:?}: level-0 sampling"));
@@ -171,7 +177,7 @@ fn the_celestial_mapping_from_level_0_changes_no_pixel() {
             let forward = glam::Quat::from_axis_angle(side, f32::to_radians(from_pole_deg)) * north;
             let up = if forward.y.abs() > 0.99 { glam::Vec3::Z } else { glam::Vec3::Y };
             let camera = Camera { look: Some((forward, up)), fov_y_deg, ..Camera::default() };
-            let on = RenderOptions { glare: false, scene: false, dome_resolution: resolution, ..Default::default() };
+            let on = RenderOptions { glare: false, scene: false, strategy: FillStrategy { dome_resolution: resolution, ..FillStrategy::software() }, ..Default::default() };
             let off = RenderOptions { skips: Skips { unneeded_mips: false, ..on.skips }, ..on };
             let (with, _) = same_pixels(&mut h, (&sky, &input, &camera), (&on, &off), 0, |_| {
                 format!("{from_pole_deg} degrees from the pole, {fov_y_deg} degrees of view, {resolution:?}: level-0 sampling")
@@ -239,7 +245,10 @@ fn clears_left_out_where_the_background_or_an_untouched_depth_makes_them_unneede
         ("night looking down at full resolution (no background)", FrameInput::new(23.0, 0.0), &down, DomeResolution::Full),
         ("dusk at the horizon at full resolution (every layer depth-tested)", FrameInput::new(18.5, 0.3), &horizon, DomeResolution::Full),
     ] {
-        let (on, off) = (RenderOptions { dome_resolution: resolution, ..on }, RenderOptions { dome_resolution: resolution, ..off });
+        let (on, off) = (
+            RenderOptions { strategy: FillStrategy { dome_resolution: resolution, ..on.strategy }, ..on },
+            RenderOptions { strategy: FillStrategy { dome_resolution: resolution, ..off.strategy }, ..off },
+        );
         // Each frame follows one with the main scene drawn, whose colour and depth a clear left out
         // where needed would keep: the sky failing the depth test where the terrain was, or the
         // terrain's colour left below the dome.
@@ -271,7 +280,7 @@ fn blended_draws_black_and_transparent_are_left_out_without_moving_a_pixel() {
     let sky = default_sky();
     let mut h = common::headless(160, 90);
     h.set_sky(&sky).expect("uploaded");
-    let on = RenderOptions { glare: false, dome_resolution: DomeResolution::Full, ..Default::default() };
+    let on = RenderOptions { glare: false, strategy: FillStrategy { dome_resolution: DomeResolution::Full, ..FillStrategy::software() }, ..Default::default() };
     let off = RenderOptions { skips: Skips { dark_stages: false, ..Skips::default() }, ..on };
     for (hour, tier) in [(13.0, 2), (16.0, 2), (13.0, 4)] {
         let input = FrameInput { tier: skytune::sky::Tier::new(tier).expect("a tier"), ..FrameInput::new(hour, 0.3) };

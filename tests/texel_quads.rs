@@ -1,11 +1,12 @@
-//! A sparse stage drawn texel by texel (`RenderOptions::texel_quads`, src/render/texel_quads.rs):
+//! A sparse stage drawn texel by texel (`SparseStages::TexelPolygons`, src/render/texel_quads.rs):
 //! the skydome's stars times their mask, in the fused background, as one polygon per lit texel
 //! where they are sampled from level 0. The polygons add up to the bilinear sample: frames with
 //! and without them differ by the blend's rounding of each texel's share (a level or two).
 
 mod common;
 
-use skytune::render::{Camera, RenderOptions};
+use skytune::render::strategy::SparseStages;
+use skytune::render::{Camera, FillStrategy, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
 use skytune::sky::FrameInput;
@@ -18,7 +19,7 @@ fn stars_drawn_texel_by_texel_give_the_sampled_picture() {
     // away from the pole, as at 1280 x 720 and 70 degrees.
     let views = [("horizon", Camera { pitch_deg: 10.0, fov_y_deg: 40.0, ..Camera::default() }), ("zenith", Camera { pitch_deg: 89.0, fov_y_deg: 40.0, ..Camera::default() })];
     let on = RenderOptions { glare: false, scene: false, ..Default::default() };
-    let off = RenderOptions { texel_quads: false, ..on };
+    let off = RenderOptions { strategy: FillStrategy { sparse_stages: SparseStages::Sampled, ..on.strategy }, ..on };
     for (name, sky) in [("built-in", default_sky()), ("lakes", lakes)] {
         h.set_sky(&sky).expect("uploaded");
         for (hour, weather) in [(18.5, 0.3), (23.0, 0.0), (2.0, 0.6)] {
@@ -50,7 +51,7 @@ fn the_background_drawn_without_the_grid_where_the_polygons_stand_in_gives_the_s
     // Where the polygons stand for the stars, the rest of the background maps nothing from the
     // dome's grid: it goes as one triangle over the frame, scissored round the rings that still
     // sample the stars and the rows below the dome, and inside those as one band of quads per run
-    // of rings (`RenderOptions::grid_bands`), which must cover exactly the grid's pixels. Each
+    // of rings (`SparseStages::TexelPolygonsOnBands`), which must cover exactly the grid's pixels. Each
     // frame follows one of another hour, whose pixels a draw that left some out would keep (the
     // background's frame is not cleared first).
     let lakes = skytune::sky::load_sky_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("skies/lakes/sky.toml")).expect("lakes loads");
@@ -61,7 +62,7 @@ fn the_background_drawn_without_the_grid_where_the_polygons_stand_in_gives_the_s
         ("looking up, to the east", Camera { yaw_deg: 75.0, pitch_deg: 55.0, fov_y_deg: 40.0, ..Camera::default() }),
     ];
     let bands = RenderOptions { glare: false, scene: false, ..Default::default() };
-    let grid = RenderOptions { grid_bands: false, ..bands };
+    let grid = RenderOptions { strategy: FillStrategy { sparse_stages: SparseStages::TexelPolygons, ..bands.strategy }, ..bands };
     for (name, sky) in [("built-in", default_sky()), ("lakes", lakes)] {
         h.set_sky(&sky).expect("uploaded");
         for (hour, weather) in [(18.5, 0.3), (23.0, 0.0)] {

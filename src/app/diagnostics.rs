@@ -77,33 +77,48 @@ fn skipped(ui: &mut egui::Ui, info: &UiInfo<'_>) {
 /// now against the median when they were last all on.
 fn switches(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     let s = info.stats;
+    use crate::render::strategy::{FillStrategy, FlashPlacement, LayerPairs, RunJoining, SparseStages, UnderBackground, PRESETS};
+    let st = &mut c.options.strategy;
+    ui.horizontal_wrapped(|ui| {
+        ui.label(format!("fill strategy: {} (preset", st.name()));
+        for (name, preset) in PRESETS {
+            ui.radio_value(st, preset, name);
+        }
+        ui.label(format!("; {} for this adapter)", FillStrategy::for_device(info.device_type).name()));
+    });
     ui.horizontal_wrapped(|ui| {
         ui.label("dome layers at");
         for r in crate::render::DomeResolution::ALL {
-            ui.radio_value(&mut c.options.dome_resolution, r, r.name());
+            ui.radio_value(&mut st.dome_resolution, r, r.name());
         }
         ui.label("resolution");
     });
-    ui.vertical(|ui| {
-        ui.checkbox(&mut c.options.join_runs, format!("join the first runs ({} composites)", s.composites));
-        ui.add_enabled(
-            c.options.join_runs,
-            egui::Checkbox::new(&mut c.options.seed_joined, format!("seed the second run with the first ({})", if s.seeded { "this frame" } else { "not this frame" })),
-        );
-        ui.checkbox(&mut c.options.additive_first, format!("additive draws under the background ({})", s.drawn_first));
-        ui.add_enabled(
-            c.options.additive_first,
-            egui::Checkbox::new(&mut c.options.fuse_background, format!("one of them as the background ({})", if s.background_fused { "this frame" } else { "not this frame" })),
-        );
-        ui.add_enabled(
-            c.options.join_runs && c.options.seed_joined,
-            egui::Checkbox::new(&mut c.options.fold_seed, format!("its first layer over the seed ({})", if s.seed_folded { "this frame" } else { "not this frame" })),
-        );
-        ui.checkbox(&mut c.options.flash_in_run, format!("lightning flash in a run ({})", if s.joined_runs_only > 0 { "this frame" } else { "not this frame" }));
-        ui.checkbox(&mut c.options.pair_layers, format!("two alpha layers at once ({} pairs)", s.layers_paired));
-        ui.checkbox(&mut c.options.texel_quads, format!("sparse stars texel by texel ({} triangles)", s.texel_triangles));
-        ui.add_enabled(c.options.texel_quads, egui::Checkbox::new(&mut c.options.grid_bands, format!("the background there on one triangle ({} rectangles)", s.background_rects)));
-    });
+    let frame = |on: bool| if on { "this frame" } else { "not this frame" };
+    choice(
+        ui,
+        &format!("first runs ({} composites, seeded {}, folded {})", s.composites, frame(s.seeded), frame(s.seed_folded)),
+        &mut st.runs,
+        &[(RunJoining::Separate, "apart"), (RunJoining::Combined, "joined"), (RunJoining::Seeded, "seeded"), (RunJoining::SeededFolded, "seeded, first layer over the seed")],
+    );
+    choice(
+        ui,
+        &format!("under the background ({} draws, fused {})", s.drawn_first, frame(s.background_fused)),
+        &mut st.under_background,
+        &[(UnderBackground::Nothing, "nothing"), (UnderBackground::Additive, "additive draws"), (UnderBackground::AdditiveFused, "additive draws, one as the background")],
+    );
+    choice(
+        ui,
+        &format!("sparse stars ({} triangles, {} rectangles)", s.texel_triangles, s.background_rects),
+        &mut st.sparse_stages,
+        &[(SparseStages::Sampled, "sampled"), (SparseStages::TexelPolygons, "texel by texel"), (SparseStages::TexelPolygonsOnBands, "texel by texel, the rest on bands")],
+    );
+    choice(
+        ui,
+        &format!("lightning flash ({})", frame(s.joined_runs_only > 0)),
+        &mut st.flash,
+        &[(FlashPlacement::OverFrame, "over the frame"), (FlashPlacement::InRun, "in a run")],
+    );
+    choice(ui, &format!("alpha layers ({} pairs)", s.layers_paired), &mut st.pairs, &[(LayerPairs::OneByOne, "one by one"), (LayerPairs::AtOnce, "two at once")]);
     let median = |v: &VecDeque<f32>| {
         let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();
         x.sort_by(f32::total_cmp);
@@ -133,4 +148,14 @@ fn switches(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
             ui.label("switch a skip off to measure what it saves in this view");
         }
     }
+}
+
+/// One row of radio buttons choosing among `values`, after `label`.
+fn choice<T: PartialEq + Copy>(ui: &mut egui::Ui, label: &str, value: &mut T, values: &[(T, &str)]) {
+    ui.horizontal_wrapped(|ui| {
+        ui.label(label);
+        for &(v, name) in values {
+            ui.radio_value(value, v, name);
+        }
+    });
 }

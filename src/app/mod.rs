@@ -32,7 +32,7 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::window::WindowId;
 
 use crate::live::{LiveSky, SkySpec};
-use crate::render::{AdapterChoice, GpuContext, Headless, RenderOptions, ShaderLibrary};
+use crate::render::{AdapterChoice, FillStrategy, GpuContext, Headless, RenderOptions, ShaderLibrary};
 use crate::sky::{Clock, FrameInput, Stepping, Tier};
 use crate::watch::FileWatcher;
 use capture::{screenshot_name, ContactSheet};
@@ -69,6 +69,8 @@ pub struct AppConfig {
     pub weather: Option<f32>,
     /// Preset view to start with (`south`, `zenith`, ...).
     pub view: Option<String>,
+    /// Fill strategy preset (`software`, `plain`; None: the adapter's, [`FillStrategy::for_device`]).
+    pub strategy: Option<String>,
 }
 
 /// Whether a display server is reachable (X11 or Wayland).
@@ -116,6 +118,10 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
     if let Some(v) = &config.view {
         controls.camera = crate::render::Camera::preset_arg(v).map_err(|e| anyhow!(e))?;
     }
+    let strategy = match &config.strategy {
+        Some(name) => Some(FillStrategy::preset_arg(name).map_err(|e| anyhow!(e))?),
+        None => None,
+    };
     if let Some(t) = config.tier {
         controls.tier = Tier::new(t).ok_or_else(|| anyhow!("--tier: expected 4, 2 or 1, found {t}"))?;
     }
@@ -151,6 +157,7 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         snapshots: Vec::new(),
         auto: auto_pick::AutoPicker::default(),
         title: String::new(),
+        strategy: Some(strategy),
     };
     event_loop.run_app(&mut app).context("running the window")?;
     app.settings.panels = app.controls.layout.clone();
@@ -209,6 +216,9 @@ pub struct App {
     auto: auto_pick::AutoPicker,
     /// The window's title as last set.
     title: String,
+    /// The fill strategy to start with, until the first device is made (None afterwards: a new
+    /// device keeps the panel's choice). `Some(None)`: the adapter's.
+    strategy: Option<Option<FillStrategy>>,
 }
 
 impl App {
@@ -230,6 +240,11 @@ impl App {
         self.title = self.window_title();
         let (gpu, shader_error) = WindowGpu::new(event_loop, &self.title, self.settings.window_size, adapter, library, self.live.sky())?;
         self.shader_error = shader_error;
+        // The adapter's strategy unless one was asked for.
+        if let Some(asked) = self.strategy.take() {
+            let device_type = gpu.ctx.adapter.get_info().device_type;
+            self.controls.options.strategy = asked.unwrap_or_else(|| FillStrategy::for_device(device_type));
+        }
         self.gpu = Some(gpu);
         self.refresh_snapshots();
         self.request_auto_model();

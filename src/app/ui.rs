@@ -173,6 +173,8 @@ pub struct UiInfo<'a> {
     pub errors: &'a [String],
     /// Adapter description.
     pub adapter: &'a str,
+    /// The adapter's type (which fill strategy it defaults to).
+    pub device_type: wgpu::DeviceType,
     /// What is shown (path or "default").
     pub source: &'a str,
     /// Whether the source is a continent file.
@@ -321,7 +323,7 @@ fn side_panel(ui: &mut egui::Ui, c: &mut Controls, side: Side, range: (f32, f32)
 fn controls_panel(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, actions: &mut Vec<UiAction>) {
     let sky = info.sky;
     ui.label(RichText::new(info.source).small());
-    ui.label(RichText::new(info.adapter).small().weak());
+    ui.label(RichText::new(format!("{} · fill strategy: {}", info.adapter, c.options.strategy.name())).small().weak());
     ui.separator();
 
     section(ui, c, "sky_file", "Sky file", |ui, c| {

@@ -233,7 +233,7 @@ impl ParticlesPass {
                 Some(wgpu::CompareFunction::Less),
             )
         })?;
-        // The flash added to a run of reduced dome layers ([`RenderOptions::flash_in_run`]).
+        // The flash added to a run of reduced dome layers ([`FlashPlacement::InRun`](super::strategy::FlashPlacement::InRun)).
         let reduced = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| {
             build_entries(b, l, "particles", "Particles::reduced_pipeline", [("fs_flash", super::reduced_layers::REDUCED_BLENDS[2], "flash")], None)
         })?;
@@ -324,8 +324,8 @@ impl Pass for ParticlesPass {
         if self.flash.count > 0 {
             // One constant colour: it needs no resolution, so it joins the run of dome layers
             // before it, if there is one, at whatever resolution that run has.
-            let (finest, coarsest) = cx.options.dome_resolution.divisors();
-            let reduced = cx.options.flash_in_run && finest > Divisor::FULL;
+            let (finest, coarsest) = cx.options.strategy.dome_resolution.divisors();
+            let reduced = cx.options.strategy.flash_in_run() && finest > Divisor::FULL;
             out.push(DrawItem { additive: true, reduced, joins_only: true, divisor: if reduced { coarsest } else { Divisor::FULL }, ..DrawItem::new(63, FLASH_KEY) });
         }
     }

@@ -280,7 +280,7 @@ pub trait Pass: Any {
     }
 
     /// Records additive item `key` onto the cleared frame, before the background run is
-    /// composited over it ([`super::RenderOptions::additive_first`]): without depth test, since
+    /// composited over it ([`super::strategy::UnderBackground::Additive`]): without depth test, since
     /// the scene drawn afterwards covers what it hides. Adding onto black is writing.
     fn draw_first(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target) -> u32 {
         0
@@ -293,7 +293,7 @@ pub trait Pass: Any {
     }
 
     /// Records reduced item `key` as the first layer of a seeded buffer
-    /// ([`super::RenderOptions::fold_seed`]): over the lower run's colour (`seed`, that run's
+    /// ([`super::strategy::RunJoining::SeededFolded`]): over the lower run's colour (`seed`, that run's
     /// bind group, as group 2), replacing the clear colour, unblended: what its blend would
     /// leave over the seed.
     fn draw_over_seed(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target, _seed: &wgpu::BindGroup) -> u32 {
@@ -308,7 +308,7 @@ pub trait Pass: Any {
     }
 
     /// Records reduced items `lower` and `upper` at once into a run's buffer
-    /// ([`super::RenderOptions::pair_layers`]): one draw that leaves what the two would, one after
+    /// ([`super::strategy::LayerPairs::AtOnce`]): one draw that leaves what the two would, one after
     /// the other; over `seed` (as [`Pass::draw_over_seed`]) when given. Returns draw calls.
     fn draw_pair(&self, _rpass: &mut wgpu::RenderPass<'_>, _lower: usize, _upper: usize, _target: Target, _seed: Option<&wgpu::BindGroup>) -> u32 {
         0

@@ -6,7 +6,7 @@ use super::camera::Camera;
 use super::error::RenderResult;
 use super::globals::{Globals, GlobalsBinding};
 use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SharedResources, SkyUpload, Target, PASSES};
-use super::reduced_layers::{Divisor, DomeResolution};
+use super::reduced_layers::Divisor;
 use super::reduced_layers::{Joining, ReducedLayersPass};
 use super::shaders::{self, ShaderLibrary};
 use super::strategy::FillStrategy;
@@ -35,100 +35,21 @@ pub struct RenderOptions {
     /// Work skipped because it would contribute nothing (all on by default; off to measure
     /// what each saves).
     pub skips: Skips,
-    /// Resolution of the dome layers (skydome, galaxy, clouds, fog): below full, each run of
-    /// consecutive dome layers is drawn into a smaller buffer and composited in its place.
-    pub dome_resolution: DomeResolution,
-    /// With dome layers in reduced buffers: the first runs (the skydome's, the clouds', and
-    /// the fog's after a lightning bolt) are composited at once, and the billboards between them
-    /// drawn afterwards, corrected by the runs above them (the same picture, one full-screen pass
-    /// less per run joined). Off: one composite per run.
-    pub join_runs: bool,
-    /// With the first run of dome layers as the frame's background: the additive draws that
-    /// follow it (the skydome's fine stars, the star field) go first onto the cleared frame,
-    /// neither depth-tested nor corrected by a run, and the background is composited over them
-    /// (the same sums; the scene drawn next covers what it hides). Off: drawn in the sky phase,
-    /// depth-tested, each sampling the run above it.
-    pub additive_first: bool,
-    /// With additive draws under the background: one that covers the frame (the skydome's fine
-    /// stars looking up) is drawn as the background itself, writing the background run's colour
-    /// plus its term, the others added after it: one full-screen pass, neither blended nor
-    /// depth-tested, in place of that draw and the background's blended composite. Off: the
-    /// background is composited over them.
-    pub fuse_background: bool,
-    /// With the first two runs joined: the second run's buffer starts as the first run's colour
-    /// instead of nothing, so that its layers leave the two runs' combination there (one pass at
-    /// reduced resolution less: no combining pass reading both buffers). Off, or where the first
-    /// run is the finer one, or with more runs joined: combined in passes of their own.
-    pub seed_joined: bool,
-    /// With a seeded buffer: its first layer, when a dome that can, is drawn over the lower run's
-    /// colour itself, replacing the clear colour (`Pass::draw_over_seed`), and the seeding pass
-    /// only fills the rows below that dome. One reduced-resolution pass less, for one sample of
-    /// the lower run in the layer.
-    pub fold_seed: bool,
-    /// With dome layers in reduced buffers: the lightning flash (one additive colour over the
-    /// sky, above every layer) is added to the run of layers before it, at that run's
-    /// resolution, instead of over the whole frame at full resolution (the same sum; one
-    /// full-screen blended pass less while a flash lasts). Off, or with no run before it: drawn
-    /// over the frame.
-    pub flash_in_run: bool,
-    /// With dome layers in reduced buffers: two alpha-blended layers next to each other in a run,
-    /// on the same mesh (the cloud layers), are drawn at once, one shader evaluating both and one
-    /// blend leaving what the two would (`Pass::draw_pair`): one set of triangles and one blend
-    /// per pixel less. Off: one after the other.
-    pub pair_layers: bool,
-    /// On the display target, a sparse texture stage of the fused background (the skydome's
-    /// stars times their mask: under 1% of texels lit) is drawn texel by texel where it is
-    /// sampled from level 0: one small polygon per lit texel adding the texel times its bilinear
-    /// weight ([`super::texel_quads`]), over the background drawn without that stage. The same
-    /// sum as the sample, for the pixels near a lit texel only. Off: sampled everywhere.
-    pub texel_quads: bool,
-    /// With `texel_quads`: where the polygons stand for the background's sparse stage, the rest
-    /// of its draw maps nothing from the dome's grid (it writes the runs' colour), so it goes as
-    /// one triangle over the frame, scissored round the box of the rings that still sample the
-    /// stage (round the pole) and the rows below the dome, and inside those as one band of quads
-    /// between the rings' top and bottom chords: the same pixels, without most of the triangle
-    /// edges whose 4 x 4 blocks lavapipe shades twice. Off: on the grid.
-    pub grid_bands: bool,
+    /// How the sky's pixels are filled: reduced buffers and the tricks that go with them, a
+    /// preset per kind of adapter ([`FillStrategy::for_device`]).
+    pub strategy: FillStrategy,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self {
-            scene: true,
-            depth_split: true,
-            glare: true,
-            occluder: None,
-            skips: Skips::default(),
-            dome_resolution: DomeResolution::default(),
-            join_runs: true,
-            additive_first: true,
-            fuse_background: true,
-            seed_joined: true,
-            fold_seed: true,
-            flash_in_run: true,
-            pair_layers: true,
-            texel_quads: true,
-            grid_bands: true,
-        }
+        Self { scene: true, depth_split: true, glare: true, occluder: None, skips: Skips::default(), strategy: FillStrategy::default() }
     }
 }
 
 impl RenderOptions {
     /// These options filling the sky's pixels with `strategy`.
     pub fn with_strategy(self, strategy: FillStrategy) -> Self {
-        Self {
-            dome_resolution: strategy.dome_resolution,
-            join_runs: strategy.joins_runs(),
-            seed_joined: strategy.seeds_joined(),
-            fold_seed: strategy.folds_seed(),
-            additive_first: strategy.additive_first(),
-            fuse_background: strategy.fuses_background(),
-            texel_quads: strategy.texel_polygons(),
-            grid_bands: strategy.grid_bands(),
-            flash_in_run: strategy.flash_in_run(),
-            pair_layers: strategy.pairs_layers(),
-            ..self
-        }
+        Self { strategy, ..self }
     }
 }
 
@@ -201,34 +122,34 @@ pub struct FrameStats {
     pub objects_off_screen: u32,
     /// Texture stages sampled from level 0 alone (no pixel minifies them), over every draw.
     pub stages_level0: u32,
-    /// Sky objects drawn into a reduced-resolution buffer ([`RenderOptions::dome_resolution`]).
+    /// Sky objects drawn into a reduced-resolution buffer ([`dome_resolution`](super::strategy::FillStrategy::dome_resolution)).
     pub objects_reduced: u32,
     /// Each run of reduced layers this frame, in draw order: its buffer's divisor (2: half the
     /// frame's width and height, 2.5: two fifths, 4: a quarter). One composite each.
     pub reduced_runs: Vec<Divisor>,
     /// Full-screen composites of those runs (the background included): one for all the runs
-    /// joined ([`RenderOptions::join_runs`]).
+    /// joined ([`Combined`](super::strategy::RunJoining::Combined)).
     pub composites: u32,
-    /// Additive draws put under the background ([`RenderOptions::additive_first`]).
+    /// Additive draws put under the background ([`Additive`](super::strategy::UnderBackground::Additive)).
     pub drawn_first: u32,
     /// One of them (the skydome's fine stars) covered the frame and was drawn as the background
     /// itself, its run's colour plus its term: no separate composite of the background.
     pub background_fused: bool,
     /// The first two runs were joined by seeding the second's buffer with the first
-    /// ([`RenderOptions::seed_joined`]): no combining pass.
+    /// ([`Seeded`](super::strategy::RunJoining::Seeded)): no combining pass.
     pub seeded: bool,
-    /// The seeded buffer's first layer was drawn over the lower run itself ([`RenderOptions::fold_seed`]).
+    /// The seeded buffer's first layer was drawn over the lower run itself ([`SeededFolded`](super::strategy::RunJoining::SeededFolded)).
     pub seed_folded: bool,
-    /// Pairs of reduced layers drawn at once ([`RenderOptions::pair_layers`]).
+    /// Pairs of reduced layers drawn at once ([`AtOnce`](super::strategy::LayerPairs::AtOnce)).
     pub layers_paired: u32,
     /// Triangles of texel polygons drawn in place of a sparse stage's sample
-    /// ([`RenderOptions::texel_quads`]).
+    /// ([`TexelPolygons`](super::strategy::SparseStages::TexelPolygons)).
     pub texel_triangles: u32,
     /// Scissor rectangles in which the background without its sparse stage went as one triangle
-    /// over the frame ([`RenderOptions::grid_bands`]).
+    /// over the frame ([`TexelPolygonsOnBands`](super::strategy::SparseStages::TexelPolygonsOnBands)).
     pub background_rects: u32,
     /// Draws added to a run of reduced layers only because the run was there
-    /// ([`DrawItem::joins_only`]: the lightning flash, [`RenderOptions::flash_in_run`]).
+    /// ([`DrawItem::joins_only`]: the lightning flash, [`InRun`](super::strategy::FlashPlacement::InRun)).
     pub joined_runs_only: u32,
     /// Clears of the frame left out ([`Skips::covered_clears`]): the colour's, the depth's.
     pub clears_skipped: u32,
@@ -463,12 +384,12 @@ impl SkyRenderer {
         sky_items.sort_by_key(|(_, it)| it.priority);
         // Runs of consecutive dome layers drawn at reduced resolution, each into its own buffer
         // before the scene; the sky pass composites each in its run's place.
-        let reduce = options.dome_resolution.divisors().0 > Divisor::FULL;
+        let reduce = options.strategy.dome_resolution.divisors().0 > Divisor::FULL;
         if reduce {
             join_additive_runs(sky_items);
             leave_lone_joiners(sky_items);
         }
-        let runs = if reduce { reduced_runs(sky_items, options.join_runs && options.seed_joined) } else { Vec::new() };
+        let runs = if reduce { reduced_runs(sky_items, options.strategy.seeds_joined()) } else { Vec::new() };
         // A run's buffer is as fine as its finest layer needs.
         let divisors: Vec<Divisor> = runs.iter().map(|&(start, end)| sky_items[start..end].iter().map(|(_, it)| it.divisor).min().unwrap_or(Divisor::FULL)).collect();
         stats.reduced_runs.clone_from(&divisors);
@@ -483,7 +404,7 @@ impl SkyRenderer {
         // between the clouds and the fog): `chain` runs, each combined with those above it.
         let mut chain = usize::from(background);
         while background
-            && options.join_runs
+            && options.strategy.joins_runs()
             && chain < runs.len()
             && sky_items[runs[chain - 1].1..runs[chain].0].iter().all(|(i, it)| self.passes[*i].can_draw_under_run(it.key, kind))
         {
@@ -494,7 +415,7 @@ impl SkyRenderer {
         // Two joined runs, the second at least as fine: the second's buffer is seeded with the
         // first and ends as their combination. Otherwise joined runs are combined from the top
         // down, each combination at the finer resolution of its run and the combination above it.
-        let seeded = options.seed_joined && chain == 2 && divisors[1] <= divisors[0];
+        let seeded = options.strategy.seeds_joined() && chain == 2 && divisors[1] <= divisors[0];
         stats.seeded = seeded;
         let combined = if seeded { Vec::new() } else { combined_divisors(&divisors[..chain]) };
         // The additive draws right after the background go under it, first onto the cleared
@@ -502,7 +423,7 @@ impl SkyRenderer {
         // they would pay for its pixels, which the depth test spares them in the sky phase.
         let scene_in_view = options.scene && camera.elevation_range_deg(wf / hf.max(1.0)).0 < -SCENE_COVERS_BELOW_DEG;
         let first = match runs.first() {
-            Some(&(_, start)) if background && options.additive_first && !scene_in_view => {
+            Some(&(_, start)) if background && options.strategy.additive_first() && !scene_in_view => {
                 let limit = runs.get(1).map_or(sky_items.len(), |r| r.0);
                 let end = (start..limit).find(|&k| !(sky_items[k].1.additive && self.passes[sky_items[k].0].can_draw_first(sky_items[k].1.key, kind))).unwrap_or(limit);
                 // Blending the background costs a full-screen pass about a millisecond: worth it
@@ -520,16 +441,18 @@ impl SkyRenderer {
         // its term, written): the others are then added under the runs above the first (joined)
         // or onto it. Saves the background's full-screen composite and the first draw's blend.
         let fused =
-            first.clone().filter(|_| options.fuse_background).find(|&k| self.passes[sky_items[k].0].can_draw_as_background(sky_items[k].1.key, kind, joined)).filter(|&f| {
-                first.clone().filter(|&k| k != f).all(|k| {
-                    let (i, it) = &sky_items[k];
-                    if joined {
-                        self.passes[*i].can_draw_under_run(it.key, kind)
-                    } else {
-                        self.passes[*i].can_draw_first(it.key, kind)
-                    }
-                })
-            });
+            first.clone().filter(|_| options.strategy.fuses_background()).find(|&k| self.passes[sky_items[k].0].can_draw_as_background(sky_items[k].1.key, kind, joined)).filter(
+                |&f| {
+                    first.clone().filter(|&k| k != f).all(|k| {
+                        let (i, it) = &sky_items[k];
+                        if joined {
+                            self.passes[*i].can_draw_under_run(it.key, kind)
+                        } else {
+                            self.passes[*i].can_draw_first(it.key, kind)
+                        }
+                    })
+                },
+            );
         stats.background_fused = fused.is_some();
         if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
             let joining = if seeded { Joining::Seeded } else { Joining::Combined(&combined) };
@@ -611,7 +534,7 @@ impl SkyRenderer {
                             let mut first = start;
                             if let (1, true, Some(l)) = (r, seeded, layers) {
                                 let (i, it) = &sky_list[start];
-                                match l.seed_source().filter(|_| options.fold_seed && self.passes[*i].can_draw_over_seed(it.key, kind)) {
+                                match l.seed_source().filter(|_| options.strategy.folds_seed() && self.passes[*i].can_draw_over_seed(it.key, kind)) {
                                     // The first layer goes over the seed itself; the seeding pass
                                     // fills what it does not reach (below its dome), first.
                                     Some(seed) => {
@@ -620,7 +543,7 @@ impl SkyRenderer {
                                         }
                                         rpass.set_bind_group(0, &self.globals.bind_group, &[]);
                                         // With the layer after it, at once, where the two pair.
-                                        match pair_at(&self.passes, sky_list, start, end, kind, true).filter(|_| options.pair_layers) {
+                                        match pair_at(&self.passes, sky_list, start, end, kind, true).filter(|_| options.strategy.pairs_layers()) {
                                             Some(upper) => {
                                                 stats.draw_calls += self.passes[*i].draw_pair(&mut rpass, it.key, upper, kind, Some(seed));
                                                 stats.layers_paired += 1;
@@ -640,7 +563,7 @@ impl SkyRenderer {
                             let mut k = first;
                             while k < end {
                                 let (i, it) = &sky_list[k];
-                                if let Some(upper) = pair_at(&self.passes, sky_list, k, end, kind, false).filter(|_| options.pair_layers) {
+                                if let Some(upper) = pair_at(&self.passes, sky_list, k, end, kind, false).filter(|_| options.strategy.pairs_layers()) {
                                     stats.draw_calls += self.passes[*i].draw_pair(&mut rpass, it.key, upper, kind, None);
                                     stats.layers_paired += 1;
                                     k += 2;
@@ -872,7 +795,7 @@ fn combined_divisors(divisors: &[Divisor]) -> Vec<Divisor> {
 /// `split_first`: a lone run at the start of the list whose layers get finer part-way (the
 /// skydome's at a quarter of the resolution, the clouds' at half, when the billboards between
 /// them lie out of the frame) is two runs, the coarse layers in their own buffer seeding the
-/// finer one ([`RenderOptions::seed_joined`]), rather than every layer at the finer resolution.
+/// finer one ([`Seeded`](super::strategy::RunJoining::Seeded)), rather than every layer at the finer resolution.
 fn reduced_runs(list: &[(usize, DrawItem)], split_first: bool) -> Vec<(usize, usize)> {
     let mut runs = Vec::new();
     let mut k = 0;

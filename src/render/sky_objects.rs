@@ -209,7 +209,7 @@ enum Placement {
     /// transmittance (`UNDER_RUN` in the shader).
     UnderRun,
     /// Additive, first onto the cleared frame under the background run, not depth-tested
-    /// ([`super::RenderOptions::additive_first`]).
+    /// ([`super::strategy::UnderBackground::Additive`]).
     First,
     /// Additive and covering the frame: the background itself, its run's colour plus the
     /// draw's term, neither blended nor depth-tested (`BACKGROUND` in the shader: 1).
@@ -349,12 +349,12 @@ pub struct SkyObjectsPass {
     /// the shaders change.
     texel_pipelines: HashMap<VariantKey, Option<wgpu::RenderPipeline>>,
     /// The background without its sparse stage as one triangle over the frame
-    /// ([`super::RenderOptions::grid_bands`]), by the signature without the stage.
+    /// ([`super::strategy::SparseStages::TexelPolygonsOnBands`]), by the signature without the stage.
     fullscreen_pipelines: HashMap<VariantKey, Option<wgpu::RenderPipeline>>,
-    /// Sparse stages are drawn texel by texel this frame ([`super::RenderOptions::texel_quads`]).
+    /// Sparse stages are drawn texel by texel this frame ([`super::strategy::SparseStages::TexelPolygons`]).
     texels_on: bool,
     /// The rest of such a draw goes as bands where the polygons stand for the stage
-    /// ([`super::RenderOptions::grid_bands`]).
+    /// ([`super::strategy::SparseStages::TexelPolygonsOnBands`]).
     bands_on: bool,
     /// Triangles of texel polygons recorded this frame (counted as they are recorded).
     texel_triangles: std::cell::Cell<u32>,
@@ -958,7 +958,7 @@ struct TexelDraw<'a> {
     stage: usize,
     /// The draw without the stage, on the grid or its bands.
     without: &'a wgpu::RenderPipeline,
-    /// The same as one triangle over the frame ([`super::RenderOptions::grid_bands`]), if built.
+    /// The same as one triangle over the frame ([`super::strategy::SparseStages::TexelPolygonsOnBands`]), if built.
     fullscreen: Option<&'a wgpu::RenderPipeline>,
     /// The polygons' pipeline and mesh.
     polygons: &'a wgpu::RenderPipeline,
@@ -1067,8 +1067,8 @@ impl Pass for SkyObjectsPass {
         self.visible.clear();
         self.hidden = 0;
         self.draws_dark = 0;
-        self.texels_on = cx.options.texel_quads && cx.target == Target::Display;
-        self.bands_on = cx.options.grid_bands;
+        self.texels_on = cx.options.strategy.texel_polygons() && cx.target == Target::Display;
+        self.bands_on = cx.options.strategy.grid_bands();
         self.texel_triangles.set(0);
         self.background_rects.set(0);
         let Some(draws) = &self.draws.current else { return };
@@ -1116,8 +1116,8 @@ impl Pass for SkyObjectsPass {
                 _ => false,
             })
         };
-        let (finest, coarsest) = cx.options.dome_resolution.divisors();
-        let finest_whole = cx.options.dome_resolution.finest_whole();
+        let (finest, coarsest) = cx.options.strategy.dome_resolution.divisors();
+        let finest_whole = cx.options.strategy.dome_resolution.finest_whole();
         let reduce_domes = finest > Divisor::FULL;
         // The frame's pixels per degree of view at its centre.
         let frame_px_per_deg = cx.size.1 as f32 / cx.camera.fov_y_deg.max(1.0);

@@ -154,6 +154,11 @@ impl FillStrategy {
         PRESETS.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
     }
 
+    /// The preset named by a command-line value, or an error naming `--strategy` and the presets.
+    pub fn preset_arg(name: &str) -> Result<Self, String> {
+        Self::preset(name).ok_or_else(|| format!("--strategy: unknown fill strategy \"{name}\"; expected {}", PRESETS.map(|p| p.0).join(", ")))
+    }
+
     /// The preset's name, or `custom` for a strategy that is none of them.
     pub fn name(&self) -> &'static str {
         PRESETS.iter().find(|(_, s)| s == self).map_or("custom", |(n, _)| n)
