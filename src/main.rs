@@ -1,11 +1,6 @@
 //! The `skytune` binary: window (default), `render`, `check`, `watch`, `new-sky`, `bench`, `radiance`.
 
-mod bench;
-mod bench_frame;
-mod bench_models;
-mod charts;
 mod cli;
-mod sweep_cmd;
 
 use std::path::Path;
 use std::time::Duration;
@@ -13,8 +8,9 @@ use std::time::Duration;
 use anyhow::{anyhow, bail, Context as _};
 use clap::Parser;
 
+use cli::{bench_frame, bench_models, bench_passes, stability_report};
 use cli::{Cli, Command, FrameArgs, RenderArgs};
-use skytune::live::{LiveSky, ReloadEvent, SkySpec};
+use skytune::files::hot_reload::{LiveSky, ReloadEvent, SkySpec};
 use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions};
 use skytune::sky::resolved::SkyModelKind;
 use skytune::sky::{procedural, FrameInput, Sky, Tier};
@@ -57,11 +53,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Frame(args)), .. })) => bench_frame::run(&args),
         Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Models(args)), .. })) => bench_models::run(&args),
-        Some(Command::Bench(cmd)) => bench::run(&cmd.args),
+        Some(Command::Bench(cmd)) => bench_passes::run(&cmd.args),
         Some(Command::Radiance(args)) => radiance(&args),
         Some(Command::Compare(args)) => compare(&args),
         Some(Command::Soak(args)) => soak(&args),
-        Some(Command::Sweep(args)) => sweep_cmd::run(&args),
+        Some(Command::Sweep(args)) => stability_report::run(&args),
         Some(Command::Bake(args)) => bake(&args),
     }
 }
@@ -89,7 +85,7 @@ fn new_sky_folder(dir: &Path, palette: &procedural::Palette, seed: u64, force: b
 
 /// `skytune bake`: bakes a physical model into NeL bitmaps and writes a sky folder.
 fn bake(args: &cli::BakeArgs) -> anyhow::Result<()> {
-    use skytune::modelbench::Method;
+    use skytune::measure::model_points::Method;
     let sky = spec_for(args.sky.as_deref(), None)?.load().map_err(|e| anyhow!("{e}"))?;
     let m = &sky.model;
     let method = match args.model {
@@ -100,10 +96,10 @@ fn bake(args: &cli::BakeArgs) -> anyhow::Result<()> {
         cli::BakeModel::Hosek => Method::Hosek,
     };
     let ctx = GpuContext::headless(adapter(args.cpu))?;
-    let ev = skytune::modelbench::Evaluator::new(&ctx)?;
+    let ev = skytune::measure::model_points::Evaluator::new(&ctx)?;
     let started = std::time::Instant::now();
-    let baked = skytune::bake::bake(&ev, &sky, method, args.rows, args.weathers)?;
-    skytune::bake::write_folder(&args.out, &sky, &baked, method.model_name()).with_context(|| format!("writing {}", args.out.display()))?;
+    let baked = skytune::measure::bake::bake(&ev, &sky, method, args.rows, args.weathers)?;
+    skytune::measure::bake::write_folder(&args.out, &sky, &baked, method.model_name()).with_context(|| format!("writing {}", args.out.display()))?;
     println!(
         "baked {} into {} ({} rows x 24 hours x {} weather steps) in {:.1} s; open it with `skytune {}`",
         method.model_name(),
@@ -224,7 +220,7 @@ fn reference_radiance(args: &cli::RadianceArgs, atm: skytune::atmosphere::Atmosp
     use skytune::atmosphere::reference::{Estimate, Reference, ReferenceSettings};
     let settings = ReferenceSettings { max_order: args.max_order, paths: args.paths, seed: args.seed, ..Default::default() };
     let model = Reference::new(atm, settings);
-    let bar = skytune::progress::Reporter::new(list.len() as u64, "radiance");
+    let bar = skytune::support::progress::Reporter::new(list.len() as u64, "radiance");
     let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).min(list.len().max(1));
     let chunk = list.len().div_ceil(workers).max(1);
     let mut estimates = vec![Estimate { single: [0.0; 3], all: [0.0; 3], std_err: [0.0; 3] }; list.len()];
@@ -309,7 +305,7 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
             log::info!("hidden: {} ({why})", sky.objects[o.index].name);
         }
     }
-    use skytune::export::{self, Format};
+    use skytune::files::export::{self, Format};
     let ext = args.out.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
     let format = match (args.format, ext.as_deref()) {
         (Some(cli::ExportFormat::Png), _) | (None, Some("png")) | (None, None) => Format::Png,
@@ -348,7 +344,7 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
         image.dimensions()
     } else {
         let image = headless.render(sky, &input, &camera, &options)?;
-        skytune::fsx::save_png(&image, &args.out)?;
+        skytune::support::safe_write::save_png(&image, &args.out)?;
         image.dimensions()
     };
     println!("wrote {} ({w}x{h}, {about})", args.out.display());
@@ -357,7 +353,7 @@ fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyh
 
 /// `skytune soak`: runs, prints progress and the verdict, writes the report and the plot.
 fn soak(args: &cli::SoakArgs) -> anyhow::Result<()> {
-    let settings = skytune::soak::SoakSettings {
+    let settings = skytune::measure::soak::SoakSettings {
         frames: args.frames,
         size: cli::parse_size(&args.size)?,
         seed: args.seed,
@@ -368,7 +364,7 @@ fn soak(args: &cli::SoakArgs) -> anyhow::Result<()> {
     };
     let ctx = GpuContext::headless(adapter(args.cpu))?;
     println!("adapter: {}", ctx.adapter_line());
-    let report = skytune::soak::run(ctx, &settings, |s| {
+    let report = skytune::measure::soak::run(ctx, &settings, |s| {
         println!(
             "frame {:>6}: resident {:>7.1} MiB, GPU {} buffers {} textures {:.1} MiB",
             s.frame,
@@ -378,7 +374,7 @@ fn soak(args: &cli::SoakArgs) -> anyhow::Result<()> {
             s.gpu_bytes as f64 / 1048576.0
         )
     })?;
-    skytune::soak::require_samples(&report)?;
+    skytune::measure::soak::require_samples(&report)?;
     if let Some(plot) = &args.plot {
         report.plot_svg(plot)?;
         println!("wrote {}", plot.display());
@@ -391,7 +387,7 @@ fn soak(args: &cli::SoakArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.report {
         // The report may hold other, hand-written sections: only the soak's is replaced.
         let existing = std::fs::read_to_string(path).unwrap_or_default();
-        skytune::fsx::write_atomic(path, skytune::soak::splice_section(&existing, &md).as_bytes())?;
+        skytune::support::safe_write::write_atomic(path, skytune::measure::soak::splice_section(&existing, &md).as_bytes())?;
         println!("wrote {}", path.display());
     }
     println!(
@@ -434,7 +430,7 @@ fn model_override(sky: &Sky, f: &cli::FrameArgs) -> anyhow::Result<Option<skytun
 
 /// `skytune compare`: renders both sides, prints the figures, writes the picture.
 fn compare(args: &cli::CompareArgs) -> anyhow::Result<()> {
-    use skytune::compare::{self, Layout, SideSpec};
+    use skytune::measure::image_diff::{self, Layout, SideSpec};
     let sides: [SideSpec; 2] = [args.a.parse()?, args.b.parse()?];
     let layout = Layout::ALL.into_iter().find(|l| l.name() == args.layout).ok_or_else(|| anyhow!("--layout: expected side, split or diff, found \"{}\"", args.layout))?;
     anyhow::ensure!(args.split.is_finite(), "--split: expected a number in 0..1");
@@ -469,9 +465,9 @@ fn compare(args: &cli::CompareArgs) -> anyhow::Result<()> {
         images.push(headless.render(&sky, &input, &camera, &options)?);
         println!("{label}: sky \"{}\" ({}), hour {}, weather {}, tier {}, model {}", sky.name, sky.source_name, input.hour, input.weather, input.tier.stages(), model.name());
     }
-    let diff = compare::difference(&images[0], &images[1], args.tolerance);
-    let picture = compare::compose(&images[0], &images[1], &diff, layout, args.split);
-    skytune::fsx::save_png(&picture, &args.out)?;
+    let diff = image_diff::difference(&images[0], &images[1], args.tolerance);
+    let picture = image_diff::compose(&images[0], &images[1], &diff, layout, args.split);
+    skytune::support::safe_write::save_png(&picture, &args.out)?;
     println!("{}", diff.summary());
     println!("wrote {} ({})", args.out.display(), layout.name());
     if let Some(limit) = args.max_flip_mean {
@@ -489,7 +485,7 @@ fn render(args: &RenderArgs) -> anyhow::Result<()> {
     let (w, h) = cli::parse_size(&args.size)?;
     let ctx = GpuContext::headless(adapter(args.frame.cpu))?;
     println!("adapter: {}", ctx.adapter_line());
-    if let Some(pick) = skytune::progress::run_reported("auto model", |job| skytune::auto_model::resolve(&mut sky, &ctx, job))? {
+    if let Some(pick) = skytune::support::progress::run_reported("auto model", |job| skytune::measure::auto_model::resolve(&mut sky, &ctx, job))? {
         println!("{}", pick.describe());
     }
     let mut headless = Headless::new(ctx, w, h)?;
@@ -520,9 +516,9 @@ fn check(path: &Path) -> anyhow::Result<()> {
     print!("{}", summary(&sky));
     if let Some(budget) = sky.auto_model {
         let ctx = GpuContext::headless(AdapterChoice::from_env())?;
-        let pick = skytune::progress::run_reported("auto model", |job| skytune::auto_model::pick_cached(&sky, budget, &ctx, job))?;
+        let pick = skytune::support::progress::run_reported("auto model", |job| skytune::measure::auto_model::pick_cached(&sky, budget, &ctx, job))?;
         println!("  {}", pick.describe());
-        println!("  measured at sun elevations {:?} degrees, over {} weather step(s)", pick.suns_deg, skytune::auto_model::sky_atmospheres(&sky).len());
+        println!("  measured at sun elevations {:?} degrees, over {} weather step(s)", pick.suns_deg, skytune::measure::auto_model::sky_atmospheres(&sky).len());
     }
     Ok(())
 }

@@ -42,7 +42,7 @@ fn run_panels_at(controls: &mut Controls, events: Vec<egui::Event>, size: (f32, 
         model_progress: Some(0.4),
         compare: controls.compare.open.then(|| ui::CompareInfo {
             texture: None,
-            summary: Some(("model lut".into(), "FLIP mean 0.1".into(), skytune::compare::FlipSummary { mean: 0.1, p95: 0.2, max: 0.5 })),
+            summary: Some(("model lut".into(), "FLIP mean 0.1".into(), skytune::measure::image_diff::FlipSummary { mean: 0.1, p95: 0.2, max: 0.5 })),
             progress: Some(0.5),
             error: Some("no earlier version yet".into()),
             snapshots: Vec::new(),
@@ -106,7 +106,7 @@ fn the_compare_window_lays_out_and_saves_snapshots() {
 fn window_compares_the_sky_with_a_snapshot_under_xvfb() {
     let (dir, sky_file) = common::default_sky_folder();
     let sky = skytune::sky::load_sky_file(&sky_file).unwrap();
-    skytune::snapshot::save(&sky_file, &sky, "before").unwrap();
+    skytune::files::snapshot::save(&sky_file, &sky, "before").unwrap();
     // The edit after the snapshot: darker gradients.
     let gradient = sky_file.parent().unwrap().join("gradient_clear.png");
     let mut img = image::open(&gradient).unwrap().to_rgba8();

@@ -5,9 +5,10 @@
 
 use skytune::atmosphere::dome;
 use skytune::atmosphere::reference::{Case, Reference, ReferenceSettings};
-use skytune::auto_model::{self, Budget};
-use skytune::modelbench::{Evaluator, Method, Prepared};
+use skytune::measure::auto_model;
+use skytune::measure::model_points::{Evaluator, Method, Prepared};
 use skytune::render::{AdapterChoice, GpuContext};
+use skytune::sky::resolved::Budget;
 use skytune::sky::Sky;
 
 fn committed_skies() -> Vec<Sky> {
@@ -33,7 +34,7 @@ fn auto_pick_meets_its_budget_against_the_reference_on_every_committed_sky() {
     // Skies that share a sun path and an atmosphere share the reference's answers.
     let mut truths: std::collections::HashMap<String, Vec<[f64; 3]>> = std::collections::HashMap::new();
     for sky in committed_skies() {
-        let scored = auto_model::score(&sky, &ev, &skytune::progress::Job::new()).expect("scored");
+        let scored = auto_model::score(&sky, &ev, &skytune::support::progress::Job::new()).expect("scored");
         let pick = auto_model::choose(&scored, budget, auto_model::sky_suns(&sky));
         assert!(pick.within_budget, "{}: no model within {budget:?}: {scored:?}", sky.name);
         let model = pick.model(&sky.model);
@@ -46,7 +47,7 @@ fn auto_pick_meets_its_budget_against_the_reference_on_every_committed_sky() {
         for (w, atm) in auto_model::sky_atmospheres(&sky).iter().enumerate() {
             let reference = Reference::new(*atm, ReferenceSettings { paths: 2048, seed: 0xbeef + w as u64, ..Default::default() });
             let prepared = match pick.chosen.method {
-                Method::Preetham | Method::Hosek => Prepared::Analytic(pick.chosen.method, skytune::modelbench::Fit { turbidity: model.turbidity as f64, scale: 1.0 }),
+                Method::Preetham | Method::Hosek => Prepared::Analytic(pick.chosen.method, skytune::measure::model_points::Fit { turbidity: model.turbidity as f64, scale: 1.0 }),
                 m => ev.prepare(&m, atm, &[]).expect("prepared"),
             };
             for &hour in &hours {
@@ -67,8 +68,8 @@ fn tighter_budgets_never_pick_cheaper_models_and_picks_are_reproducible() {
     let ctx = GpuContext::headless(AdapterChoice::Cpu).expect("lavapipe");
     let ev = Evaluator::new(&ctx).expect("probe");
     let sky = skytune::sky::builtin::default_sky();
-    let scored = auto_model::score(&sky, &ev, &skytune::progress::Job::new()).expect("scored");
-    assert_eq!(scored, auto_model::score(&sky, &ev, &skytune::progress::Job::new()).expect("scored again"), "same inputs, same scores");
+    let scored = auto_model::score(&sky, &ev, &skytune::support::progress::Job::new()).expect("scored");
+    assert_eq!(scored, auto_model::score(&sky, &ev, &skytune::support::progress::Job::new()).expect("scored again"), "same inputs, same scores");
     assert!(scored.windows(2).all(|w| w[0].cost_ms <= w[1].cost_ms), "candidates cheapest first");
     let mut last_cost = 0.0;
     for de2000 in [50.0, 20.0, 10.0, 5.0, 3.0, 2.0, 1.5, 1.2, 1.0, 0.5] {

@@ -5,7 +5,7 @@ mod common;
 
 use skytune::atmosphere::dome;
 use skytune::atmosphere::LutSettings;
-use skytune::modelbench::{Evaluator, Method};
+use skytune::measure::model_points::{Evaluator, Method};
 use skytune::render::{AdapterChoice, Camera, GpuContext, RenderOptions};
 use skytune::sky::FrameInput;
 
@@ -15,7 +15,7 @@ fn baked_folder_is_a_sky_that_matches_its_model_at_the_baked_hours() {
     let ev = Evaluator::new(&ctx).expect("probe");
     let sky = skytune::sky::builtin::default_sky();
     let method = Method::Lut(LutSettings::default());
-    let baked = skytune::bake::bake(&ev, &sky, method, 24, 2).expect("baked");
+    let baked = skytune::measure::bake::bake(&ev, &sky, method, 24, 2).expect("baked");
     assert_eq!((baked.rows, baked.gradient.len(), baked.halo_color.len()), (24, 2, 2));
     // The hazier weather step is whiter at the horizon than the clear one at noon.
     let horizon_row = 20;
@@ -25,11 +25,11 @@ fn baked_folder_is_a_sky_that_matches_its_model_at_the_baked_hours() {
 
     // At a baked hour (no interpolation between columns) the bitmaps reproduce the model.
     let dirs = dome::dome_directions(6, 12);
-    let hours = skytune::bake::sun_elevations(&sky);
-    let prepared = ev.prepare(&method, &skytune::bake::weather_atmosphere(&sky, 0, 2), &[]).expect("prepared");
+    let hours = skytune::measure::bake::sun_elevations(&sky);
+    let prepared = ev.prepare(&method, &skytune::measure::bake::weather_atmosphere(&sky, 0, 2), &[]).expect("prepared");
     for hour in [8usize, 12, 16] {
         let sun = hours[hour];
-        let want = ev.radiance(&prepared, &skytune::bake::weather_atmosphere(&sky, 0, 2), sun, &dome::cases(sun, &dirs)).expect("model");
+        let want = ev.radiance(&prepared, &skytune::measure::bake::weather_atmosphere(&sky, 0, 2), sun, &dome::cases(sun, &dirs)).expect("model");
         // The baked sky's own sun here is the sky's; azimuths are relative to it.
         let got = skytune::atmosphere::represent::over_dome(&dirs, |e, a| baked.radiance(0, hour as f64, sun, e, a));
         let e = dome::dome_error(&dirs, &want, &got);
@@ -37,7 +37,7 @@ fn baked_folder_is_a_sky_that_matches_its_model_at_the_baked_hours() {
     }
 
     let dir = tempfile::tempdir().expect("temp dir");
-    skytune::bake::write_folder(dir.path(), &sky, &baked, "lut").expect("written");
+    skytune::measure::bake::write_folder(dir.path(), &sky, &baked, "lut").expect("written");
     let loaded = skytune::sky::load_sky_file(&dir.path().join("sky.toml")).unwrap_or_else(|e| panic!("the baked sky loads: {e}"));
     assert_eq!(loaded.objects.len(), 1);
     let mut h = common::headless(96, 64);

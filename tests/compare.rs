@@ -82,7 +82,7 @@ fn a_darkened_gradient_bitmap_shows_in_the_sky_only_and_fails_a_threshold() {
         hl.render(&s, &FrameInput::new(13.0, 0.0), &camera, &opts).unwrap()
     };
     let (a, b) = (render(&sky), render(&edited_sky));
-    let d = skytune::compare::difference(&a, &b, 12);
+    let d = skytune::measure::image_diff::difference(&a, &b, 12);
     let (flip, differing_pct, mean) = figures(&text);
     assert!(
         (flip - d.flip.mean as f64).abs() < 1e-4 && (differing_pct - d.pixels.differing * 100.0).abs() < 0.01 && (mean - d.pixels.mean).abs() < 1e-3,
@@ -92,8 +92,8 @@ fn a_darkened_gradient_bitmap_shows_in_the_sky_only_and_fails_a_threshold() {
 
     // The heat map is black where the scene covers the sky (the bottom rows) and lit above.
     let heat = image::open(&out).unwrap().to_rgba8();
-    assert_eq!(heat.dimensions(), (w, h + skytune::compare::LEGEND_HEIGHT));
-    let black = skytune::compare::magma(0.0);
+    assert_eq!(heat.dimensions(), (w, h + skytune::measure::image_diff::LEGEND_HEIGHT));
+    let black = skytune::measure::image_diff::magma(0.0);
     let rows = |ys: std::ops::Range<u32>| ys.flat_map(|y| (0..w).map(move |x| (x, y))).collect::<Vec<_>>();
     assert!(rows(h - 15..h).iter().all(|&(x, y)| *heat.get_pixel(x, y) == black), "the ground did not change");
     let lit = rows(0..15).iter().filter(|&&(x, y)| *heat.get_pixel(x, y) != black).count();

@@ -4,7 +4,7 @@
 
 mod common;
 
-use skytune::export::{self, Format, CUBE_FACES};
+use skytune::files::export::{self, Format, CUBE_FACES};
 use skytune::render::{Camera, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::model::SkyModelKind;

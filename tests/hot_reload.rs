@@ -5,7 +5,7 @@ mod common;
 
 use std::time::Duration;
 
-use skytune::live::{LiveSky, ReloadEvent, SkySpec};
+use skytune::files::hot_reload::{LiveSky, ReloadEvent, SkySpec};
 
 const WAIT: Duration = Duration::from_secs(20);
 

@@ -5,7 +5,7 @@ use skytune::atmosphere::dome::{self, DomeDir, Haze};
 use skytune::atmosphere::reference::Case;
 use skytune::atmosphere::represent::{self, Baked, DomeMapTable, Regression};
 use skytune::atmosphere::Rgb;
-use skytune::modelbench::{self, ChartRow};
+use skytune::measure::model_points::{self, ChartRow};
 
 #[test]
 fn error_figures_are_zero_for_the_reference_and_scale_with_a_bias() {
@@ -146,17 +146,17 @@ fn pareto_front_has_no_dominated_point() {
         pareto: false,
     };
     let mut rows = vec![row("cheap", 1.0, 5.0), row("dominated", 2.0, 6.0), row("accurate", 3.0, 1.0), row("equal-cost-worse", 3.0, 2.0)];
-    modelbench::mark_pareto(&mut rows);
+    model_points::mark_pareto(&mut rows);
     let front: Vec<&str> = rows.iter().filter(|r| r.pareto).map(|r| r.id.as_str()).collect();
     assert_eq!(front, ["cheap", "accurate"]);
-    let back = modelbench::rows_from_csv(&modelbench::rows_to_csv(&rows)).expect("round trip");
+    let back = model_points::rows_from_csv(&model_points::rows_to_csv(&rows)).expect("round trip");
     assert_eq!(back, rows);
 }
 
 #[test]
 fn committed_benchmark_lists_every_point() {
-    let rows = modelbench::rows_from_csv(modelbench::COMMITTED_CSV).expect("docs/models.csv parses");
-    for p in modelbench::points() {
+    let rows = model_points::rows_from_csv(model_points::COMMITTED_CSV).expect("docs/models.csv parses");
+    for p in model_points::points() {
         assert!(rows.iter().any(|r| r.id == p.id), "docs/models.csv lacks {}: re-run skytune bench models", p.id);
     }
 }
@@ -172,8 +172,8 @@ fn quick_benchmark_writes_the_csv_and_both_charts() {
         .expect("running skytune");
     assert!(status.success());
     let csv = std::fs::read_to_string(out.path().join("models.csv")).expect("models.csv");
-    let rows = modelbench::rows_from_csv(&csv).expect("parses");
-    let quick: Vec<String> = modelbench::points().into_iter().filter(|p| p.quick).map(|p| p.id).collect();
+    let rows = model_points::rows_from_csv(&csv).expect("parses");
+    let quick: Vec<String> = model_points::points().into_iter().filter(|p| p.quick).map(|p| p.id).collect();
     assert_eq!(rows.iter().map(|r| r.id.clone()).collect::<Vec<_>>(), quick);
     assert!(rows.iter().all(|r| r.de_mean.is_finite() && r.gpu_frame_ms > 0.0), "{rows:?}");
     assert!(rows.iter().any(|r| r.pareto));

@@ -2,9 +2,9 @@
 //! across and beyond their domains (a smaller sweep than `skytune sweep`'s 1e5 per model); the raw
 //! published fits do fail where the literature says; the jump detector finds steps, not slopes.
 
-use skytune::modelbench::Evaluator;
+use skytune::measure::model_points::Evaluator;
+use skytune::measure::stability::{self, SweptModel};
 use skytune::render::{AdapterChoice, GpuContext};
-use skytune::sweep::{self, SweptModel};
 
 #[test]
 fn shipped_models_have_zero_counters_and_raw_fits_fail() {
@@ -12,7 +12,7 @@ fn shipped_models_have_zero_counters_and_raw_fits_fail() {
     let ev = Evaluator::new(&ctx).expect("probe");
     for model in SweptModel::ALL {
         let count = 10_000;
-        let c = sweep::sweep(&ev, model, count, 42, &mut |_| {}).expect("swept");
+        let c = stability::sweep(&ev, model, count, 42, &mut |_| {}).expect("swept");
         assert_eq!(c.evaluated, count as u64);
         if model.shipped() {
             assert_eq!(c.failures(), 0, "{}: {:?}", model.name(), c);
@@ -29,25 +29,25 @@ fn shipped_models_have_zero_counters_and_raw_fits_fail() {
 fn jump_detector_finds_steps_and_not_steep_slopes() {
     let grey = |x: f64| [x; 3];
     // A step in the middle of the second interval.
-    assert!(sweep::jump_candidate([grey(1.0), grey(1.0), grey(2.0)]).is_some());
-    assert!(sweep::refined_is_jump(&[1.0, 1.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 2.0, 2.0, 2.0]));
+    assert!(stability::jump_candidate([grey(1.0), grey(1.0), grey(2.0)]).is_some());
+    assert!(stability::refined_is_jump(&[1.0, 1.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 2.0, 2.0, 2.0]));
     // A steep exponential changes alike over both steps: no candidate.
     let e = |s: f64| grey((s * 8.0).exp());
-    assert!(sweep::jump_candidate([e(0.0), e(0.05), e(0.1)]).is_none());
+    assert!(stability::jump_candidate([e(0.0), e(0.05), e(0.1)]).is_none());
     // A kink (flat, then a slope) spreads when refined, even with the kink in the last sub-step:
     // max(0, x) crossing zero there continues into the next sub-step.
     let ramp: Vec<f64> = (0..11).map(|k| k as f64).collect();
-    assert!(!sweep::refined_is_jump(&ramp));
+    assert!(!stability::refined_is_jump(&ramp));
     let clamp_at_end: Vec<f64> = (0..11).map(|k| (k as f64 - 8.5).max(0.0)).collect();
-    assert!(!sweep::refined_is_jump(&clamp_at_end));
+    assert!(!stability::refined_is_jump(&clamp_at_end));
     // Tiny changes under the floor are never jumps.
-    assert!(sweep::jump_candidate([grey(0.0), grey(0.0), grey(1e-9)]).is_none());
+    assert!(stability::jump_candidate([grey(0.0), grey(0.0), grey(1e-9)]).is_none());
 }
 
 #[test]
 fn sweeps_are_reproducible() {
-    let a = sweep::random_cases(500, 100, 9);
-    let b = sweep::random_cases(500, 100, 9);
+    let a = stability::random_cases(500, 100, 9);
+    let b = stability::random_cases(500, 100, 9);
     assert_eq!(a, b);
     assert!(a.iter().any(|c| c.case.camera_km > c.atmosphere.thickness_km()), "cameras above the atmosphere are swept");
     assert!(a.iter().any(|c| c.case.sun_elev_deg < -12.0) && a.iter().any(|c| c.case.view_elev_deg < -30.0));

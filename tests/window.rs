@@ -172,7 +172,7 @@ fn a_reload_that_changes_the_atmosphere_cancels_the_pick_under_way() {
     window.wait_for("auto model: measuring the candidates", Duration::from_secs(120));
     // The artist edits the atmosphere while the pick is measured.
     std::thread::sleep(Duration::from_secs(2));
-    skytune::fsx::write_atomic(&sky_file, with_mie(15e-3).as_bytes()).unwrap();
+    skytune::support::safe_write::write_atomic(&sky_file, with_mie(15e-3).as_bytes()).unwrap();
     window.wait_for("is cancelled", Duration::from_secs(60));
     let stopped = window.wait_for("stopped measuring for a superseded version", Duration::from_secs(60));
     assert!(numbers(&stopped, &["after"])[0] < 60.0, "the old measurement stopped promptly: {stopped}");
@@ -181,7 +181,7 @@ fn a_reload_that_changes_the_atmosphere_cancels_the_pick_under_way() {
     // A change that leaves the atmosphere as it is (a bitmap's name here: any other key) keeps the
     // measurement running.
     let edited = std::fs::read_to_string(&sky_file).unwrap().replacen("name = ", "name = \"renamed\"\n# was: ", 1);
-    skytune::fsx::write_atomic(&sky_file, edited.as_bytes()).unwrap();
+    skytune::support::safe_write::write_atomic(&sky_file, edited.as_bytes()).unwrap();
     window.wait_for("reloaded sky \"renamed\"", Duration::from_secs(60));
     std::thread::sleep(Duration::from_secs(1));
     assert_eq!(window.log().matches("is cancelled").count(), 1, "{}", window.log());

@@ -10,11 +10,11 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::auto_model::{self, Pick, Scored};
-use crate::progress::Job;
+use crate::measure::auto_model::{self, Pick, Scored};
 use crate::render::GpuContext;
 use crate::sky::resolved::SkyModel;
 use crate::sky::Sky;
+use crate::support::progress::Job;
 
 /// A pick being measured on the worker.
 struct Pending {

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::compare::{self, Difference, Layout};
+use crate::measure::image_diff::{self, Difference, Layout};
 use crate::render::{Camera, GpuContext, Headless, RenderOptions, ShaderLibrary};
 use crate::sky::resolved::SkyModelKind;
 use crate::sky::{FrameInput, Sky, Tier};
@@ -45,7 +45,7 @@ impl CompareB {
             "weather" => value.parse::<f32>().ok().filter(|w| (0.0..=1.0).contains(w)).map(CompareB::Weather).ok_or_else(|| format!("weather: expected 0..1, found \"{value}\"")),
             "snapshot" => {
                 let file = sky_file.ok_or("snapshots need a sky file")?;
-                crate::snapshot::list(file)
+                crate::files::snapshot::list(file)
                     .into_iter()
                     .find(|snap| snap.name == value)
                     .map(|snap| CompareB::Snapshot(snap.sky_file))
@@ -234,7 +234,7 @@ impl CompareView {
         self.pending = false;
         self.progress = None;
         let image_a = sides[0].0.render(sky_a, &inputs.input, &inputs.camera, &inputs.options)?;
-        let diff = compare::difference(&image_a, &image_b, 12);
+        let diff = image_diff::difference(&image_a, &image_b, 12);
         log::info!("compare: B = {}: {}", b.label(), diff.summary());
         self.result = Some(CompareResult { a: image_a, b: image_b, diff, b_label: b.label() });
         // Recomposed by `picture` on the next paint.
@@ -247,7 +247,7 @@ impl CompareView {
         let result = self.result.as_ref()?;
         let stale = self.texture.as_ref().is_none_or(|(_, l, s)| *l != layout || *s != split);
         if stale {
-            let img = compare::compose(&result.a, &result.b, &result.diff, layout, split);
+            let img = image_diff::compose(&result.a, &result.b, &result.diff, layout, split);
             let color = egui::ColorImage::from_rgba_unmultiplied([img.width() as usize, img.height() as usize], img.as_raw());
             match self.texture.as_mut() {
                 Some((handle, l, s)) => {

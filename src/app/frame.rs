@@ -14,7 +14,7 @@ use super::capture::{free_path, screenshot_name, ContactSheet};
 use super::ui::{self, UiAction, UiInfo};
 use super::window::UiPaint;
 use super::App;
-use crate::live::{ReloadEvent, SkySpec};
+use crate::files::hot_reload::{ReloadEvent, SkySpec};
 use crate::sky::{FrameInput, FrameSky, Sky, Tier};
 
 /// Frame times kept for the stats graph.
@@ -25,7 +25,7 @@ pub struct WindowSoak {
     /// The temporary sky file being rewritten.
     pub sky_file: PathBuf,
     good: String,
-    driver: crate::soak::Driver,
+    driver: crate::measure::soak::Driver,
     dir: PathBuf,
     /// Resident memory samples (frame, bytes).
     samples: Vec<(u64, u64)>,
@@ -34,10 +34,10 @@ pub struct WindowSoak {
 impl WindowSoak {
     /// Copies the sky of `spec` (its folder's files, or the built-in sky) to a temporary folder.
     pub fn new(spec: &SkySpec) -> anyhow::Result<Self> {
-        let (dir, sky_file) = crate::soak::sky_copy("window-soak", spec.sky_file().as_deref())?;
+        let (dir, sky_file) = crate::measure::soak::sky_copy("window-soak", spec.sky_file().as_deref())?;
         let good = std::fs::read_to_string(&sky_file).with_context(|| format!("reading {}", sky_file.display()))?;
         log::info!("soak: working on a copy of the sky in {}", dir.display());
-        Ok(Self { sky_file, good, driver: crate::soak::Driver::new(1), dir, samples: Vec::new() })
+        Ok(Self { sky_file, good, driver: crate::measure::soak::Driver::new(1), dir, samples: Vec::new() })
     }
 }
 
@@ -56,19 +56,19 @@ impl App {
         let (input, camera) = soak.driver.frame(self.live.sky());
         let c = &mut self.controls;
         (c.hour, c.game_hours, c.weather, c.tier, c.sky_model, c.camera) = (input.hour, input.game_hours, input.weather, input.tier, input.sky_model, camera);
-        if frame.is_multiple_of(crate::soak::RELOAD_EVERY) {
-            let n = frame / crate::soak::RELOAD_EVERY;
-            let text = if n.is_multiple_of(2) { crate::soak::broken_version(&soak.good) } else { crate::soak::good_version(&soak.good, frame) };
-            if let Err(e) = crate::fsx::write_atomic(&soak.sky_file, text.as_bytes()) {
+        if frame.is_multiple_of(crate::measure::soak::RELOAD_EVERY) {
+            let n = frame / crate::measure::soak::RELOAD_EVERY;
+            let text = if n.is_multiple_of(2) { crate::measure::soak::broken_version(&soak.good) } else { crate::measure::soak::good_version(&soak.good, frame) };
+            if let Err(e) = crate::support::safe_write::write_atomic(&soak.sky_file, text.as_bytes()) {
                 self.gpu_error = Some(format!("soak: {e}"));
             }
         }
-        if frame.is_multiple_of(crate::soak::SAMPLE_EVERY) {
-            let rss = crate::soak::resident_bytes();
+        if frame.is_multiple_of(crate::measure::soak::SAMPLE_EVERY) {
+            let rss = crate::measure::soak::resident_bytes();
             soak.samples.push((frame, rss));
             log::info!("soak: frame {frame} resident {:.1} MiB", rss as f64 / 1048576.0);
         }
-        if frame.is_multiple_of(crate::soak::SHADERS_EVERY) {
+        if frame.is_multiple_of(crate::measure::soak::SHADERS_EVERY) {
             self.reload_shaders();
         }
     }
@@ -416,8 +416,8 @@ impl App {
     /// Saves the sky file shown and its bitmaps as a snapshot named by the time.
     fn save_snapshot(&mut self) {
         let result = match self.live.sky_file() {
-            Some(file) => crate::snapshot::save(&file, self.live.sky(), &crate::snapshot::timestamp_name()).map_err(|e| e.to_string()),
-            None => Err(crate::snapshot::SnapshotError::NoFile.to_string()),
+            Some(file) => crate::files::snapshot::save(&file, self.live.sky(), &crate::files::snapshot::timestamp_name()).map_err(|e| e.to_string()),
+            None => Err(crate::files::snapshot::SnapshotError::NoFile.to_string()),
         };
         match result {
             Ok(snap) => {
@@ -430,7 +430,7 @@ impl App {
     }
 
     pub(super) fn refresh_snapshots(&mut self) {
-        self.snapshots = self.live.sky_file().map(|f| crate::snapshot::list(&f)).unwrap_or_default();
+        self.snapshots = self.live.sky_file().map(|f| crate::files::snapshot::list(&f)).unwrap_or_default();
     }
 
     fn shots_dir(&self) -> PathBuf {
@@ -449,7 +449,7 @@ impl App {
         let path = free_path(&self.shots_dir(), &screenshot_name(&self.live.sky().name, input.hour, input.weather))?;
         let size = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU yet"))?.sky_size();
         let img = self.capture_image(&input, size)?;
-        crate::fsx::save_png(&img, &path)?;
+        crate::support::safe_write::save_png(&img, &path)?;
         Ok(path)
     }
 
@@ -468,7 +468,7 @@ impl App {
         let Some(sheet) = self.sheet.as_mut() else { return Ok(()) };
         let Some((hour, weather, col, row)) = sheet.next_cell() else {
             let sheet = self.sheet.take().expect("present");
-            crate::fsx::save_png(&sheet.image, &sheet.path)?;
+            crate::support::safe_write::save_png(&sheet.image, &sheet.path)?;
             self.last_capture = format!("contact sheet saved to {}", sheet.path.display());
             println!("{}", self.last_capture);
             return Ok(());

@@ -31,10 +31,10 @@ use winit::event::{ElementState, MouseButton, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::window::WindowId;
 
-use crate::live::{LiveSky, SkySpec};
+use crate::files::hot_reload::{LiveSky, SkySpec};
+use crate::files::watch::FileWatcher;
 use crate::render::{AdapterChoice, FillStrategy, GpuContext, Headless, RenderOptions, ShaderLibrary};
 use crate::sky::{Clock, FrameInput, Stepping, Tier};
-use crate::watch::FileWatcher;
 use capture::{screenshot_name, ContactSheet};
 use settings::Settings;
 use ui::Controls;
@@ -180,7 +180,7 @@ fn headless_fallback(spec: &SkySpec, config: &AppConfig) -> anyhow::Result<()> {
     let input = FrameInput::new(c.hour, c.weather);
     let img = h.render(&sky, &input, &c.camera, &RenderOptions::default())?;
     let out = PathBuf::from(if matches!(spec, SkySpec::Builtin) { "skytune-default.png".to_string() } else { screenshot_name(&sky.name, c.hour, c.weather) });
-    crate::fsx::save_png(&img, &out)?;
+    crate::support::safe_write::save_png(&img, &out)?;
     println!("wrote {} (sky \"{}\", hour {}, weather {})", out.display(), sky.name, c.hour, c.weather);
     Ok(())
 }
@@ -211,7 +211,7 @@ pub struct App {
     /// Test hook: frame at which to destroy the device (`SKYTUNE_TEST_LOSE_DEVICE_AT`).
     test_lose_device_at: Option<u64>,
     /// Snapshots of the sky file shown (refreshed when the compare view opens and after saving one).
-    snapshots: Vec<crate::snapshot::Snapshot>,
+    snapshots: Vec<crate::files::snapshot::Snapshot>,
     /// `kind = "auto"`: the pick for the sky shown, measured on a worker.
     auto: auto_pick::AutoPicker,
     /// The window's title as last set.

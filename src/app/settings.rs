@@ -65,7 +65,7 @@ impl Settings {
     /// Saves the settings; failures are logged, never fatal.
     pub fn save(&self) {
         let Some(path) = Self::path() else { return };
-        let result = toml::to_string(self).map_err(std::io::Error::other).and_then(|text| crate::fsx::write_atomic(&path, text.as_bytes()).map_err(|e| e.source));
+        let result = toml::to_string(self).map_err(std::io::Error::other).and_then(|text| crate::support::safe_write::write_atomic(&path, text.as_bytes()).map_err(|e| e.source));
         if let Err(e) = result {
             log::warn!("cannot save {}: {e}", path.display());
         }

@@ -148,13 +148,13 @@ pub struct CompareInfo {
     /// The composed picture and its size, once a comparison exists.
     pub texture: Option<(egui::TextureId, [usize; 2])>,
     /// What B was, the summary line and the FLIP figures of the latest comparison.
-    pub summary: Option<(String, String, crate::compare::FlipSummary)>,
+    pub summary: Option<(String, String, crate::measure::image_diff::FlipSummary)>,
     /// Progress of B computing in the background.
     pub progress: Option<f32>,
     /// Why the comparison could not be made.
     pub error: Option<String>,
     /// Snapshots of the sky file.
-    pub snapshots: Vec<crate::snapshot::Snapshot>,
+    pub snapshots: Vec<crate::files::snapshot::Snapshot>,
     /// Whether the sky shown has a file (snapshots need one).
     pub has_file: bool,
 }
@@ -393,7 +393,7 @@ fn controls_panel(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, action
         ui.label(RichText::new(stage).small());
     }
     sky_model_controls(ui, c, info.sky);
-    let current = info.auto_point.clone().filter(|_| c.sky_model.is_none()).or_else(|| crate::modelbench::point_for(&c.sky_model.unwrap_or(info.sky.model)));
+    let current = info.auto_point.clone().filter(|_| c.sky_model.is_none()).or_else(|| crate::measure::model_points::point_for(&c.sky_model.unwrap_or(info.sky.model)));
     section(ui, c, "model_chart", "Speed against accuracy", |ui, _| model_chart(ui, current.as_deref()));
     if let Some(p) = info.model_progress {
         ui.add(egui::ProgressBar::new(p).show_percentage().text("computing the sky in the background"));
@@ -554,14 +554,14 @@ fn model_label(kind: SkyModelKind) -> &'static str {
 /// The committed model benchmark (docs/models.csv) as in docs/models-cost.svg: mean dE2000
 /// against frame cost, both log10, the Pareto front, and the current model's point ringed.
 fn model_chart(ui: &mut egui::Ui, current: Option<&str>) {
-    let rows = match crate::modelbench::rows_from_csv(crate::modelbench::COMMITTED_CSV) {
+    let rows = match crate::measure::model_points::rows_from_csv(crate::measure::model_points::COMMITTED_CSV) {
         Ok(r) if !r.is_empty() => r,
         _ => {
             ui.label("no benchmark in this build (run skytune bench models)");
             return;
         }
     };
-    let at = |r: &crate::modelbench::ChartRow| [r.frame_ms().max(1e-3).log10(), r.error().max(1e-3).log10()];
+    let at = |r: &crate::measure::model_points::ChartRow| [r.frame_ms().max(1e-3).log10(), r.error().max(1e-3).log10()];
     let mut front: Vec<[f64; 2]> = rows.iter().filter(|r| r.pareto).map(at).collect();
     front.sort_by(|a, b| a[0].total_cmp(&b[0]));
     ui.label("x: log10 frame ms in which the sun moved; y: log10 mean CIE dE2000 over the dome");
@@ -799,7 +799,7 @@ fn inspect_button(ui: &mut egui::Ui, c: &mut Controls, color: &crate::sky::resol
 /// The compare window: what B is, the layout, the picture and its figures.
 fn compare_window(ui: &mut egui::Ui, c: &mut Controls, info: &CompareInfo, actions: &mut Vec<UiAction>) {
     use super::compare::CompareB;
-    use crate::compare::Layout;
+    use crate::measure::image_diff::Layout;
     let mut open = c.compare.open;
     egui::Window::new("Compare").open(&mut open).default_width(520.0).show(ui.ctx(), |ui| {
         let cc = &mut c.compare;

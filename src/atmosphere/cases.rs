@@ -130,5 +130,5 @@ pub fn write_radiance(path: &Path, comment: &str, cases: &[Case], radiance: &[Rg
     }
     let body = writer.into_inner().map_err(|e| io(std::io::Error::other(e.to_string())))?;
     text.push_str(&String::from_utf8_lossy(&body));
-    crate::fsx::write_atomic(path, text.as_bytes()).map_err(|e| io(e.source))
+    crate::support::safe_write::write_atomic(path, text.as_bytes()).map_err(|e| io(e.source))
 }

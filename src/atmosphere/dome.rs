@@ -14,7 +14,7 @@ use deltae::{DEMethod, DeltaE, LabValue, XyzValue};
 
 use super::reference::{Case, Reference, ReferenceSettings};
 use super::{Atmosphere, Rgb};
-use crate::progress::Cancelled;
+use crate::support::progress::Cancelled;
 
 /// One view direction of the dome and the solid angle it stands for.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -410,7 +410,7 @@ impl ReferenceDome {
                 );
             }
         }
-        crate::fsx::write_atomic(path, text.as_bytes()).map_err(|e| ReferenceDomeError::Io { file: path.display().to_string(), source: e.source })
+        crate::support::safe_write::write_atomic(path, text.as_bytes()).map_err(|e| ReferenceDomeError::Io { file: path.display().to_string(), source: e.source })
     }
 
     /// Reads a dataset written by [`Self::save`] for these settings.

@@ -63,9 +63,10 @@ pub fn write_sky_folder(dir: &Path, palette: &procedural::Palette, seed: u64) ->
     std::fs::create_dir_all(dir)?;
     for (name, bitmap) in procedural::all_images(palette, seed) {
         let img = image::RgbaImage::from_raw(bitmap.width, bitmap.height, bitmap.to_rgba8()).ok_or_else(|| std::io::Error::other("image size mismatch"))?;
-        crate::fsx::save_png(&img, &dir.join(name)).map_err(std::io::Error::other)?;
+        crate::support::safe_write::save_png(&img, &dir.join(name)).map_err(std::io::Error::other)?;
     }
     let sky = dir.join("sky.toml");
-    crate::fsx::write_atomic(&sky, DEFAULT_SKY_TOML.replace("name = \"Default\"", &format!("name = \"{}\"", palette.name)).as_bytes()).map_err(std::io::Error::other)?;
+    crate::support::safe_write::write_atomic(&sky, DEFAULT_SKY_TOML.replace("name = \"Default\"", &format!("name = \"{}\"", palette.name)).as_bytes())
+        .map_err(std::io::Error::other)?;
     Ok(sky)
 }

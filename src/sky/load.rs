@@ -378,7 +378,7 @@ impl Validator<'_> {
             }
         });
         let auto_model = match f.sky_model.as_ref() {
-            Some(m) if m.kind == ModelChoice::Auto => Some(crate::auto_model::Budget { de2000: m.budget.as_ref().map_or(DEFAULT_DE2000_BUDGET, |b| b.de2000.get() as f64) }),
+            Some(m) if m.kind == ModelChoice::Auto => Some(super::resolved::Budget { de2000: m.budget.as_ref().map_or(DEFAULT_DE2000_BUDGET, |b| b.de2000.get() as f64) }),
             Some(m) => {
                 if m.budget.is_some() {
                     self.err_in("[sky_model]", "budget", "sky_model.budget", "an error budget only applies with kind = \"auto\"");

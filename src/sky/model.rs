@@ -394,7 +394,7 @@ pub struct SkyModelDef {
 pub enum ModelChoice {
     /// This model.
     Model(SkyModelKind),
-    /// The cheapest model within the budget (`crate::auto_model`).
+    /// The cheapest model within the budget (`crate::measure::auto_model`).
     Auto,
 }
 

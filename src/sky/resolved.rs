@@ -4,6 +4,14 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use super::bitmap::{ColorBitmap, Rgba};
+/// The error budget of `kind = "auto"` (`budget = { de2000 = 2.0 }`): the sky's, read by the
+/// measurement that picks the model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Budget {
+    /// Largest mean CIE dE2000 over the dome, at any of the sky's sun elevations and weathers.
+    pub de2000: f64,
+}
+
 pub use super::model::{BlendMode, ColorMode, Lighting, RefColor, Shape, SkyModelKind, StageOp, ToneMapper, UvSource};
 
 /// Most texture stages a material may use (the best GPU tier).
@@ -64,7 +72,7 @@ pub struct Sky {
     /// One atmosphere per weather step (empty: `atmosphere` in every weather).
     pub atmosphere_by_weather: Vec<crate::atmosphere::Atmosphere>,
     /// `kind = "auto"`: the error budget; `model` holds `lut` until `auto_model::resolve` picks.
-    pub auto_model: Option<crate::auto_model::Budget>,
+    pub auto_model: Option<Budget>,
 }
 
 /// A skydome colour source and its settings.

@@ -29,12 +29,12 @@ pub const CHANNEL_TOLERANCE: u8 = 10;
 pub const PIXEL_BUDGET: f64 = 0.01;
 
 /// Result of comparing two images (the library's measure, also behind `skytune compare`).
-pub type Diff = skytune::compare::PixelDiff;
+pub type Diff = skytune::measure::image_diff::PixelDiff;
 
 /// Compares two equally sized images: pixels whose largest channel difference exceeds
 /// `tolerance`, and an image marking them.
 pub fn diff(a: &image::RgbaImage, b: &image::RgbaImage, tolerance: u8) -> (Diff, image::RgbaImage) {
-    skytune::compare::pixel_diff(a, b, tolerance)
+    skytune::measure::image_diff::pixel_diff(a, b, tolerance)
 }
 
 /// Compares with `tests/reference/NAME.png`. `SKYTUNE_ACCEPT=1` writes the reference instead.

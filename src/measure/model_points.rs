@@ -374,7 +374,7 @@ pub fn rows_from_csv(text: &str) -> Result<Vec<ChartRow>, csv::Error> {
 
 /// The last committed benchmark (docs/models.csv at build time): what the app charts and what
 /// `model = "auto"` ranks costs by.
-pub const COMMITTED_CSV: &str = include_str!("../docs/models.csv");
+pub const COMMITTED_CSV: &str = include_str!("../../docs/models.csv");
 
 /// One point's errors at one atmosphere and sun elevation: a row of docs/models-by-sun.csv.
 #[derive(Debug, Clone, PartialEq)]

@@ -9,7 +9,7 @@ use crate::atmosphere::analytic::{self, Preetham};
 use crate::atmosphere::cells::{CellModel, CellSettings};
 use crate::atmosphere::reference::Case;
 use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, Rgb, SingleSettings};
-use crate::modelbench::{Evaluator, Method};
+use crate::measure::model_points::{Evaluator, Method};
 
 /// Step of the sun between the two evaluations of a case, degrees.
 pub const JUMP_DELTA_DEG: f64 = 0.05;

@@ -268,7 +268,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         saving(23, 2),
         saving(24, 2)
     );
-    skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
+    skytune::support::safe_write::write_atomic(&args.out, md.as_bytes())?;
     print!("{md}");
     println!("\nwrote {}", args.out.display());
     if configs.iter().any(|c| c.wall_ms.is_empty()) {

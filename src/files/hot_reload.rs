@@ -7,10 +7,10 @@ use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use crate::files::watch::{normalize, FileWatcher};
 use crate::sky::builtin;
 use crate::sky::load::{is_continent_file, load_continent, SEASONS};
 use crate::sky::{load_sky_file, Sky, SkyError, SkyErrors};
-use crate::watch::{normalize, FileWatcher};
 
 /// Which sky to show.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -181,7 +181,7 @@ impl LiveSky {
         let handler_trigger = trigger.clone();
         let watcher = FileWatcher::new(move |changed| {
             // Snapshots (`.skytune-snapshots/`) are copies, never the sky's own files.
-            let snapshot = |p: &PathBuf| p.components().any(|c| c.as_os_str() == crate::snapshot::SNAPSHOT_DIR);
+            let snapshot = |p: &PathBuf| p.components().any(|c| c.as_os_str() == crate::files::snapshot::SNAPSHOT_DIR);
             let relevant =
                 handler_shared.lock().is_ok_and(|s| changed.iter().filter(|p| !snapshot(p)).any(|p| s.files.contains(p) || p.parent().is_some_and(|d| s.sky_dirs.contains(d))));
             if relevant {

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Context as _};
 
-use crate::live::{LiveSky, SkySpec};
+use crate::files::hot_reload::{LiveSky, SkySpec};
 use crate::render::{Camera, GpuContext, Headless, RenderOptions};
 use crate::sky::resolved::SkyModelKind;
 use crate::sky::{FrameInput, Sky, Tier};
@@ -219,7 +219,7 @@ pub fn run(ctx: GpuContext, settings: &SoakSettings, mut progress: impl FnMut(&S
             let broken = reloads.is_multiple_of(2);
             if broken {
                 let before = headless.render(&sky, &still_input, &Camera::default(), &still_options)?;
-                crate::fsx::write_atomic(&sky_file, broken_text.as_bytes())?;
+                crate::support::safe_write::write_atomic(&sky_file, broken_text.as_bytes())?;
                 // A save may reach the watcher as several events: wait for the state, not a count.
                 let rejected = wait_until(&mut live, |l| l.error.as_ref().is_some_and(|e| e.to_string().contains("sky.toml:")));
                 if !rejected {
@@ -234,7 +234,7 @@ pub fn run(ctx: GpuContext, settings: &SoakSettings, mut progress: impl FnMut(&S
             } else {
                 // A real change each time: the name carries the frame.
                 let text = good_version(&good_text, frame);
-                crate::fsx::write_atomic(&sky_file, text.as_bytes())?;
+                crate::support::safe_write::write_atomic(&sky_file, text.as_bytes())?;
                 let prefix = format!("soak {frame} ");
                 if wait_until(&mut live, |l| l.error.is_none() && l.sky().name.starts_with(&prefix)) {
                     match headless.set_sky(live.sky()) {
@@ -414,7 +414,7 @@ impl SoakReport {
             chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).position(SeriesLabelPosition::LowerRight).draw().map_err(|e| anyhow!("{e}"))?;
             root.present().map_err(|e| anyhow!("{e}"))?;
         }
-        crate::fsx::write_atomic(path, svg.as_bytes())?;
+        crate::support::safe_write::write_atomic(path, svg.as_bytes())?;
         Ok(())
     }
 }

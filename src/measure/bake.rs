@@ -14,7 +14,7 @@ use crate::atmosphere::dome;
 use crate::atmosphere::reference::Case;
 use crate::atmosphere::represent::{self, Baked, BAKED_HOURS};
 use crate::atmosphere::{Atmosphere, Rgb};
-use crate::modelbench::{Evaluator, Fit, Method, Prepared};
+use crate::measure::model_points::{Evaluator, Fit, Method, Prepared};
 use crate::sky::Sky;
 
 /// The atmosphere of weather step `i` of `n`.
@@ -57,7 +57,7 @@ fn png(path: &Path, width: u32, height: u32, rgba: Vec<u8>) -> anyhow::Result<()
     let image = image::RgbaImage::from_raw(width, height, rgba).ok_or_else(|| anyhow::anyhow!("{}: wrong pixel count", path.display()))?;
     let mut bytes = Vec::new();
     image.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
-    crate::fsx::write_atomic(path, &bytes)?;
+    crate::support::safe_write::write_atomic(path, &bytes)?;
     Ok(())
 }
 
@@ -134,6 +134,6 @@ pub fn write_folder(dir: &Path, sky: &Sky, baked: &Baked, source: &str) -> anyho
         gradients.join(", "),
         2.0 * represent::BAKED_HALO_RADIUS_DEG
     );
-    crate::fsx::write_atomic(&dir.join("sky.toml"), toml.as_bytes())?;
+    crate::support::safe_write::write_atomic(&dir.join("sky.toml"), toml.as_bytes())?;
     Ok(())
 }

@@ -18,17 +18,10 @@ use std::sync::Mutex;
 
 use crate::atmosphere::dome::{self, DomeDir, Haze};
 use crate::atmosphere::{Atmosphere, Rgb};
-use crate::modelbench::{self, Evaluator, FitTarget, Method, Prepared};
-use crate::progress::{Job, Phase};
-use crate::sky::resolved::{SkyModel, SkyModelKind};
+use crate::measure::model_points::{self, Evaluator, FitTarget, Method, Prepared};
+use crate::sky::resolved::{Budget, SkyModel, SkyModelKind};
 use crate::sky::Sky;
-
-/// An error budget (`budget = { de2000 = 2.0 }`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Budget {
-    /// Largest mean CIE dE2000 over the dome, at any of the sky's sun elevations and weathers.
-    pub de2000: f64,
-}
+use crate::support::progress::{Job, Phase};
 
 /// A candidate with its measured error and cost.
 #[derive(Debug, Clone, PartialEq)]
@@ -90,10 +83,10 @@ impl Pick {
 }
 
 /// The candidates with their committed costs, cheapest first (ties by id).
-pub fn candidates() -> Vec<(modelbench::Point, f64)> {
-    let costs: HashMap<String, f64> = modelbench::rows_from_csv(modelbench::COMMITTED_CSV).unwrap_or_default().into_iter().map(|r| (r.id.clone(), r.frame_ms())).collect();
-    let mut out: Vec<(modelbench::Point, f64)> =
-        modelbench::points().into_iter().filter(|p| p.method.is_runtime_model()).filter_map(|p| costs.get(&p.id).copied().map(|c| (p, c))).collect();
+pub fn candidates() -> Vec<(model_points::Point, f64)> {
+    let costs: HashMap<String, f64> = model_points::rows_from_csv(model_points::COMMITTED_CSV).unwrap_or_default().into_iter().map(|r| (r.id.clone(), r.frame_ms())).collect();
+    let mut out: Vec<(model_points::Point, f64)> =
+        model_points::points().into_iter().filter(|p| p.method.is_runtime_model()).filter_map(|p| costs.get(&p.id).copied().map(|c| (p, c))).collect();
     out.sort_by(|a, b| a.1.total_cmp(&b.1).then_with(|| a.0.id.cmp(&b.0.id)));
     out
 }
@@ -170,7 +163,7 @@ fn compute_reference(atm: &Atmosphere, suns: &[f64], phase: Phase<'_>) -> anyhow
         if let Some(dir) = f.parent() {
             let _ = std::fs::create_dir_all(dir);
         }
-        if let Err(e) = crate::fsx::write_atomic(&f, text.as_bytes()) {
+        if let Err(e) = crate::support::safe_write::write_atomic(&f, text.as_bytes()) {
             log::warn!("auto model: cannot cache the reference: {e}");
         }
     }
@@ -228,7 +221,7 @@ pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Sco
                     if w == 0 {
                         turbidity = t;
                     }
-                    Prepared::Analytic(point.method, modelbench::Fit { turbidity: t, scale: 1.0 })
+                    Prepared::Analytic(point.method, model_points::Fit { turbidity: t, scale: 1.0 })
                 }
                 m => ev.prepare(&m, atm, &targets)?,
             };
@@ -264,7 +257,7 @@ static SCORES: Mutex<Vec<(u64, Vec<Scored>)>> = Mutex::new(Vec::new());
 /// The key of `sky`'s scores: everything they depend on (its atmospheres and sun range, the
 /// committed benchmark), not its budget or anything else in the file.
 pub fn scores_key(sky: &Sky) -> u64 {
-    hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&modelbench::COMMITTED_CSV), dome::ReferenceDome::header(dome::COMMITTED_PATHS, dome::BENCH_DOME)))
+    hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&model_points::COMMITTED_CSV), dome::ReferenceDome::header(dome::COMMITTED_PATHS, dome::BENCH_DOME)))
 }
 
 /// Where the scores of `key` are cached.
@@ -279,7 +272,7 @@ fn known_scores(sky: &Sky) -> Option<Vec<Scored>> {
         return Some(s.clone());
     }
     let file = scores_file(key)?;
-    let points = modelbench::points();
+    let points = model_points::points();
     let from_disk: Option<Vec<Scored>> = std::fs::read_to_string(&file).ok().and_then(|text| {
         text.lines()
             .map(|line| {
@@ -309,7 +302,7 @@ pub fn score_cached(sky: &Sky, ctx: &crate::render::GpuContext, job: &Job) -> an
         if let Some(dir) = f.parent() {
             let _ = std::fs::create_dir_all(dir);
         }
-        if let Err(e) = crate::fsx::write_atomic(&f, text.as_bytes()) {
+        if let Err(e) = crate::support::safe_write::write_atomic(&f, text.as_bytes()) {
             log::warn!("auto model: cannot cache the scores: {e}");
         }
     }

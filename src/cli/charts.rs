@@ -7,7 +7,7 @@ use anyhow::{anyhow, Context as _};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use skytune::modelbench::{ChartRow, SunRow};
+use skytune::measure::model_points::{ChartRow, SunRow};
 
 const SIZE: (u32, u32) = (1100, 700);
 
@@ -44,7 +44,7 @@ fn both(
     let image = image::RgbImage::from_raw(SIZE.0, SIZE.1, buffer).context("chart buffer size")?;
     let mut bytes = Vec::new();
     image.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
-    skytune::fsx::write_atomic(&png, &bytes)?;
+    skytune::support::safe_write::write_atomic(&png, &bytes)?;
     Ok(())
 }
 

@@ -3,9 +3,9 @@
 use std::fmt::Write as _;
 
 use crate::cli::SweepArgs;
-use skytune::modelbench::Evaluator;
+use skytune::measure::model_points::Evaluator;
+use skytune::measure::stability::{self, Counters, SweptModel};
 use skytune::render::{AdapterChoice, GpuContext};
-use skytune::sweep::{self, Counters, SweptModel};
 
 pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     anyhow::ensure!(args.count >= 1, "--count: expected at least 1");
@@ -14,9 +14,9 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     let ev = Evaluator::new(&ctx)?;
     let mut results: Vec<(SweptModel, Counters, f64)> = Vec::new();
     for model in SweptModel::ALL {
-        let bar = skytune::progress::Reporter::new(args.count as u64, model.name());
+        let bar = skytune::support::progress::Reporter::new(args.count as u64, model.name());
         let t = std::time::Instant::now();
-        let counters = sweep::sweep(&ev, model, args.count, args.seed, &mut |n| bar.inc(n as u64))?;
+        let counters = stability::sweep(&ev, model, args.count, args.seed, &mut |n| bar.inc(n as u64))?;
         bar.finish();
         println!(
             "{:<36} {:>8} sets: NaN {} inf {} negative {} jumps {} refused {}",
@@ -31,7 +31,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
         results.push((model, counters, t.elapsed().as_secs_f64()));
     }
     let md = report(args, &ctx.adapter_line(), &results, started.elapsed().as_secs_f64());
-    skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
+    skytune::support::safe_write::write_atomic(&args.out, md.as_bytes())?;
     println!("wrote {}", args.out.display());
     let failing: Vec<&str> = results.iter().filter(|(m, c, _)| m.shipped() && c.failures() > 0).map(|(m, _, _)| m.name()).collect();
     anyhow::ensure!(failing.is_empty(), "shipped models failed the sweep: {}", failing.join(", "));
@@ -45,18 +45,18 @@ fn report(args: &SweepArgs, adapter: &str, results: &[(SweptModel, Counters, f64
     let _ = writeln!(md, "## Method\n");
     let _ = writeln!(
         md,
-        "Each model gets {} random parameter sets (`src/sweep.rs`), across and beyond its domain:\n\n\
+        "Each model gets {} random parameter sets (`src/measure/stability.rs`), across and beyond its domain:\n\n\
          - atmospheres from a thousandth to 30 times the default's coefficients, aerosols from 1% to 30 times, Mie g from -0.95 to 0.95, thickness 10 to 400 km, planets of 100 to 100,000 km radius (30% of atmospheres; f32 cancellation in ray-sphere intersection), one atmosphere per 1,000 sets (5,000 for `cells`, solved per atmosphere);\n\
          - the camera on the ground (40%), inside the atmosphere (40%) or up to twice its thickness above its top (20%);\n\
          - the sun from -18 degrees (astronomical night) to 90, half of the sets within 3 degrees of the horizon (where the erf optical depth crosses its regime boundary b = 7 sqrt(a) and b turns negative, and where the LUT parameterisation is tightest);\n\
          - views all round, half within 5 degrees of the horizon, rays into the ground included; ground albedo 0..1; turbidity 0.5..15 for `preetham` and `hosek` (beyond 1.3..10).\n\n\
          Each set is evaluated three times, with the sun moved by -{d}, 0 and +{d} degrees. Counted: results with a NaN, an infinite or a negative channel, and jumps: a step that changes a channel by more than {} of the brightest channel of the three results plus {:e} sr^-1, and by more than {} times the other step, and whose change, re-evaluated in {} sub-steps plus one on either side, happens within one sub-step for more than half and is more than that ratio times each neighbouring sub-step (a discontinuity stays in one sub-step; a kink, even a clamp at 0, or a steep smooth change, as a twilight on a small planet, continues into its neighbours). GPU models run on the GPU through the radiance probe, as they ship.\n",
         args.count,
-        sweep::JUMP_RELATIVE,
-        sweep::JUMP_FLOOR_SR,
-        sweep::JUMP_STEP_RATIO,
-        sweep::JUMP_REFINE,
-        d = sweep::JUMP_DELTA_DEG
+        stability::JUMP_RELATIVE,
+        stability::JUMP_FLOOR_SR,
+        stability::JUMP_STEP_RATIO,
+        stability::JUMP_REFINE,
+        d = stability::JUMP_DELTA_DEG
     );
     let _ = writeln!(md, "## Counts\n");
     let _ = writeln!(md, "| model | sets | NaN | infinite | negative | jumps | refused | seconds |");

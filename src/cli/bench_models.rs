@@ -12,12 +12,12 @@ use crate::cli::{self, ModelBenchArgs};
 use skytune::atmosphere::dome::{self, DomeError, Haze, ReferenceDome};
 use skytune::atmosphere::reference::Case;
 use skytune::atmosphere::LutSettings;
-use skytune::modelbench::{self, ChartRow, Evaluator, FitTarget, Method, Point, Prepared, SunRow};
-use skytune::progress::Reporter;
+use skytune::measure::model_points::{self, ChartRow, Evaluator, FitTarget, Method, Point, Prepared, SunRow};
 use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
 use skytune::sky::{FrameInput, Sky};
+use skytune::support::progress::Reporter;
 
 /// The reference over the benchmark's dome: read from `path`, or computed (minutes) and written.
 pub fn reference_dome(path: &Path, paths: u32) -> anyhow::Result<ReferenceDome> {
@@ -149,13 +149,13 @@ pub fn run(args: &ModelBenchArgs) -> anyhow::Result<()> {
     let ev = Evaluator::new(&ctx)?;
     let hazes: Vec<Haze> = if args.quick { vec![Haze::Default] } else { Haze::ALL.to_vec() };
     let suns: Vec<f64> = if args.quick { dome::QUICK_SUN_ELEVATIONS_DEG.to_vec() } else { dome::SUN_ELEVATIONS_DEG.to_vec() };
-    let points: Vec<Point> = modelbench::points().into_iter().filter(|p| !args.quick || p.quick).collect();
+    let points: Vec<Point> = model_points::points().into_iter().filter(|p| !args.quick || p.quick).collect();
     let dirs = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
 
     // Accuracy.
     let bar = Reporter::new((points.len() * hazes.len()) as u64, "accuracy");
     let mut by_sun: Vec<SunRow> = Vec::new();
-    let mut fits: Vec<(String, Haze, modelbench::Fit)> = Vec::new();
+    let mut fits: Vec<(String, Haze, model_points::Fit)> = Vec::new();
     let mut build_ms = vec![Vec::new(); points.len()];
     let mut prepared_default: Vec<Option<Prepared>> = (0..points.len()).map(|_| None).collect();
     for &haze in &hazes {
@@ -229,16 +229,16 @@ pub fn run(args: &ModelBenchArgs) -> anyhow::Result<()> {
             pareto: false,
         });
     }
-    modelbench::mark_pareto(&mut rows);
+    model_points::mark_pareto(&mut rows);
 
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let csv_path = args.out.join("models.csv");
-    skytune::fsx::write_atomic(&csv_path, modelbench::rows_to_csv(&rows).as_bytes())?;
-    skytune::fsx::write_atomic(&args.out.join("models-by-sun.csv"), modelbench::sun_rows_to_csv(&by_sun).as_bytes())?;
-    crate::charts::cost_chart(&rows, &args.out.join("models-cost"))?;
-    crate::charts::sun_chart(&by_sun, &args.out.join("models-by-sun"))?;
+    skytune::support::safe_write::write_atomic(&csv_path, model_points::rows_to_csv(&rows).as_bytes())?;
+    skytune::support::safe_write::write_atomic(&args.out.join("models-by-sun.csv"), model_points::sun_rows_to_csv(&by_sun).as_bytes())?;
+    crate::cli::charts::cost_chart(&rows, &args.out.join("models-cost"))?;
+    crate::cli::charts::sun_chart(&by_sun, &args.out.join("models-by-sun"))?;
     let md = report(args, &adapter, &rows, &by_sun, &fits, &reference, &hazes, &suns, (w, h), started.elapsed().as_secs_f64());
-    skytune::fsx::write_atomic(&args.out.join("models.md"), md.as_bytes())?;
+    skytune::support::safe_write::write_atomic(&args.out.join("models.md"), md.as_bytes())?;
     print!("{md}");
     println!("\nwrote {}/models.md, models.csv, models-by-sun.csv, models-cost.svg/png, models-by-sun.svg/png", args.out.display());
     Ok(())
@@ -262,7 +262,7 @@ fn report(
     adapter: &str,
     rows: &[ChartRow],
     by_sun: &[SunRow],
-    fits: &[(String, Haze, modelbench::Fit)],
+    fits: &[(String, Haze, model_points::Fit)],
     reference: &ReferenceDome,
     hazes: &[Haze],
     suns: &[f64],

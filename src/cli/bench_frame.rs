@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use anyhow::{anyhow, Context as _};
 
 use crate::cli::{self, FrameBenchArgs};
-use skytune::live::{LiveSky, ReloadEvent, SkySpec};
+use skytune::files::hot_reload::{LiveSky, ReloadEvent, SkySpec};
 use skytune::render::baseline::Baseline;
 use skytune::render::strategy::PRESETS;
 use skytune::render::{AdapterChoice, Camera, FillStrategy, GpuContext, Headless, RenderOptions, ShaderLibrary, OFFSCREEN_FORMAT};
@@ -362,7 +362,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
         let _ = writeln!(md, "| {} | {} | {} | {:.3} | {:.3} | {:.2} |", p.cap, p.cpu_alive, p.gpu_alive, p.cpu_ms, p.gpu_ms, p.gpu_ms / p.cpu_ms);
     }
     let _ = writeln!(md);
-    let _ = writeln!(md, "## Hot-reload latency\n\nFrom the end of a file write to the end of the first frame rendered with the change (file watcher with its debounce of {} ms, off-thread load, upload, one frame at {w}x{h}), medians of {} edits (target: 100 ms plus the debounce):\n", skytune::watch::DEBOUNCE.as_millis(), latency.0.len().min(latency.1.len()));
+    let _ = writeln!(md, "## Hot-reload latency\n\nFrom the end of a file write to the end of the first frame rendered with the change (file watcher with its debounce of {} ms, off-thread load, upload, one frame at {w}x{h}), medians of {} edits (target: 100 ms plus the debounce):\n", skytune::files::watch::DEBOUNCE.as_millis(), latency.0.len().min(latency.1.len()));
     let _ = writeln!(
         md,
         "| edit | median ms |\n|---|---:|\n| sky file | {:.0} |\n| bitmap | {:.0} |\n| shader (`sky_objects.wgsl`: every pipeline of the renderer rebuilt) | {:.0} |",
@@ -370,7 +370,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
         median(&latency.1),
         median(&shader_ms)
     );
-    skytune::fsx::write_atomic(&args.out, md.as_bytes())?;
+    skytune::support::safe_write::write_atomic(&args.out, md.as_bytes())?;
     for p in &particles {
         println!("particles {}: CPU + upload {:.3} ms ({} alive), GPU {:.3} ms ({} alive)", p.cap, p.cpu_ms, p.cpu_alive, p.gpu_ms, p.gpu_alive);
     }
@@ -535,7 +535,7 @@ fn shader_latency(ctx: &GpuContext, (w, h): (u32, u32), edits: u32) -> anyhow::R
     hl.set_sky(&sky)?;
     let changed = Arc::new(AtomicBool::new(false));
     let flag = changed.clone();
-    let mut watcher = skytune::watch::FileWatcher::new(move |paths| {
+    let mut watcher = skytune::files::watch::FileWatcher::new(move |paths| {
         if paths.iter().any(|p| p.extension().is_some_and(|x| x == "wgsl")) {
             flag.store(true, Ordering::Release);
         }

@@ -163,7 +163,7 @@ impl Format {
 pub fn save(img: &LinearImage, format: Format, path: &Path) -> anyhow::Result<()> {
     use anyhow::Context as _;
     let bytes = match format {
-        Format::Png => return crate::fsx::save_png(&float_to_display(img), path).map_err(Into::into),
+        Format::Png => return crate::support::safe_write::save_png(&float_to_display(img), path).map_err(Into::into),
         Format::Exr => {
             let mut out = std::io::Cursor::new(Vec::new());
             image::DynamicImage::ImageRgba32F(img.clone()).write_to(&mut out, image::ImageFormat::OpenExr).context("encoding OpenEXR")?;
@@ -176,7 +176,7 @@ pub fn save(img: &LinearImage, format: Format, path: &Path) -> anyhow::Result<()
             out
         }
     };
-    crate::fsx::write_atomic(path, &bytes).map_err(|e| anyhow::anyhow!("{e}"))
+    crate::support::safe_write::write_atomic(path, &bytes).map_err(|e| anyhow::anyhow!("{e}"))
 }
 
 /// The file of cube face `suffix` next to `out` (`sky.exr` -> `sky_px.exr`).

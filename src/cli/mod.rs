@@ -1,0 +1,12 @@
+//! The binary's commands: arguments (clap) and the commands that write reports (`bench`,
+//! `bench frame`, `bench models` with its charts, `sweep`). The window and the library's
+//! measurements do the work; these modules drive them and write docs/.
+
+pub mod args;
+pub mod bench_frame;
+pub mod bench_models;
+pub mod bench_passes;
+pub mod charts;
+pub mod stability_report;
+
+pub use args::*;
