@@ -165,7 +165,7 @@ impl Pass for Tint {
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         out.push(DrawItem::new(0, 0));
     }
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target) -> u32 {
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target, _placement: skytune::render::pass::Placement, _run: Option<&wgpu::BindGroup>) -> u32 {
         rpass.set_pipeline(self.pipeline.for_target(target));
         rpass.draw(0..3, 0..1);
         1

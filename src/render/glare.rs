@@ -12,7 +12,7 @@ use glam::{Mat4, Vec3, Vec4};
 
 use super::camera::Camera;
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
 use super::renderer::RenderOptions;
 use super::shaders;
 use super::textures::TextureCache;
@@ -358,7 +358,7 @@ impl Pass for GlarePass {
         }
     }
 
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target) -> u32 {
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target, _placement: Placement, _run: Option<&wgpu::BindGroup>) -> u32 {
         self.resources.current.as_ref().map_or(0, |g| g.draw(rpass, self.pipelines.for_target(target)))
     }
 

@@ -12,6 +12,7 @@ pub mod mesh;
 pub mod particle_sim;
 pub mod particles;
 pub mod pass;
+pub mod plan;
 pub mod precipitation;
 pub mod radiance_probe;
 pub mod reduced_layers;

@@ -5,7 +5,7 @@
 //! `precipitation.rs` draws the emitters attached to the camera with the same GPU resources.
 
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
+use super::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
 use super::reduced_layers::Divisor;
 use super::renderer::FrameStats;
 use super::shaders;
@@ -199,11 +199,11 @@ pub struct ParticlesPass {
     /// Alpha, additive, and the flash's (additive, `fs_flash`).
     pipeline: Pipelines<[wgpu::RenderPipeline; 3]>,
     /// Alpha and additive, drawn after the run of reduced layers above them
-    /// ([`Pass::draw_under_run`]).
+    /// ([`Placement::UnderRun`](super::pass::Placement::UnderRun)).
     under_run: Pipelines<[wgpu::RenderPipeline; 2]>,
-    /// Additive, drawn first under the background, not depth-tested ([`Pass::draw_first`]).
+    /// Additive, drawn first under the background, not depth-tested ([`Placement::First`](super::pass::Placement::First)).
     first: Pipelines<[wgpu::RenderPipeline; 1]>,
-    /// The flash into a reduced buffer ([`Pass::draw_reduced`]).
+    /// The flash into a reduced buffer ([`Placement::Reduced`](super::pass::Placement::Reduced)).
     reduced: Pipelines<[wgpu::RenderPipeline; 1]>,
     set: Staged<Option<EmitterSet>>,
     /// The flash's one instance.
@@ -318,7 +318,7 @@ impl Pass for ParticlesPass {
     fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         if let Some(set) = &self.set.current {
             for (key, g) in set.emitters.iter().enumerate().filter(|(_, g)| !g.camera && g.count > 0) {
-                out.push(DrawItem { additive: g.additive, ..DrawItem::new(g.priority, key) });
+                out.push(DrawItem { additive: g.additive, caps: Caps { under_run: true, first: g.additive, ..Caps::default() }, ..DrawItem::new(g.priority, key) });
             }
         }
         if self.flash.count > 0 {
@@ -330,41 +330,32 @@ impl Pass for ParticlesPass {
         }
     }
 
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        let [alpha, additive, flash] = self.pipeline.for_target(target);
-        if key == FLASH_KEY {
-            return draw_emitter(rpass, [flash, flash], &self.flash);
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, placement: Placement, run: Option<&wgpu::BindGroup>) -> u32 {
+        let emitter = || self.set.current.as_ref().and_then(|s| s.emitters.get(key));
+        match placement {
+            Placement::Reduced if key == FLASH_KEY => {
+                let [flash] = self.reduced.for_target(target);
+                draw_emitter(rpass, [flash, flash], &self.flash)
+            }
+            Placement::UnderRun => {
+                let [alpha, additive] = self.under_run.for_target(target);
+                let (Some(g), Some(run)) = (emitter(), run) else { return 0 };
+                rpass.set_bind_group(2, run, &[]);
+                draw_emitter(rpass, [alpha, additive], g)
+            }
+            Placement::First => {
+                let [additive] = self.first.for_target(target);
+                emitter().filter(|g| g.additive).map_or(0, |g| draw_emitter(rpass, [additive, additive], g))
+            }
+            Placement::Plain => {
+                let [alpha, additive, flash] = self.pipeline.for_target(target);
+                if key == FLASH_KEY {
+                    return draw_emitter(rpass, [flash, flash], &self.flash);
+                }
+                emitter().map_or(0, |g| draw_emitter(rpass, [alpha, additive], g))
+            }
+            _ => 0,
         }
-        self.set.current.as_ref().and_then(|s| s.emitters.get(key)).map_or(0, |g| draw_emitter(rpass, [alpha, additive], g))
-    }
-
-    fn draw_reduced(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        let [flash] = self.reduced.for_target(target);
-        if key == FLASH_KEY {
-            draw_emitter(rpass, [flash, flash], &self.flash)
-        } else {
-            0
-        }
-    }
-
-    fn can_draw_under_run(&self, key: usize, _target: Target) -> bool {
-        key != FLASH_KEY && self.set.current.as_ref().is_some_and(|s| s.emitters.get(key).is_some())
-    }
-
-    fn draw_under_run(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, run: &wgpu::BindGroup) -> u32 {
-        let [alpha, additive] = self.under_run.for_target(target);
-        let Some(g) = self.set.current.as_ref().and_then(|s| s.emitters.get(key)) else { return 0 };
-        rpass.set_bind_group(2, run, &[]);
-        draw_emitter(rpass, [alpha, additive], g)
-    }
-
-    fn can_draw_first(&self, key: usize, _target: Target) -> bool {
-        self.set.current.as_ref().and_then(|s| s.emitters.get(key)).is_some_and(|g| g.additive)
-    }
-
-    fn draw_first(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        let [additive] = self.first.for_target(target);
-        self.set.current.as_ref().and_then(|s| s.emitters.get(key)).filter(|g| g.additive).map_or(0, |g| draw_emitter(rpass, [additive, additive], g))
     }
 
     fn stats(&self, stats: &mut FrameStats) {

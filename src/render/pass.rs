@@ -191,7 +191,7 @@ pub struct DrawItem {
     pub priority: u8,
     /// The pass's own index of what to draw.
     pub key: usize,
-    /// A dome layer the sky phase may draw at reduced resolution ([`Pass::draw_reduced`]).
+    /// A dome layer the sky phase may draw at reduced resolution ([`Placement::Reduced`](super::pass::Placement::Reduced)).
     pub reduced: bool,
     /// The draw only adds to what lies behind it (target + something, clamped): it commutes with
     /// every other such draw, so the sky phase may reorder them (to join reduced runs).
@@ -203,13 +203,81 @@ pub struct DrawItem {
     /// its run's full-resolution composite would cost what drawing it at full resolution does
     /// (the lightning flash: one constant colour over the sky).
     pub joins_only: bool,
+    /// The placements other than plain and reduced that the pass can draw this item at, this
+    /// frame (the frame plan chooses among them: [`super::plan`]).
+    pub caps: Caps,
 }
 
 impl DrawItem {
-    /// A plain full-resolution draw: not reduced, not known to commute.
+    /// A plain full-resolution draw: not reduced, not known to commute, no other placement.
     pub fn new(priority: u8, key: usize) -> Self {
-        Self { priority, key, reduced: false, additive: false, divisor: Divisor::FULL, joins_only: false }
+        Self { priority, key, reduced: false, additive: false, divisor: Divisor::FULL, joins_only: false, caps: Caps::default() }
     }
+}
+
+/// What a pass can do with one of its items this frame, as data for the frame plan.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Caps {
+    /// [`Placement::UnderRun`]: drawn after the composite of the run of reduced layers that
+    /// follows it, as if drawn before that run. Two runs join into one composite only when every
+    /// item between them can.
+    pub under_run: bool,
+    /// [`Placement::First`] (additive items): onto the cleared frame, before the background.
+    pub first: bool,
+    /// It spans much of the frame (a dome layer): drawing it first pays for the blended
+    /// background; a few small billboards or sprites do not.
+    pub spans_frame: bool,
+    /// [`Placement::OverSeed`] (reduced items): it covers every pixel of its buffer outside
+    /// `background_gap`.
+    pub over_seed: bool,
+    /// [`Placement::Background`] over one run (index 0) and over joined runs (index 1): it covers
+    /// every pixel of the frame outside `background_gap`.
+    pub background: [bool; 2],
+    /// A rectangle of pixels (x, y, width, height) holding every pixel the item leaves uncovered
+    /// as the background or over a seed (below a dome's lowest row). None: it covers the frame.
+    pub background_gap: Option<[u32; 4]>,
+    /// The pass's next item (its key) in priority order, when the two can be drawn at once as
+    /// [`Placement::Pair`]: plain (index 0) and over a seed (index 1).
+    pub pair_next: Option<(usize, [bool; 2])>,
+}
+
+/// How one draw reaches the frame: chosen by the frame plan, carried out by [`Pass::draw`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Placement {
+    /// In its place in its phase, at full resolution, depth-tested against the scene.
+    Plain,
+    /// Into a reduced-resolution buffer of a run of dome layers ([`super::reduced_layers`]:
+    /// premultiplied colour and transmittance, blended with
+    /// [`super::reduced_layers::REDUCED_BLENDS`]).
+    Reduced,
+    /// After the composite of the run of reduced layers that follows it in the sky phase, as if
+    /// drawn before that run: corrected by the run's colour and transmittance (the run's buffer
+    /// as group 2: [`super::reduced_layers::run_layout`]).
+    UnderRun,
+    /// Additive, onto the cleared frame before the background run is composited over it
+    /// ([`super::strategy::UnderBackground::Additive`]): without depth test, since the scene
+    /// drawn afterwards covers what it hides. Adding onto black is writing.
+    First,
+    /// Reduced, as the first layer of a seeded buffer
+    /// ([`super::strategy::RunJoining::SeededFolded`]): over the lower run's colour (group 2),
+    /// replacing the clear colour, unblended: what its blend would leave over the seed.
+    OverSeed,
+    /// Reduced, at once with the pass's item `upper` right after it in the run
+    /// ([`super::strategy::LayerPairs::AtOnce`]): one draw that leaves what the two would, one
+    /// after the other; over the seed (group 2) when `over_seed`.
+    Pair {
+        /// The upper item's key.
+        upper: usize,
+        /// The pair is a seeded buffer's first layers.
+        over_seed: bool,
+    },
+    /// Additive, as the frame's background in place of the background run's composite: the
+    /// run's colour (group 2) plus its own term, weighed by the transmittance of the runs above
+    /// it when `joined`. One full-screen pass, neither blended nor depth-tested.
+    Background {
+        /// The background is the combination of joined runs.
+        joined: bool,
+    },
 }
 
 /// A GPU pass: its pipelines (built once, rebuilt on shader reload), its per-sky resources and
@@ -242,98 +310,10 @@ pub trait Pass: Any {
     /// Draws wanted this frame (none: the pass is idle).
     fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>);
 
-    /// Records one item into the phase's render pass, with the pipelines built for `target`;
-    /// returns draw calls.
-    fn draw(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target) -> u32 {
-        0
-    }
-
-    /// Records an item marked `reduced` into a reduced-resolution buffer of the sky phase
-    /// ([`super::reduced_layers`]: premultiplied colour and transmittance, blended with
-    /// [`super::reduced_layers::REDUCED_BLENDS`]); returns draw calls.
-    fn draw_reduced(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target) -> u32 {
-        0
-    }
-
-    /// Whether [`Pass::draw_under_run`] can draw item `key` this frame. The sky phase joins two
-    /// runs of reduced layers into one composite only when every item between them can.
-    fn can_draw_under_run(&self, _key: usize, _target: Target) -> bool {
-        false
-    }
-
-    /// Records item `key` after the composite of the run of reduced layers that follows it in the
-    /// sky phase, as if drawn before that run: corrected by the run's colour and transmittance
-    /// (`run`, its buffer's bind group: [`super::reduced_layers::run_layout`], as group 2).
-    fn draw_under_run(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target, _run: &wgpu::BindGroup) -> u32 {
-        0
-    }
-
-    /// Whether [`Pass::draw_first`] can draw additive item `key` this frame.
-    fn can_draw_first(&self, _key: usize, _target: Target) -> bool {
-        false
-    }
-
-    /// Whether item `key` spans much of the frame (a dome layer): drawing such an item first
-    /// pays for the blended background; a few small billboards or sprites do not.
-    fn spans_frame(&self, _key: usize) -> bool {
-        false
-    }
-
-    /// Records additive item `key` onto the cleared frame, before the background run is
-    /// composited over it ([`super::strategy::UnderBackground::Additive`]): without depth test, since
-    /// the scene drawn afterwards covers what it hides. Adding onto black is writing.
-    fn draw_first(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target) -> u32 {
-        0
-    }
-
-    /// Whether [`Pass::draw_over_seed`] can draw reduced item `key` this frame: it covers every
-    /// pixel of its buffer outside [`Pass::background_gap`].
-    fn can_draw_over_seed(&self, _key: usize, _target: Target) -> bool {
-        false
-    }
-
-    /// Records reduced item `key` as the first layer of a seeded buffer
-    /// ([`super::strategy::RunJoining::SeededFolded`]): over the lower run's colour (`seed`, that run's
-    /// bind group, as group 2), replacing the clear colour, unblended: what its blend would
-    /// leave over the seed.
-    fn draw_over_seed(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target, _seed: &wgpu::BindGroup) -> u32 {
-        0
-    }
-
-    /// Whether [`Pass::draw_pair`] can draw reduced items `lower` and `upper`, consecutive in a
-    /// run (`upper` right after `lower`), at once this frame; `over_seed`: `lower` as the first
-    /// layer of a seeded buffer ([`Pass::draw_over_seed`]).
-    fn can_draw_pair(&self, _lower: usize, _upper: usize, _target: Target, _over_seed: bool) -> bool {
-        false
-    }
-
-    /// Records reduced items `lower` and `upper` at once into a run's buffer
-    /// ([`super::strategy::LayerPairs::AtOnce`]): one draw that leaves what the two would, one after
-    /// the other; over `seed` (as [`Pass::draw_over_seed`]) when given. Returns draw calls.
-    fn draw_pair(&self, _rpass: &mut wgpu::RenderPass<'_>, _lower: usize, _upper: usize, _target: Target, _seed: Option<&wgpu::BindGroup>) -> u32 {
-        0
-    }
-
-    /// Whether [`Pass::draw_as_background`] can draw additive item `key` this frame: it covers
-    /// every pixel of the frame outside [`Pass::background_gap`]. `joined`: the background is the
-    /// combination of joined runs.
-    fn can_draw_as_background(&self, _key: usize, _target: Target, _joined: bool) -> bool {
-        false
-    }
-
-    /// A rectangle of pixels (x, y, width, height) holding every pixel that item `key`, drawn as
-    /// the background, leaves uncovered this frame (below a dome's lowest row): the background
-    /// run is composited there first, the item's draw overwriting it where it reaches. None: it
-    /// covers the whole frame.
-    fn background_gap(&self, _key: usize) -> Option<[u32; 4]> {
-        None
-    }
-
-    /// Records additive item `key` as the frame's background, in place of the background run's
-    /// composite: it writes the run's colour (`run`, as group 2) plus its own term, weighed by
-    /// the transmittance of the runs above it when `joined`. One full-screen pass, neither blended
-    /// nor depth-tested, where drawing it first and compositing the background over it takes two.
-    fn draw_as_background(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target, _joined: bool, _run: &wgpu::BindGroup) -> u32 {
+    /// Records one item into the phase's render pass (or a run's buffer), with the pipelines
+    /// built for `target`, at `placement` (one the item's [`Caps`] allow); `run`: the run buffer
+    /// the placement reads, as group 2. Returns draw calls.
+    fn draw(&self, _rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target, _placement: Placement, _run: Option<&wgpu::BindGroup>) -> u32 {
         0
     }
 

@@ -8,7 +8,7 @@
 use super::error::RenderResult;
 use super::particle_sim::GpuParticleSim;
 use super::particles::{bind_layout, build_pipelines, draw_emitter, sampler, EmitterSet};
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
 
 /// The precipitation pass.
 pub struct PrecipitationPass {
@@ -119,7 +119,7 @@ impl Pass for PrecipitationPass {
         }
     }
 
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, _placement: Placement, _run: Option<&wgpu::BindGroup>) -> u32 {
         let Some(g) = self.set.current.as_ref().and_then(|s| s.emitters.get(key)) else { return 0 };
         let pipelines = self.pipeline.for_target(target);
         let mut calls = draw_emitter(rpass, [&pipelines[0], &pipelines[1]], g);

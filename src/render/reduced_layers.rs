@@ -9,7 +9,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::error::RenderResult;
-use super::pass::{FrameContext, Pass, PassBuild, Phase, Pipelines, Target};
+use super::pass::{FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, Target};
 use super::shaders;
 
 /// Format of the reduced buffers for a target: premultiplied colour and transmittance. Display
@@ -169,7 +169,7 @@ const JOINED_BACKGROUND_OVER: usize = 3;
 struct CompositeUniform {
     /// Pixel to texture coordinates (every buffer holds the whole frame): xy, of a frame pixel
     /// (1 / frame size); zw, of a pixel of the seeded buffer (1 / its size), for its first layer
-    /// drawn over the seed (`Pass::draw_over_seed`).
+    /// drawn over the seed (`Placement::OverSeed`).
     uv_from_pixel: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<CompositeUniform>() == 16);
@@ -411,7 +411,7 @@ impl ReducedLayersPass {
     }
 
     /// The lower run's bind group, which a seeded buffer's first layer reads as group 2 when it
-    /// is drawn over the seed itself ([`super::pass::Pass::draw_over_seed`]); None unless seeded.
+    /// is drawn over the seed itself ([`super::pass::Placement::OverSeed`]); None unless seeded.
     pub fn seed_source(&self) -> Option<&wgpu::BindGroup> {
         self.buffers.first().filter(|_| self.seeded).map(|b| &b.bind_group)
     }
@@ -544,7 +544,7 @@ impl Pass for ReducedLayersPass {
     fn items(&self, _cx: &FrameContext<'_>, _out: &mut Vec<super::pass::DrawItem>) {}
 
     /// Composites run `key` (the renderer places it where the run's first layer would draw).
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, _placement: Placement, _run: Option<&wgpu::BindGroup>) -> u32 {
         let Some(buffer) = self.buffers.get(key) else { return 0 };
         rpass.set_pipeline(&self.pipelines.for_target(target)[COMPOSITE]);
         rpass.set_bind_group(1, &buffer.bind_group, &[]);

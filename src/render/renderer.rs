@@ -5,7 +5,8 @@
 use super::camera::Camera;
 use super::error::RenderResult;
 use super::globals::{Globals, GlobalsBinding};
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, SharedResources, SkyUpload, Target, PASSES};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Placement, SharedResources, SkyUpload, Target, PASSES};
+use super::plan::{self, FrameFacts, RunInput, Seeding, SkyPlan, SkyStep, Step};
 use super::reduced_layers::Divisor;
 use super::reduced_layers::{Joining, ReducedLayersPass};
 use super::shaders::{self, ShaderLibrary};
@@ -349,7 +350,6 @@ impl SkyRenderer {
     /// Call [`Self::after_submit`] once the encoder is submitted.
     pub fn render(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &RenderTarget<'_>, frame: &FrameSky, camera: &Camera, options: &RenderOptions) {
         let (w, h) = target.size;
-        let (wf, hf) = (w as f32, h as f32);
         let kind = if self.has_sky && frame.sky_model.kind.is_physical() { Target::Hdr } else { Target::Display };
         let globals = Globals::new(frame, camera, w, h, kind);
         ctx.queue.write_buffer(&self.globals.buffer, 0, bytemuck::bytes_of(&globals));
@@ -368,111 +368,33 @@ impl SkyRenderer {
         for pass in &self.passes {
             pass.stats(&mut stats);
         }
-        // Items per phase: (pass index, item), ordered.
-        let mut items: [Vec<(usize, DrawItem)>; Phase::ALL.len()] = Default::default();
-        let mut scratch = Vec::new();
-        for (i, pass) in self.passes.iter().enumerate() {
-            scratch.clear();
-            pass.items(&cx, &mut scratch);
-            items[pass.phase().index()].extend(scratch.iter().map(|it| (i, *it)));
-            scratch.clear();
-            pass.compute_items(&cx, &mut scratch);
-            items[Phase::Compute.index()].extend(scratch.iter().map(|it| (i, *it)));
-        }
-        // Sky objects and stars interleave by priority; list order among equals.
-        let sky_items = &mut items[Phase::Sky.index()];
-        sky_items.sort_by_key(|(_, it)| it.priority);
-        // Runs of consecutive dome layers drawn at reduced resolution, each into its own buffer
-        // before the scene; the sky pass composites each in its run's place.
-        let reduce = options.strategy.dome_resolution.divisors().0 > Divisor::FULL;
-        if reduce {
-            join_additive_runs(sky_items);
-            leave_lone_joiners(sky_items);
-        }
-        let runs = if reduce { reduced_runs(sky_items, options.strategy.seeds_joined()) } else { Vec::new() };
-        // A run's buffer is as fine as its finest layer needs.
-        let divisors: Vec<Divisor> = runs.iter().map(|&(start, end)| sky_items[start..end].iter().map(|(_, it)| it.divisor).min().unwrap_or(Divisor::FULL)).collect();
-        stats.reduced_runs.clone_from(&divisors);
-        stats.joined_runs_only = sky_items.iter().filter(|(_, it)| it.reduced && it.joins_only).count() as u32;
-        let reduced_pass = self.passes.iter().position(|p| (p.as_ref() as &dyn std::any::Any).is::<ReducedLayersPass>()).filter(|_| !runs.is_empty());
-        // The first run, when the sky phase draws nothing before it, is the frame's background:
-        // drawn first in the scene's pass, over the clear colour.
-        let background = reduced_pass.is_some() && runs.first().is_some_and(|&(start, _)| start == 0);
-        // And the second joins it when every draw between them (billboards) can be drawn after
-        // it, corrected by it: one full-screen pass for both.
-        // So do the runs after it, for as long as every draw between two can (a lightning bolt
-        // between the clouds and the fog): `chain` runs, each combined with those above it.
-        let mut chain = usize::from(background);
-        while background
-            && options.strategy.joins_runs()
-            && chain < runs.len()
-            && sky_items[runs[chain - 1].1..runs[chain].0].iter().all(|(i, it)| self.passes[*i].can_draw_under_run(it.key, kind))
-        {
-            chain += 1;
-        }
-        let joined = chain >= 2;
-        stats.composites = (runs.len() + 1).saturating_sub(chain.max(1)) as u32;
-        // Two joined runs, the second at least as fine: the second's buffer is seeded with the
-        // first and ends as their combination. Otherwise joined runs are combined from the top
-        // down, each combination at the finer resolution of its run and the combination above it.
-        let seeded = options.strategy.seeds_joined() && chain == 2 && divisors[1] <= divisors[0];
-        stats.seeded = seeded;
-        let combined = if seeded { Vec::new() } else { combined_divisors(&divisors[..chain]) };
-        // The additive draws right after the background go under it, first onto the cleared
-        // frame: items `first` of the sky phase. Not where the scene covers part of the frame:
-        // they would pay for its pixels, which the depth test spares them in the sky phase.
-        let scene_in_view = options.scene && camera.elevation_range_deg(wf / hf.max(1.0)).0 < -SCENE_COVERS_BELOW_DEG;
-        let first = match runs.first() {
-            Some(&(_, start)) if background && options.strategy.additive_first() && !scene_in_view => {
-                let limit = runs.get(1).map_or(sky_items.len(), |r| r.0);
-                let end = (start..limit).find(|&k| !(sky_items[k].1.additive && self.passes[sky_items[k].0].can_draw_first(sky_items[k].1.key, kind))).unwrap_or(limit);
-                // Blending the background costs a full-screen pass about a millisecond: worth it
-                // only when a draw spanning the frame (the skydome's fine stars) is among them.
-                if sky_items[start..end].iter().any(|(i, it)| self.passes[*i].spans_frame(it.key)) {
-                    start..end
-                } else {
-                    0..0
-                }
-            }
-            _ => 0..0,
+        let mut items = self.collect_items(&cx);
+        let (wf, hf) = (w as f32, h as f32);
+        let facts = FrameFacts {
+            scene_in_view: options.scene && camera.elevation_range_deg(wf / hf.max(1.0)).0 < -SCENE_COVERS_BELOW_DEG,
+            reduced_layers: self.pass::<ReducedLayersPass>().is_some(),
+            covered_clears: options.skips.covered_clears,
+            depth_clean: self.depth_untouched.as_ref() == Some(target.depth),
         };
-        stats.drawn_first = first.len() as u32;
-        // One of them that covers the frame can be the background itself (its run's colour plus
-        // its term, written): the others are then added under the runs above the first (joined)
-        // or onto it. Saves the background's full-screen composite and the first draw's blend.
-        let fused =
-            first.clone().filter(|_| options.strategy.fuses_background()).find(|&k| self.passes[sky_items[k].0].can_draw_as_background(sky_items[k].1.key, kind, joined)).filter(
-                |&f| {
-                    first.clone().filter(|&k| k != f).all(|k| {
-                        let (i, it) = &sky_items[k];
-                        if joined {
-                            self.passes[*i].can_draw_under_run(it.key, kind)
-                        } else {
-                            self.passes[*i].can_draw_first(it.key, kind)
-                        }
-                    })
-                },
-            );
-        stats.background_fused = fused.is_some();
-        if let (false, Some(layers)) = (runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
-            let joining = if seeded { Joining::Seeded } else { Joining::Combined(&combined) };
-            layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &divisors, joining);
+        let plan = plan::plan(std::mem::take(&mut items[Phase::Sky.index()]), &options.strategy, facts);
+        stats.reduced_runs = plan.divisors();
+        stats.joined_runs_only = plan.items.iter().filter(|(_, it)| it.reduced && it.joins_only).count() as u32;
+        stats.composites = plan.composites;
+        stats.seeded = plan.seeded;
+        stats.drawn_first = plan.drawn_first;
+        stats.background_fused = matches!(plan.background, Some(plan::Background::Fused { .. }));
+        stats.seed_folded = plan.seed_folded;
+        stats.layers_paired = plan.layers_paired;
+        stats.clears_skipped = u32::from(!plan.clear_color) + u32::from(!plan.clear_depth);
+        if let (false, Some(layers)) = (plan.runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
+            let joining = if plan.seeded { Joining::Seeded } else { Joining::Combined(&plan.combined) };
+            layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &plan.divisors(), joining);
         }
-        // The background writes every pixel of the frame before anything reads it: the fused draw
-        // (and the composite below its dome) where it has its run to read (as drawn below), or the
-        // composite's full-screen triangle, unless additive draws went onto the cleared frame
-        // before it.
-        let fused_drawn = fused.is_some() && self.pass::<ReducedLayersPass>().and_then(|l| l.upper_bind_group(0)).is_some();
-        let color_covered = options.skips.covered_clears && background && (fused_drawn || first.is_empty());
-        let depth_clean = options.skips.covered_clears && self.depth_untouched.as_ref() == Some(target.depth);
-        stats.clears_skipped = u32::from(color_covered) + u32::from(depth_clean);
-
         if let Some(t) = self.timer.as_mut() {
             t.begin_frame();
         }
-        let split = options.depth_split;
         for phase in Phase::ALL {
-            let list = &items[phase.index()];
+            let list = if phase == Phase::Sky { &plan.items } else { &items[phase.index()] };
             match phase {
                 Phase::Compute if !list.is_empty() => {
                     let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -488,176 +410,8 @@ impl SkyRenderer {
                 // The scene and sky phases always run (the scene phase clears the target); the
                 // others only when a pass has something to draw.
                 _ if list.is_empty() && phase != Phase::Scene && phase != Phase::Sky => {}
-                Phase::Display => {
-                    let writes = self.timer.as_mut().and_then(|t| t.render_writes(phase));
-                    let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                        label: Some("SkyRenderer::display"),
-                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                            view: target.color,
-                            depth_slice: None,
-                            resolve_target: None,
-                            ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-                        })],
-                        depth_stencil_attachment: None,
-                        timestamp_writes: writes,
-                        occlusion_query_set: None,
-                        multiview_mask: None,
-                    });
-                    rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-                    for (i, it) in list {
-                        stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key, Target::Display);
-                    }
-                }
-                _ => {
-                    // Without the depth split the scene phase's draws move to the end of the sky
-                    // phase, painted over an already shaded sky.
-                    let draws_here = phase != Phase::Scene || split;
-                    let load = if phase == Phase::Scene {
-                        let color = if color_covered {
-                            // SAFETY: the background, the pass's first draw, writes every pixel
-                            // of the frame (`color_covered`), unblended, before any read or store.
-                            wgpu::LoadOp::DontCare(unsafe { wgpu::LoadOpDontCare::enabled() })
-                        } else {
-                            wgpu::LoadOp::Clear(wgpu::Color::BLACK)
-                        };
-                        (color, if depth_clean { wgpu::LoadOp::Load } else { wgpu::LoadOp::Clear(1.0) })
-                    } else {
-                        (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
-                    };
-                    if let (Phase::Scene, Some(rp)) = (phase, reduced_pass) {
-                        // The reduced buffers first: the first may be the background.
-                        let sky_list = &items[Phase::Sky.index()];
-                        let layers = (self.passes[rp].as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>();
-                        for (r, &(start, end)) in runs.iter().enumerate() {
-                            let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(r == 0, r + 1 == runs.len() && (!joined || seeded)));
-                            let Some(mut rpass) = layers.and_then(|l| l.begin(encoder, r, run_writes)) else { continue };
-                            let mut first = start;
-                            if let (1, true, Some(l)) = (r, seeded, layers) {
-                                let (i, it) = &sky_list[start];
-                                match l.seed_source().filter(|_| options.strategy.folds_seed() && self.passes[*i].can_draw_over_seed(it.key, kind)) {
-                                    // The first layer goes over the seed itself; the seeding pass
-                                    // fills what it does not reach (below its dome), first.
-                                    Some(seed) => {
-                                        if let Some(gap) = self.passes[*i].background_gap(it.key) {
-                                            stats.draw_calls += l.seed_within(&mut rpass, &self.globals.bind_group, kind, gap);
-                                        }
-                                        rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-                                        // With the layer after it, at once, where the two pair.
-                                        match pair_at(&self.passes, sky_list, start, end, kind, true).filter(|_| options.strategy.pairs_layers()) {
-                                            Some(upper) => {
-                                                stats.draw_calls += self.passes[*i].draw_pair(&mut rpass, it.key, upper, kind, Some(seed));
-                                                stats.layers_paired += 1;
-                                                first += 2;
-                                            }
-                                            None => {
-                                                stats.draw_calls += self.passes[*i].draw_over_seed(&mut rpass, it.key, kind, seed);
-                                                first += 1;
-                                            }
-                                        }
-                                        stats.seed_folded = true;
-                                    }
-                                    None => stats.draw_calls += l.seed(&mut rpass, &self.globals.bind_group, kind),
-                                }
-                            }
-                            rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-                            let mut k = first;
-                            while k < end {
-                                let (i, it) = &sky_list[k];
-                                if let Some(upper) = pair_at(&self.passes, sky_list, k, end, kind, false).filter(|_| options.strategy.pairs_layers()) {
-                                    stats.draw_calls += self.passes[*i].draw_pair(&mut rpass, it.key, upper, kind, None);
-                                    stats.layers_paired += 1;
-                                    k += 2;
-                                } else {
-                                    stats.draw_calls += self.passes[*i].draw_reduced(&mut rpass, it.key, kind);
-                                    k += 1;
-                                }
-                            }
-                        }
-                        if let (true, false, Some(l)) = (joined, seeded, layers) {
-                            let writes = self.timer.as_mut().and_then(|t| t.reduced_writes(false, true));
-                            stats.draw_calls += l.record_combined(encoder, &self.globals.bind_group, kind, writes);
-                        }
-                    }
-                    let queries = list.iter().find_map(|(i, _)| self.passes[*i].occlusion_query_set());
-                    let label = format!("SkyRenderer::{}", phase.name());
-                    let writes = self.timer.as_mut().and_then(|t| t.render_writes(phase));
-                    let color = match &self.hdr {
-                        Some(t) if kind == Target::Hdr => &t.view,
-                        _ => target.color,
-                    };
-                    let mut rpass = begin_pass(encoder, &label, (color, target.depth), load, writes, queries);
-                    rpass.set_bind_group(0, &self.globals.bind_group, &[]);
-                    let range = match phase {
-                        Phase::Sky | Phase::Overlay if split || phase == Phase::Overlay => SKY_DEPTH,
-                        Phase::Scene | Phase::SceneAfterSky if split => SCENE_DEPTH,
-                        _ => (0.0, 1.0),
-                    };
-                    rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
-                    if let (Phase::Scene, true, Some(layers)) = (phase, background, self.pass::<ReducedLayersPass>()) {
-                        let sky_list = &items[Phase::Sky.index()];
-                        match (fused, layers.upper_bind_group(0)) {
-                            // The background's buffer: the joined runs' combination, or the first run's.
-                            (Some(f), Some(run)) => {
-                                let (i, it) = &sky_list[f];
-                                // Where it does not reach (below a dome), the background's
-                                // composite, onto the cleared frame and confined to those pixels.
-                                if let Some([x, y, gw, gh]) = self.passes[*i].background_gap(it.key) {
-                                    rpass.set_scissor_rect(x, y, gw, gh);
-                                    stats.draw_calls += layers.draw_background(&mut rpass, kind, joined, false);
-                                    rpass.set_scissor_rect(0, 0, w, h);
-                                }
-                                stats.draw_calls += self.passes[*i].draw_as_background(&mut rpass, it.key, kind, joined, run);
-                                for (i, it) in first.clone().filter(|&k| k != f).map(|k| &sky_list[k]) {
-                                    stats.draw_calls +=
-                                        if joined { self.passes[*i].draw_under_run(&mut rpass, it.key, kind, run) } else { self.passes[*i].draw_first(&mut rpass, it.key, kind) };
-                                }
-                            }
-                            _ => {
-                                for (i, it) in &sky_list[first.clone()] {
-                                    stats.draw_calls += self.passes[*i].draw_first(&mut rpass, it.key, kind);
-                                }
-                                let over = !first.is_empty();
-                                stats.draw_calls += layers.draw_background(&mut rpass, kind, joined, over);
-                            }
-                        }
-                    }
-                    let layers = self.pass::<ReducedLayersPass>();
-                    if draws_here {
-                        let mut k = 0;
-                        while k < list.len() {
-                            // Already under the background.
-                            if phase == Phase::Sky && k == first.start && !first.is_empty() {
-                                k = first.end;
-                                continue;
-                            }
-                            if let (Phase::Sky, Some(r), Some(rp)) = (phase, runs.iter().position(|&(start, _)| start == k), reduced_pass) {
-                                // The background's runs are already in the frame.
-                                if r >= chain {
-                                    stats.draw_calls += self.passes[rp].draw(&mut rpass, r, kind);
-                                }
-                                k = runs[r].1;
-                                continue;
-                            }
-                            // Between two joined runs: under the combination of those above.
-                            let under = (1..chain).find(|&j| k >= runs[j - 1].1 && k < runs[j].0);
-                            if let (Phase::Sky, Some(run)) = (phase, under.and_then(|j| layers.and_then(|l| l.upper_bind_group(j)))) {
-                                let (i, it) = &list[k];
-                                stats.draw_calls += self.passes[*i].draw_under_run(&mut rpass, it.key, kind, run);
-                                k += 1;
-                                continue;
-                            }
-                            let (i, it) = &list[k];
-                            stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key, kind);
-                            k += 1;
-                        }
-                    }
-                    if phase == Phase::Sky && !split {
-                        rpass.set_viewport(0.0, 0.0, wf, hf, 0.0, 1.0);
-                        for (i, it) in &items[Phase::Scene.index()] {
-                            stats.draw_calls += self.passes[*i].draw(&mut rpass, it.key, kind);
-                        }
-                    }
-                }
+                Phase::Display => stats.draw_calls += self.record_display(encoder, target, list),
+                _ => stats.draw_calls += self.record_phase(encoder, target, (phase, kind), options, (&plan, &items[Phase::Scene.index()], list)),
             }
             for pass in self.passes.iter().filter(|p| p.phase() == phase) {
                 pass.after_phase(encoder);
@@ -675,6 +429,200 @@ impl SkyRenderer {
             pass.stats_recorded(&mut stats);
         }
         self.stats = stats;
+    }
+
+    /// Every pass's items this frame, per phase: (pass index, item), in list order.
+    fn collect_items(&self, cx: &FrameContext<'_>) -> [Vec<(usize, DrawItem)>; Phase::ALL.len()] {
+        let mut items: [Vec<(usize, DrawItem)>; Phase::ALL.len()] = Default::default();
+        let mut scratch = Vec::new();
+        for (i, pass) in self.passes.iter().enumerate() {
+            scratch.clear();
+            pass.items(cx, &mut scratch);
+            items[pass.phase().index()].extend(scratch.iter().map(|it| (i, *it)));
+            scratch.clear();
+            pass.compute_items(cx, &mut scratch);
+            items[Phase::Compute.index()].extend(scratch.iter().map(|it| (i, *it)));
+        }
+        items
+    }
+
+    /// The display phase: the HDR target tone-mapped into the display target.
+    fn record_display(&mut self, encoder: &mut wgpu::CommandEncoder, target: &RenderTarget<'_>, list: &[(usize, DrawItem)]) -> u32 {
+        let writes = self.timer.as_mut().and_then(|t| t.render_writes(Phase::Display));
+        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("SkyRenderer::display"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target.color,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rpass.set_bind_group(0, &self.globals.bind_group, &[]);
+        list.iter().map(|(i, it)| self.passes[*i].draw(&mut rpass, it.key, Target::Display, Placement::Plain, None)).sum()
+    }
+
+    /// One drawing phase into the frame's target: for the scene phase the reduced runs first and
+    /// the background; for the sky phase the plan's steps. Returns draw calls.
+    fn record_phase(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &RenderTarget<'_>,
+        (phase, kind): (Phase, Target),
+        options: &RenderOptions,
+        (plan, scene, list): (&SkyPlan, &[(usize, DrawItem)], &[(usize, DrawItem)]),
+    ) -> u32 {
+        let (wf, hf) = (target.size.0 as f32, target.size.1 as f32);
+        let split = options.depth_split;
+        let mut calls = 0;
+        let load = if phase == Phase::Scene {
+            let color = if plan.clear_color {
+                wgpu::LoadOp::Clear(wgpu::Color::BLACK)
+            } else {
+                // SAFETY: the background, the pass's first draw, writes every pixel of the frame
+                // (the plan's `clear_color` is false only then), unblended, before any read or store.
+                wgpu::LoadOp::DontCare(unsafe { wgpu::LoadOpDontCare::enabled() })
+            };
+            (color, if plan.clear_depth { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load })
+        } else {
+            (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
+        };
+        if phase == Phase::Scene && !plan.runs.is_empty() {
+            // The reduced buffers first: the first may be the background.
+            calls += self.record_runs(encoder, kind, plan);
+        }
+        let queries = list.iter().find_map(|(i, _)| self.passes[*i].occlusion_query_set());
+        let label = format!("SkyRenderer::{}", phase.name());
+        let writes = self.timer.as_mut().and_then(|t| t.render_writes(phase));
+        let color = match &self.hdr {
+            Some(t) if kind == Target::Hdr => &t.view,
+            _ => target.color,
+        };
+        let mut rpass = begin_pass(encoder, &label, (color, target.depth), load, writes, queries);
+        rpass.set_bind_group(0, &self.globals.bind_group, &[]);
+        let range = match phase {
+            Phase::Sky | Phase::Overlay if split || phase == Phase::Overlay => SKY_DEPTH,
+            Phase::Scene | Phase::SceneAfterSky if split => SCENE_DEPTH,
+            _ => (0.0, 1.0),
+        };
+        rpass.set_viewport(0.0, 0.0, wf, hf, range.0, range.1);
+        if let (Phase::Scene, Some(background)) = (phase, &plan.background) {
+            calls += self.record_background(&mut rpass, target.size, kind, plan, background);
+        }
+        // Without the depth split the scene phase's draws move to the end of the sky phase,
+        // painted over an already shaded sky.
+        match phase {
+            Phase::Sky => {
+                calls += self.record_sky(&mut rpass, kind, plan);
+                if !split {
+                    rpass.set_viewport(0.0, 0.0, wf, hf, 0.0, 1.0);
+                    calls += scene.iter().map(|(i, it)| self.passes[*i].draw(&mut rpass, it.key, kind, Placement::Plain, None)).sum::<u32>();
+                }
+            }
+            Phase::Scene if !split => {}
+            _ => calls += list.iter().map(|(i, it)| self.passes[*i].draw(&mut rpass, it.key, kind, Placement::Plain, None)).sum::<u32>(),
+        }
+        calls
+    }
+
+    /// The run buffer a step reads.
+    fn run_input(&self, input: RunInput) -> Option<&wgpu::BindGroup> {
+        let layers = self.pass::<ReducedLayersPass>()?;
+        match input {
+            RunInput::None => None,
+            RunInput::Upper(j) => layers.upper_bind_group(j),
+            RunInput::Seed => layers.seed_source(),
+        }
+    }
+
+    /// Records one step of the plan; a step whose run buffer is missing is drawn in its place.
+    fn record_step(&self, rpass: &mut wgpu::RenderPass<'_>, kind: Target, plan: &SkyPlan, step: &Step) -> u32 {
+        let (i, it) = &plan.items[step.item];
+        match (step.input, self.run_input(step.input)) {
+            (RunInput::None, _) => self.passes[*i].draw(rpass, it.key, kind, step.placement, None),
+            (_, Some(run)) => self.passes[*i].draw(rpass, it.key, kind, step.placement, Some(run)),
+            // Never while the plan and the buffers agree: drawn in its place, at its resolution.
+            (_, None) => {
+                let alone = match step.placement {
+                    Placement::OverSeed | Placement::Pair { .. } => Placement::Reduced,
+                    _ => Placement::Plain,
+                };
+                self.passes[*i].draw(rpass, it.key, kind, alone, None)
+            }
+        }
+    }
+
+    /// Each run of reduced layers into its buffer, and the joined runs' combinations.
+    fn record_runs(&mut self, encoder: &mut wgpu::CommandEncoder, kind: Target, plan: &SkyPlan) -> u32 {
+        let mut calls = 0;
+        let n = plan.runs.len();
+        for (r, run) in plan.runs.iter().enumerate() {
+            let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(r == 0, r + 1 == n && (!plan.joined() || plan.seeded)));
+            let Some(layers) = self.passes.iter().find_map(|p| (p.as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>()) else { return calls };
+            let Some(mut rpass) = layers.begin(encoder, r, run_writes) else { continue };
+            match run.seeding {
+                Seeding::None => {}
+                Seeding::Whole => calls += layers.seed(&mut rpass, &self.globals.bind_group, kind),
+                Seeding::Within(gap) => calls += layers.seed_within(&mut rpass, &self.globals.bind_group, kind, gap),
+            }
+            rpass.set_bind_group(0, &self.globals.bind_group, &[]);
+            for step in &run.draws {
+                calls += self.record_step(&mut rpass, kind, plan, step);
+            }
+        }
+        if let (true, false) = (plan.joined(), plan.seeded) {
+            let writes = self.timer.as_mut().and_then(|t| t.reduced_writes(false, true));
+            if let Some(layers) = self.passes.iter().find_map(|p| (p.as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>()) {
+                calls += layers.record_combined(encoder, &self.globals.bind_group, kind, writes);
+            }
+        }
+        calls
+    }
+
+    /// The background, first in the scene's pass.
+    fn record_background(&self, rpass: &mut wgpu::RenderPass<'_>, (w, h): (u32, u32), kind: Target, plan: &SkyPlan, background: &plan::Background) -> u32 {
+        let Some(layers) = self.pass::<ReducedLayersPass>() else { return 0 };
+        let joined = plan.joined();
+        let mut calls = 0;
+        match background {
+            plan::Background::Fused { gap, fused, others } => {
+                // Where the fused draw does not reach (below a dome), the background's
+                // composite, onto the cleared frame and confined to those pixels.
+                if let Some([x, y, gw, gh]) = *gap {
+                    rpass.set_scissor_rect(x, y, gw, gh);
+                    calls += layers.draw_background(rpass, kind, joined, false);
+                    rpass.set_scissor_rect(0, 0, w, h);
+                }
+                calls += self.record_step(rpass, kind, plan, fused);
+                for step in others {
+                    calls += self.record_step(rpass, kind, plan, step);
+                }
+            }
+            plan::Background::Composite { first } => {
+                for &k in first {
+                    calls += self.record_step(rpass, kind, plan, &Step { item: k, placement: Placement::First, input: RunInput::None });
+                }
+                calls += layers.draw_background(rpass, kind, joined, !first.is_empty());
+            }
+        }
+        calls
+    }
+
+    /// The sky phase's steps.
+    fn record_sky(&self, rpass: &mut wgpu::RenderPass<'_>, kind: Target, plan: &SkyPlan) -> u32 {
+        let reduced = self.passes.iter().position(|p| (p.as_ref() as &dyn std::any::Any).is::<ReducedLayersPass>());
+        plan.steps
+            .iter()
+            .map(|step| match (step, reduced) {
+                (SkyStep::Draw(step), _) => self.record_step(rpass, kind, plan, step),
+                (SkyStep::Composite(r), Some(rp)) => self.passes[rp].draw(rpass, *r, kind, Placement::Plain, None),
+                (SkyStep::Composite(_), None) => 0,
+            })
+            .sum()
     }
 
     /// Creates the HDR target, or recreates it at a new size.
@@ -745,80 +693,6 @@ pub fn release_freed_memory() {
     }
 }
 
-/// The key of the item after item `k` of a run ending at `end` when the two can be drawn at once
-/// by their pass ([`Pass::draw_pair`]; `over_seed`: item `k` as a seeded buffer's first layer).
-fn pair_at(passes: &[Box<dyn Pass>], items: &[(usize, DrawItem)], k: usize, end: usize, target: Target, over_seed: bool) -> Option<usize> {
-    let ((i, lower), (j, upper)) = (items.get(k)?, items.get(k + 1).filter(|_| k + 1 < end)?);
-    (i == j && passes[*i].can_draw_pair(lower.key, upper.key, target, over_seed)).then_some(upper.key)
-}
-
-/// Moves every full-resolution additive draw of the sky phase past the reduced additive layers
-/// that follow it. Additive draws commute (target + a + b, clamped, in either
-/// order), so the picture is the same; reduced layers that only such draws kept apart (the
-/// skydome's fine stars between it and the galaxy) then share a run and one composite.
-fn join_additive_runs(list: &mut [(usize, DrawItem)]) {
-    let mut moved = true;
-    while moved {
-        moved = false;
-        for k in 0..list.len().saturating_sub(1) {
-            let (a, b) = (list[k].1, list[k + 1].1);
-            if !a.reduced && a.additive && b.reduced && b.additive {
-                list.swap(k, k + 1);
-                moved = true;
-            }
-        }
-    }
-}
-
-/// Items that go to a reduced buffer only in company ([`DrawItem::joins_only`]) and found none
-/// (a run of nothing else) are drawn at full resolution.
-fn leave_lone_joiners(list: &mut [(usize, DrawItem)]) {
-    for (start, end) in reduced_runs(list, false) {
-        if list[start..end].iter().all(|(_, it)| it.joins_only) {
-            for (_, it) in &mut list[start..end] {
-                it.reduced = false;
-                it.divisor = Divisor::FULL;
-            }
-        }
-    }
-}
-
-/// Divisors of the combinations of a chain of joined runs (their buffers' `divisors`, lowest
-/// first): combination j holds runs j.. and is as fine as the finest of them. The last run
-/// needs none (its own buffer); fewer than two runs, none at all.
-fn combined_divisors(divisors: &[Divisor]) -> Vec<Divisor> {
-    let n = divisors.len();
-    (0..n.saturating_sub(1)).map(|j| divisors[j..].iter().copied().min().unwrap_or(Divisor::FULL)).collect()
-}
-
-/// The runs of consecutive items marked `reduced` in a sorted phase list: (start, end) indices.
-/// `split_first`: a lone run at the start of the list whose layers get finer part-way (the
-/// skydome's at a quarter of the resolution, the clouds' at half, when the billboards between
-/// them lie out of the frame) is two runs, the coarse layers in their own buffer seeding the
-/// finer one ([`Seeded`](super::strategy::RunJoining::Seeded)), rather than every layer at the finer resolution.
-fn reduced_runs(list: &[(usize, DrawItem)], split_first: bool) -> Vec<(usize, usize)> {
-    let mut runs = Vec::new();
-    let mut k = 0;
-    while k < list.len() {
-        if list[k].1.reduced {
-            let start = k;
-            while k < list.len() && list[k].1.reduced {
-                k += 1;
-            }
-            runs.push((start, k));
-        } else {
-            k += 1;
-        }
-    }
-    if let (true, [(0, end)]) = (split_first, runs.as_slice()) {
-        let divisor = |k: usize| list[k].1.divisor;
-        if let Some(k) = (1..*end).find(|&k| (0..k).all(|j| divisor(k) < divisor(j))) {
-            return vec![(0, k), (k, *end)];
-        }
-    }
-    runs
-}
-
 /// Begins one phase's render pass on the shared colour and depth targets.
 fn begin_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
@@ -845,82 +719,4 @@ fn begin_pass<'e>(
         occlusion_query_set,
         multiview_mask: None,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn item(key: usize, reduced: bool, additive: bool) -> (usize, DrawItem) {
-        (0, DrawItem { reduced, additive, divisor: if reduced { Divisor::HALF } else { Divisor::FULL }, ..DrawItem::new(0, key) })
-    }
-
-    #[test]
-    fn additive_draws_move_past_reduced_additive_layers_only() {
-        // Skydome (reduced, opaque), its fine stars (full, additive), galaxy (reduced, additive),
-        // sun (full, additive), clouds (reduced, alpha), fog (reduced, alpha).
-        let list = [item(0, true, false), item(1, false, true), item(2, true, true), item(3, false, true), item(4, true, false), item(5, true, false)];
-        let mut joined = list;
-        join_additive_runs(&mut joined);
-        let keys: Vec<usize> = joined.iter().map(|(_, it)| it.key).collect();
-        // The stars go past the galaxy; the sun stays before the alpha-blended clouds.
-        assert_eq!(keys, [0, 2, 1, 3, 4, 5]);
-        assert_eq!(reduced_runs(&list, true), [(0, 1), (2, 3), (4, 6)]);
-        assert_eq!(reduced_runs(&joined, true), [(0, 2), (4, 6)]);
-        // Nothing to join: unchanged.
-        let plain = [item(0, true, false), item(1, false, false), item(2, true, true)];
-        let mut unchanged = plain;
-        join_additive_runs(&mut unchanged);
-        assert_eq!(unchanged, plain);
-    }
-
-    #[test]
-    fn items_that_only_join_runs_stay_at_full_resolution_alone() {
-        let joiner = |key: usize| (0, DrawItem { reduced: true, additive: true, divisor: Divisor::QUARTER, joins_only: true, ..DrawItem::new(0, key) });
-        // The flash after the fog's run joins it, the bolts before it moving past it; after an
-        // alpha-blended billboard, or first, it is alone.
-        let mut after_bolts = [item(0, true, false), item(1, false, true), joiner(2)];
-        join_additive_runs(&mut after_bolts);
-        leave_lone_joiners(&mut after_bolts);
-        assert_eq!(reduced_runs(&after_bolts, true), [(0, 2)]);
-        assert_eq!(after_bolts[1].1.divisor, Divisor::QUARTER);
-        let mut after_moon = [item(0, true, false), item(1, false, false), joiner(2)];
-        join_additive_runs(&mut after_moon);
-        leave_lone_joiners(&mut after_moon);
-        assert_eq!(reduced_runs(&after_moon, true), [(0, 1)]);
-        let mut alone = [joiner(0), item(1, false, false), joiner(2), joiner(3)];
-        leave_lone_joiners(&mut alone);
-        assert!(alone.iter().all(|(_, it)| !it.reduced && it.divisor == Divisor::FULL), "{alone:?}");
-    }
-
-    #[test]
-    fn a_lone_first_run_that_gets_finer_is_split_where_it_does() {
-        let at = |key: usize, divisor: u8| (0, DrawItem { reduced: true, divisor: Divisor::whole(divisor), ..DrawItem::new(0, key) });
-        // Skydome and galaxy at a quarter, clouds at half, fog at a quarter: the billboards
-        // between the skydome and the clouds out of the frame.
-        let lone = [at(0, 4), at(1, 4), at(2, 2), at(3, 4)];
-        assert_eq!(reduced_runs(&lone, true), [(0, 2), (2, 4)]);
-        assert_eq!(reduced_runs(&lone, false), [(0, 4)]);
-        // Finer first, or all alike: one run.
-        assert_eq!(reduced_runs(&[at(0, 2), at(1, 4)], true), [(0, 2)]);
-        assert_eq!(reduced_runs(&[at(0, 4), at(1, 4)], true), [(0, 2)]);
-        // Not at the start of the list, or not alone: as they are.
-        let after = [item(0, false, false), at(1, 4), at(2, 2)];
-        assert_eq!(reduced_runs(&after, true), [(1, 3)]);
-        let two = [at(0, 4), at(1, 2), item(2, false, false), at(3, 2)];
-        assert_eq!(reduced_runs(&two, true), [(0, 2), (3, 4)]);
-    }
-
-    #[test]
-    fn each_combination_is_as_fine_as_its_finest_run() {
-        // Skydome at a quarter, clouds at half, fog at a quarter: combination 0 holds all three,
-        // combination 1 the clouds and the fog; the fog's own buffer stands for itself.
-        let [half, quarter] = [Divisor::HALF, Divisor::QUARTER];
-        assert_eq!(combined_divisors(&[quarter, half, quarter]), [half, half]);
-        assert_eq!(combined_divisors(&[quarter, quarter, half]), [half, half]);
-        assert_eq!(combined_divisors(&[half, quarter]), [half]);
-        assert_eq!(combined_divisors(&[Divisor::whole(3), Divisor::whole(3), Divisor::at_most(2.6, half, quarter)]), [Divisor::at_most(2.5, half, quarter); 2]);
-        assert_eq!(combined_divisors(&[quarter]), Vec::<Divisor>::new());
-        assert_eq!(combined_divisors(&[]), Vec::<Divisor>::new());
-    }
 }

@@ -6,7 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Target};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, Target};
 use super::shaders;
 
 /// Vertex of the stand-in scene. Keep in sync with `vs_main` in shaders/scene.wgsl.
@@ -263,7 +263,7 @@ impl Pass for ScenePass {
         }
     }
 
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, _placement: Placement, _run: Option<&wgpu::BindGroup>) -> u32 {
         let p = self.pipelines.for_target(target);
         if key == TERRAIN {
             rpass.set_pipeline(&p.scene);

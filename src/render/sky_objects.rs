@@ -9,7 +9,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use super::camera::Camera;
 use super::error::RenderResult;
 use super::mesh::{outline_mesh, shape_key, shape_mesh, GpuMesh, SkyVertex};
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
+use super::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
 use super::reduced_layers::Divisor;
 use super::renderer::FrameStats;
 use super::shaders;
@@ -196,13 +196,14 @@ struct VariantKey {
     tone: u32,
     /// Drawn into a reduced-resolution buffer ([`super::reduced_layers`]).
     reduced: bool,
-    /// Where on the frame it goes ([`Placement::Plain`] for reduced draws).
-    placement: Placement,
+    /// Where on the frame it goes ([`Slot::Plain`] for reduced draws).
+    placement: Slot,
 }
 
-/// Where a draw on the frame goes.
+/// Where a draw on the frame goes, as its pipeline variant sees it (the shader's switches of a
+/// [`super::pass::Placement`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-enum Placement {
+enum Slot {
     /// In its place in the sky phase, depth-tested against the scene.
     Plain,
     /// After a run of reduced layers that lies above it, corrected by that run's colour and
@@ -217,17 +218,17 @@ enum Placement {
     /// As `Background` over joined runs, the term weighed by the runs above it (`BACKGROUND`: 2).
     JoinedBackground,
     /// Into a seeded reduced buffer as its first layer, over the lower run's colour itself and
-    /// replacing what the buffer holds (`OVER_SEED` in the shader; `Pass::draw_over_seed`).
+    /// replacing what the buffer holds (`OVER_SEED` in the shader; `Placement::OverSeed`).
     OverSeed,
 }
 
-impl Placement {
+impl Slot {
     /// The background placement over one run or over joined runs.
     fn background(joined: bool) -> Self {
         if joined {
-            Placement::JoinedBackground
+            Slot::JoinedBackground
         } else {
-            Placement::Background
+            Slot::Background
         }
     }
 }
@@ -252,7 +253,7 @@ impl VariantKey {
             target,
             tone,
             reduced: false,
-            placement: Placement::Plain,
+            placement: Slot::Plain,
         }
     }
 
@@ -269,14 +270,14 @@ impl VariantKey {
             ("LIGHTING", f64::from(self.lighting)),
             ("TARGET_KIND", if self.target == Target::Hdr { 2.0 } else { 1.0 }),
             ("TONE_KIND", f64::from(self.tone)),
-            ("UNDER_RUN", f64::from(u8::from(self.placement == Placement::UnderRun))),
+            ("UNDER_RUN", f64::from(u8::from(self.placement == Slot::UnderRun))),
             ("BLEND_KIND", self.blend as f64),
-            ("OVER_SEED", f64::from(u8::from(self.placement == Placement::OverSeed))),
+            ("OVER_SEED", f64::from(u8::from(self.placement == Slot::OverSeed))),
             (
                 "BACKGROUND",
                 match self.placement {
-                    Placement::Background => 1.0,
-                    Placement::JoinedBackground => 2.0,
+                    Slot::Background => 1.0,
+                    Slot::JoinedBackground => 2.0,
                     _ => 0.0,
                 },
             ),
@@ -549,15 +550,15 @@ impl SkyObjectsPass {
     }
 
     /// The pipeline signature of draw `e` this frame, if its version was prepared for `target`.
-    fn entry_key(&self, e: &Visible, target: Target, placement: Placement) -> Option<VariantKey> {
+    fn entry_key(&self, e: &Visible, target: Target, placement: Slot) -> Option<VariantKey> {
         let k = self.keys.get(&(e.index, e.version)).filter(|k| k.target == target)?;
         let live = std::array::from_fn(|s| k.live[s] && e.part[s]);
         let view_stage = if (k.view_stage as usize) < 4 && !e.part[k.view_stage as usize] { NO_STAGE } else { k.view_stage };
         let blend = if e.on_top { BLEND_ADD } else { k.blend };
         let placement = match (e.reduced, placement) {
-            (true, Placement::OverSeed) if !e.on_top => Placement::OverSeed,
-            (true, _) => Placement::Plain,
-            (false, Placement::OverSeed) => return None,
+            (true, Slot::OverSeed) if !e.on_top => Slot::OverSeed,
+            (true, _) => Slot::Plain,
+            (false, Slot::OverSeed) => return None,
             (false, p) => p,
         };
         // A celestial stage's level-0 bit is the same in every part of a draw (its bound does not
@@ -586,21 +587,79 @@ impl SkyObjectsPass {
         }
     }
 
+    /// What item `key` can be drawn as this frame, `next` the pass's item after it in priority
+    /// order.
+    fn caps(&self, key: usize, target: Target, next: Option<usize>) -> Caps {
+        let dome = self.dome_bottom_deg(key).is_some();
+        let spans_frame = match (&self.draws.current, self.visible.get(key)) {
+            (Some(draws), Some(e)) => matches!(draws.objects[e.index][e.version].shape, Shape::Dome { .. } | Shape::DomeBand { .. }),
+            _ => false,
+        };
+        Caps {
+            under_run: self.can_place(key, target, Slot::UnderRun),
+            first: self.can_place(key, target, Slot::First),
+            spans_frame,
+            // A dome covers its buffer, or the frame, down to its lowest row (`background_gap`),
+            // every row in view being drawn; only reduced draws have the seed's placement
+            // (`entry_key`).
+            over_seed: dome && self.can_place(key, target, Slot::OverSeed),
+            background: [false, true].map(|joined| dome && self.can_place(key, target, Slot::background(joined))),
+            background_gap: self.background_gap(key),
+            pair_next: next.map(|upper| (upper, [false, true].map(|over_seed| self.can_pair(key, upper, target, over_seed)))),
+        }
+    }
+
+    /// Whether reduced items `lower` and `upper` can be drawn at once ([`Placement::Pair`]).
+    fn can_pair(&self, lower: usize, upper: usize, target: Target, over_seed: bool) -> bool {
+        let (Some(draws), Some(a), Some(b)) = (&self.draws.current, self.visible.get(lower), self.visible.get(upper)) else { return false };
+        let built = self.pair_key(a, b, target, over_seed).is_some_and(|k| self.pairs.get(&k).is_some_and(Option::is_some));
+        built && self.pair_parts(a, b, Self::pair_mesh(draws, a, b).mesh.index_count).is_some()
+    }
+
+    /// Records reduced items `lower` and `upper` at once, over `seed` when given.
+    fn record_pair(&self, rpass: &mut wgpu::RenderPass<'_>, (lower, upper): (usize, usize), target: Target, seed: Option<&wgpu::BindGroup>) -> u32 {
+        let (Some(draws), Some(a), Some(b)) = (&self.draws.current, self.visible.get(lower), self.visible.get(upper)) else { return 0 };
+        let Some(pipeline) = self.pair_key(a, b, target, seed.is_some()).and_then(|k| self.pairs.get(&k)).and_then(Option::as_ref) else { return 0 };
+        let (da, db) = (&draws.objects[a.index][a.version], &draws.objects[b.index][b.version]);
+        let mesh = &Self::pair_mesh(draws, a, b).mesh;
+        let Some(parts) = self.pair_parts(a, b, mesh.index_count) else { return 0 };
+        rpass.set_pipeline(pipeline);
+        rpass.set_bind_group(2, seed.unwrap_or(&self.no_run), &[]);
+        rpass.set_vertex_buffer(0, mesh.vertices.slice(..));
+        rpass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for (indices, level0_lower, level0_upper) in &parts {
+            rpass.set_bind_group(1, &da.bind_groups[usize::from(level0_lower & da.level0_able)], &[]);
+            rpass.set_bind_group(3, &db.bind_groups[usize::from(level0_upper & db.level0_able)], &[]);
+            rpass.draw_indexed(indices.clone(), 0, 0..1);
+        }
+        parts.len() as u32
+    }
+
+    /// Pixels item `key` leaves uncovered as the background or over a seed: below the dome's
+    /// lowest row, with the margin of its chords' sag.
+    fn background_gap(&self, key: usize) -> Option<[u32; 4]> {
+        let covered_from_deg = self.dome_bottom_deg(key)? + 0.5;
+        if covered_from_deg <= self.frame_elevations_deg.0 {
+            return None;
+        }
+        self.frame_camera.pixels_below_elevation(self.frame_size, covered_from_deg)
+    }
+
     /// Whether draw `key` has a pipeline for `placement` on the frame this frame.
-    fn can_place(&self, key: usize, target: Target, placement: Placement) -> bool {
+    fn can_place(&self, key: usize, target: Target, placement: Slot) -> bool {
         self.visible.get(key).and_then(|e| self.entry_key(e, target, placement)).is_some_and(|k| k.placement == placement && self.variants.get(&k).is_some_and(Option::is_some))
     }
 
     /// Records draw `key` into the frame's target or, `reduced`, into a reduced-resolution
     /// buffer; returns draw calls.
-    fn record(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, reduced: bool, (placement, under_run): (Placement, Option<&wgpu::BindGroup>)) -> u32 {
+    fn record(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, reduced: bool, (placement, under_run): (Slot, Option<&wgpu::BindGroup>)) -> u32 {
         let (Some(draws), Some(e)) = (&self.draws.current, self.visible.get(key)) else { return 0 };
         let d = &draws.objects[e.index][e.version];
         let specialised = self.entry_key(e, target, placement).and_then(|k| self.variants.get(&k)).and_then(Option::as_ref);
         let pipeline = match specialised {
             Some(p) => p,
             // The generic pipeline draws every term: only right for whole draws in their place.
-            None if !reduced && placement == Placement::Plain && e.part == [true; 4] && !e.on_top => &self.pipelines.for_target(target).generic[blend_index(d.blend)],
+            None if !reduced && placement == Slot::Plain && e.part == [true; 4] && !e.on_top => &self.pipelines.for_target(target).generic[blend_index(d.blend)],
             // Building it failed and was logged.
             None => return 0,
         };
@@ -735,7 +794,7 @@ impl SkyObjectsPass {
     /// stand for (mesh-mapped, not the sky model's, the term's other stages folded into it as
     /// white, no lighting) on the display target.
     fn without_texel_stage(key: &VariantKey, stage: usize) -> Option<VariantKey> {
-        let background = matches!(key.placement, Placement::Background | Placement::JoinedBackground);
+        let background = matches!(key.placement, Slot::Background | Slot::JoinedBackground);
         let own_term = (0..MAX_STAGES).filter(|&j| j != stage && key.live[j]).all(|j| j > stage && key.modes[j] == UV_WHITE && key.ops[j] == 1 && key.constants[j] == NO_STAGE);
         let term = key.live[stage] && key.modes[stage] == UV_MESH && key.ops[stage] != 1 && key.view_stage as usize != stage && key.lighting == 0;
         (background && key.target == Target::Display && !key.reduced && own_term && term).then(|| {
@@ -746,7 +805,7 @@ impl SkyObjectsPass {
     }
 
     /// Draw `e` placed as `placement` with its sparse stage texel by texel this frame.
-    fn texel_draw(&self, e: &Visible, target: Target, placement: Placement) -> Option<TexelDraw<'_>> {
+    fn texel_draw(&self, e: &Visible, target: Target, placement: Slot) -> Option<TexelDraw<'_>> {
         let d = &self.draws.current.as_ref()?.objects[e.index][e.version];
         let (stage, mesh) = d.texels.as_ref().filter(|_| self.texels_on)?;
         let key = self.entry_key(e, target, placement)?;
@@ -787,9 +846,9 @@ impl SkyObjectsPass {
         if !self.pairable(lower, upper) {
             return None;
         }
-        let placement = if over_seed { Placement::OverSeed } else { Placement::Plain };
+        let placement = if over_seed { Slot::OverSeed } else { Slot::Plain };
         let lower = self.entry_key(lower, target, placement).filter(|k| k.placement == placement)?;
-        Some(PairKey { lower, upper: self.entry_key(upper, target, Placement::Plain)? })
+        Some(PairKey { lower, upper: self.entry_key(upper, target, Slot::Plain)? })
     }
 
     /// The index ranges draws `lower` and `upper` (on one mesh of `index_count` indices) both
@@ -833,22 +892,22 @@ impl SkyObjectsPass {
         for e in &self.visible {
             // Drawn as it is, and (on the frame, with runs) possibly after the run above it, or
             // first under the background when additive.
-            let placed = |p: Placement, wanted: bool| self.entry_key(e, target, p).filter(|k| wanted && k.placement == p);
+            let placed = |p: Slot, wanted: bool| self.entry_key(e, target, p).filter(|k| wanted && k.placement == p);
             // As the background only when it may cover the frame (an additive dome layer).
             let background = runs && self.additive(e) && self.dome_of(e);
             // As the background with its sparse stage left to the texel polygons.
             let texel_stage = self.draws.current.as_ref().and_then(|d| d.objects[e.index][e.version].texels.as_ref()).map(|t| t.0);
-            let without = |p: Placement| placed(p, background).zip(texel_stage).and_then(|(k, stage)| Self::without_texel_stage(&k, stage));
+            let without = |p: Slot| placed(p, background).zip(texel_stage).and_then(|(k, stage)| Self::without_texel_stage(&k, stage));
             let wanted = [
-                self.entry_key(e, target, Placement::Plain),
-                placed(Placement::UnderRun, runs),
-                placed(Placement::First, runs && self.additive(e)),
-                placed(Placement::Background, background),
-                placed(Placement::JoinedBackground, background),
+                self.entry_key(e, target, Slot::Plain),
+                placed(Slot::UnderRun, runs),
+                placed(Slot::First, runs && self.additive(e)),
+                placed(Slot::Background, background),
+                placed(Slot::JoinedBackground, background),
                 // The first layer of a seeded buffer: any whole dome layer reduced.
-                placed(Placement::OverSeed, runs && self.dome_of(e)),
-                without(Placement::Background),
-                without(Placement::JoinedBackground),
+                placed(Slot::OverSeed, runs && self.dome_of(e)),
+                without(Slot::Background),
+                without(Slot::JoinedBackground),
             ];
             for key in wanted.into_iter().flatten() {
                 if self.variants.contains_key(&key) {
@@ -861,18 +920,18 @@ impl SkyObjectsPass {
                     (false, Target::Display) => self.display_format,
                 };
                 let blend = match (key.reduced, key.placement) {
-                    (true, Placement::OverSeed) => None,
+                    (true, Slot::OverSeed) => None,
                     (true, _) => Some(super::reduced_layers::REDUCED_BLENDS[key.blend]),
-                    (false, Placement::UnderRun) => UNDER_RUN_BLENDS[key.blend],
-                    (false, Placement::Plain | Placement::First) => BLENDS[key.blend],
+                    (false, Slot::UnderRun) => UNDER_RUN_BLENDS[key.blend],
+                    (false, Slot::Plain | Slot::First) => BLENDS[key.blend],
                     // Not made (`entry_key`): reduced only.
-                    (false, Placement::Background | Placement::JoinedBackground | Placement::OverSeed) => None,
+                    (false, Slot::Background | Slot::JoinedBackground | Slot::OverSeed) => None,
                 };
                 // Reduced buffers have no depth: the composite is depth-tested instead. Draws
                 // under the background come before the scene, which covers what they hide.
                 let depth = match (key.reduced, key.placement) {
                     (true, _) => None,
-                    (false, Placement::First | Placement::Background | Placement::JoinedBackground) => Some(wgpu::CompareFunction::Always),
+                    (false, Slot::First | Slot::Background | Slot::JoinedBackground) => Some(wgpu::CompareFunction::Always),
                     (false, _) => Some(wgpu::CompareFunction::Less),
                 };
                 let label = format!("SkyObjects::pipeline {key:?}");
@@ -888,7 +947,7 @@ impl SkyObjectsPass {
         let mut texel_keys = Vec::new();
         for e in self.visible.iter().filter(|e| runs && self.additive(e) && self.dome_of(e)) {
             let Some(stage) = self.draws.current.as_ref().and_then(|d| d.objects[e.index][e.version].texels.as_ref()).map(|t| t.0) else { continue };
-            for placement in [Placement::Background, Placement::JoinedBackground] {
+            for placement in [Slot::Background, Slot::JoinedBackground] {
                 if let Some(key) = self.entry_key(e, target, placement).filter(|k| Self::without_texel_stage(k, stage).is_some()) {
                     texel_keys.push((key, stage));
                 }
@@ -940,7 +999,7 @@ impl SkyObjectsPass {
                 continue;
             }
             let label = format!("SkyObjects::pair {key:?}");
-            let blend = if key.lower.placement == Placement::OverSeed { None } else { Some(PAIR_BLEND) };
+            let blend = if key.lower.placement == Slot::OverSeed { None } else { Some(PAIR_BLEND) };
             let format = super::reduced_layers::reduced_format(target);
             let built = create_pipeline(device, (&self.pair_layout, &self.pipelines.get().module, PAIR), &label, (blend, format, None), &key.constants());
             if let Err(e) = &built {
@@ -1286,95 +1345,34 @@ impl Pass for SkyObjectsPass {
         self.build_variants(cx.device, cx.target, reduce_domes);
     }
 
-    fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
+    fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
+        let target = cx.target;
+        // The next item in priority order (the sky phase's order among this pass's items, stable).
+        let mut order: Vec<usize> = (0..self.visible.len()).collect();
+        order.sort_by_key(|&k| self.visible[k].priority);
+        let mut next = vec![None; self.visible.len()];
+        for w in order.windows(2) {
+            next[w[0]] = Some(w[1]);
+        }
         out.extend(self.visible.iter().enumerate().map(|(key, e)| DrawItem {
             reduced: e.reduced,
             additive: self.additive(e),
             divisor: e.divisor,
+            caps: self.caps(key, target, next[key]),
             ..DrawItem::new(e.priority, key)
         }));
     }
 
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        self.record(rpass, key, target, false, (Placement::Plain, None))
-    }
-
-    fn draw_reduced(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        self.record(rpass, key, target, true, (Placement::Plain, None))
-    }
-
-    fn can_draw_under_run(&self, key: usize, target: Target) -> bool {
-        self.can_place(key, target, Placement::UnderRun)
-    }
-
-    fn draw_under_run(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, run: &wgpu::BindGroup) -> u32 {
-        self.record(rpass, key, target, false, (Placement::UnderRun, Some(run)))
-    }
-
-    fn can_draw_first(&self, key: usize, target: Target) -> bool {
-        self.can_place(key, target, Placement::First)
-    }
-
-    fn spans_frame(&self, key: usize) -> bool {
-        let (Some(draws), Some(e)) = (&self.draws.current, self.visible.get(key)) else { return false };
-        matches!(draws.objects[e.index][e.version].shape, Shape::Dome { .. } | Shape::DomeBand { .. })
-    }
-
-    fn draw_first(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target) -> u32 {
-        self.record(rpass, key, target, false, (Placement::First, None))
-    }
-
-    fn can_draw_as_background(&self, key: usize, target: Target, joined: bool) -> bool {
-        // A dome covers the frame down to its lowest row (`background_gap`), every row in view
-        // being drawn.
-        self.dome_bottom_deg(key).is_some() && self.can_place(key, target, Placement::background(joined))
-    }
-
-    fn can_draw_over_seed(&self, key: usize, target: Target) -> bool {
-        // A dome covers its buffer down to its lowest row (`background_gap`); only reduced draws
-        // have the placement (`entry_key`).
-        self.dome_bottom_deg(key).is_some() && self.can_place(key, target, Placement::OverSeed)
-    }
-
-    fn draw_over_seed(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, seed: &wgpu::BindGroup) -> u32 {
-        self.record(rpass, key, target, true, (Placement::OverSeed, Some(seed)))
-    }
-
-    fn can_draw_pair(&self, lower: usize, upper: usize, target: Target, over_seed: bool) -> bool {
-        let (Some(draws), Some(a), Some(b)) = (&self.draws.current, self.visible.get(lower), self.visible.get(upper)) else { return false };
-        let built = self.pair_key(a, b, target, over_seed).is_some_and(|k| self.pairs.get(&k).is_some_and(Option::is_some));
-        built && self.pair_parts(a, b, Self::pair_mesh(draws, a, b).mesh.index_count).is_some()
-    }
-
-    fn draw_pair(&self, rpass: &mut wgpu::RenderPass<'_>, lower: usize, upper: usize, target: Target, seed: Option<&wgpu::BindGroup>) -> u32 {
-        let (Some(draws), Some(a), Some(b)) = (&self.draws.current, self.visible.get(lower), self.visible.get(upper)) else { return 0 };
-        let Some(pipeline) = self.pair_key(a, b, target, seed.is_some()).and_then(|k| self.pairs.get(&k)).and_then(Option::as_ref) else { return 0 };
-        let (da, db) = (&draws.objects[a.index][a.version], &draws.objects[b.index][b.version]);
-        let mesh = &Self::pair_mesh(draws, a, b).mesh;
-        let Some(parts) = self.pair_parts(a, b, mesh.index_count) else { return 0 };
-        rpass.set_pipeline(pipeline);
-        rpass.set_bind_group(2, seed.unwrap_or(&self.no_run), &[]);
-        rpass.set_vertex_buffer(0, mesh.vertices.slice(..));
-        rpass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-        for (indices, level0_lower, level0_upper) in &parts {
-            rpass.set_bind_group(1, &da.bind_groups[usize::from(level0_lower & da.level0_able)], &[]);
-            rpass.set_bind_group(3, &db.bind_groups[usize::from(level0_upper & db.level0_able)], &[]);
-            rpass.draw_indexed(indices.clone(), 0, 0..1);
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, placement: Placement, run: Option<&wgpu::BindGroup>) -> u32 {
+        match placement {
+            Placement::Plain => self.record(rpass, key, target, false, (Slot::Plain, None)),
+            Placement::Reduced => self.record(rpass, key, target, true, (Slot::Plain, None)),
+            Placement::UnderRun => self.record(rpass, key, target, false, (Slot::UnderRun, run)),
+            Placement::First => self.record(rpass, key, target, false, (Slot::First, None)),
+            Placement::OverSeed => self.record(rpass, key, target, true, (Slot::OverSeed, run)),
+            Placement::Background { joined } => self.record(rpass, key, target, false, (Slot::background(joined), run)),
+            Placement::Pair { upper, over_seed } => self.record_pair(rpass, (key, upper), target, run.filter(|_| over_seed)),
         }
-        parts.len() as u32
-    }
-
-    fn background_gap(&self, key: usize) -> Option<[u32; 4]> {
-        // Below the dome's lowest row, with the margin of its chords' sag.
-        let covered_from_deg = self.dome_bottom_deg(key)? + 0.5;
-        if covered_from_deg <= self.frame_elevations_deg.0 {
-            return None;
-        }
-        self.frame_camera.pixels_below_elevation(self.frame_size, covered_from_deg)
-    }
-
-    fn draw_as_background(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, joined: bool, run: &wgpu::BindGroup) -> u32 {
-        self.record(rpass, key, target, false, (Placement::background(joined), Some(run)))
     }
 
     fn stats_recorded(&self, stats: &mut FrameStats) {

@@ -4,7 +4,7 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SkyUpload, Staged, Target};
+use super::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
 use super::renderer::FrameStats;
 use super::shaders;
 use crate::sky::starfield;
@@ -33,9 +33,9 @@ struct StarInstance {
 pub struct StarsPass {
     bind_layout: wgpu::BindGroupLayout,
     pipeline: Pipelines<wgpu::RenderPipeline>,
-    /// The same drawn after the run of reduced layers above the stars ([`Pass::draw_under_run`]).
+    /// The same drawn after the run of reduced layers above the stars ([`Placement::UnderRun`](super::pass::Placement::UnderRun)).
     under_run: Pipelines<wgpu::RenderPipeline>,
-    /// The same drawn first under the background, not depth-tested ([`Pass::draw_first`]).
+    /// The same drawn first under the background, not depth-tested ([`Placement::First`](super::pass::Placement::First)).
     first: Pipelines<wgpu::RenderPipeline>,
     field: Staged<Option<StarField>>,
     /// Whether the stars show this frame.
@@ -158,29 +158,21 @@ impl Pass for StarsPass {
 
     fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         if let (true, Some(s)) = (self.visible, cx.frame.stars) {
-            out.push(DrawItem { additive: true, ..DrawItem::new(s.priority, 0) });
+            let drawable = self.field.current.is_some();
+            out.push(DrawItem { additive: true, caps: Caps { under_run: drawable, first: drawable, ..Caps::default() }, ..DrawItem::new(s.priority, 0) });
         }
     }
 
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target) -> u32 {
-        self.draw_with(rpass, self.pipeline.for_target(target))
-    }
-
-    fn can_draw_first(&self, _key: usize, _target: Target) -> bool {
-        self.field.current.is_some()
-    }
-
-    fn draw_first(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target) -> u32 {
-        self.draw_with(rpass, self.first.for_target(target))
-    }
-
-    fn can_draw_under_run(&self, _key: usize, _target: Target) -> bool {
-        self.field.current.is_some()
-    }
-
-    fn draw_under_run(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target, run: &wgpu::BindGroup) -> u32 {
-        rpass.set_bind_group(2, run, &[]);
-        self.draw_with(rpass, self.under_run.for_target(target))
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target, placement: Placement, run: Option<&wgpu::BindGroup>) -> u32 {
+        match (placement, run) {
+            (Placement::Plain, _) => self.draw_with(rpass, self.pipeline.for_target(target)),
+            (Placement::First, _) => self.draw_with(rpass, self.first.for_target(target)),
+            (Placement::UnderRun, Some(run)) => {
+                rpass.set_bind_group(2, run, &[]);
+                self.draw_with(rpass, self.under_run.for_target(target))
+            }
+            _ => 0,
+        }
     }
 
     fn stats(&self, stats: &mut FrameStats) {

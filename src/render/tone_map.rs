@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Target};
+use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, Target};
 use super::shaders;
 use crate::sky::resolved::ToneMapper;
 
@@ -108,7 +108,7 @@ impl Pass for ToneMapPass {
         }
     }
 
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target) -> u32 {
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, _target: Target, _placement: Placement, _run: Option<&wgpu::BindGroup>) -> u32 {
         let Some((bind_group, _)) = &self.bound else { return 0 };
         rpass.set_pipeline(self.pipeline.get());
         rpass.set_bind_group(1, bind_group, &[]);
