@@ -57,7 +57,7 @@ pub enum SparseStages {
     /// Sampled everywhere, as every other stage.
     Sampled,
     /// Texel by texel where it is sampled from level 0: one small polygon per lit texel adding
-    /// the texel times its bilinear weight ([`super::texel_quads`]), over the background drawn
+    /// the texel times its bilinear weight ([`super::sky_objects::texel_quads`]), over the background drawn
     /// without that stage. The same sum as the sample, for the pixels near a lit texel only.
     TexelPolygons,
     /// As `TexelPolygons`, and the rest of the background's draw, which then maps nothing from

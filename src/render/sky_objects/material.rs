@@ -1,0 +1,155 @@
+//! A sky object's material as the shader reads it: the draw's uniform (stages, UV modes,
+//! constants), built from a version and changed per frame (black terms skipped, placement).
+
+#[allow(unused_imports)]
+use super::*;
+
+/// One texture stage. Keep in sync with `Stage` in shaders/sky_objects.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct StageUniform {
+    /// UV scale (xy) and offset (zw), repeats.
+    pub scale_offset: [f32; 4],
+    /// Sun: size in radians; Quake: z_scale, z_offset, t_scale, time_scale.
+    pub params: [f32; 4],
+    /// op (0 add, 1 modulate), uv mode, constant index (4 = none), live (0: its term is black
+    /// this frame and is not sampled).
+    pub cfg: [u32; 4],
+}
+
+/// One draw. Keep in sync with `Draw` in shaders/sky_objects.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct DrawUniform {
+    /// Columns: right x half size, up x half size, centre direction (quads); identity for domes.
+    pub object_from_local: [[f32; 4]; 4],
+    /// Diffuse colour.
+    pub diffuse: [f32; 4],
+    /// Constant colours.
+    pub constants: [[f32; 4]; 4],
+    /// Stages.
+    pub stages: [StageUniform; 4],
+    /// Stage count, lighting (0 flat, 1 moon, 2 cloud), stage fed by the sky-view map (4 = none),
+    /// lit clouds' density (f32 bits).
+    pub misc: [u32; 4],
+}
+const _: () = assert!(std::mem::size_of::<StageUniform>() == 48);
+const _: () = assert!(std::mem::size_of::<DrawUniform>() == 64 + 16 + 64 + 4 * 48 + 16);
+
+/// "No stage" in stage-index fields shared with the shader.
+pub(super) const NO_STAGE: u32 = 4;
+
+/// UV mode of a stage folded into the one before it ([`crate::render::stage_fold`]): reads as white,
+/// not sampled. Keep in sync with `UV_WHITE` in shaders/sky_objects.wgsl.
+pub(super) const UV_WHITE: u32 = 4;
+
+/// UV mode of the mesh's texture coordinates. Keep in sync with `UV_MESH` in
+/// shaders/sky_objects.wgsl.
+pub(super) const UV_MESH: u32 = 0;
+
+/// UV mode of the celestial mapping.
+pub(super) const UV_CELESTIAL: u32 = 2;
+
+/// UV mode of a celestial stage that no pixel of its draw minifies this frame: sampled from
+/// level 0 without the derivatives the celestial mapping otherwise computes per pixel (a variant
+/// of the mapping, never in a uniform). Keep in sync with `UV_CELESTIAL_LEVEL0` in
+/// shaders/sky_objects.wgsl.
+pub(super) const UV_CELESTIAL_LEVEL0: u32 = 5;
+
+/// UV mode numbers shared with the shader.
+pub(super) fn uv_mode(uv: &UvSource) -> (u32, [f32; 4]) {
+    match *uv {
+        UvSource::Mesh => (0, [0.0; 4]),
+        UvSource::Sun { size_deg } => (1, [size_deg.get().to_radians(), 0.0, 0.0, 0.0]),
+        UvSource::Celestial => (UV_CELESTIAL, [0.0; 4]),
+        UvSource::Quake { z_scale, z_offset, t_scale, time_scale } => (3, [z_scale.get(), z_offset.get(), t_scale.get(), time_scale.get()]),
+    }
+}
+
+impl From<&Version> for DrawUniform {
+    /// The parts of a draw that do not change from frame to frame.
+    fn from(v: &Version) -> Self {
+        let mut stages = [StageUniform::zeroed(); 4];
+        for (k, s) in v.stages.iter().enumerate() {
+            let (mode, params) = uv_mode(&s.uv);
+            let op = match s.op {
+                StageOp::Add => 0,
+                StageOp::Modulate => 1,
+            };
+            stages[k] = StageUniform { scale_offset: [s.uv_scale[0], s.uv_scale[1], 0.0, 0.0], params, cfg: [op, mode, s.constant.map_or(4, |c| c as u32), 1] };
+        }
+        DrawUniform {
+            object_from_local: Mat4::IDENTITY.to_cols_array_2d(),
+            diffuse: [1.0; 4],
+            constants: [[1.0; 4]; 4],
+            stages,
+            misc: [
+                v.stages.len() as u32,
+                match v.lighting {
+                    Lighting::Flat => 0,
+                    Lighting::Moon => 1,
+                    Lighting::Cloud => 2,
+                },
+                NO_STAGE,
+                v.cloud_density.to_bits(),
+            ],
+        }
+    }
+}
+
+impl DrawUniform {
+    /// Marks the stages of terms that contribute nothing this frame (a factor's constant is black,
+    /// and transparent too when alpha weighs the colour) so the shader does not sample them;
+    /// returns how many. The sky-model stage is never skipped.
+    pub fn skip_dark_terms(&mut self, alpha_matters: bool) -> u32 {
+        let count = (self.misc[0] as usize).min(4);
+        let mut skipped = 0;
+        let mut start = 0;
+        while start < count {
+            let mut end = start + 1;
+            while end < count && self.stages[end].cfg[0] == 1 {
+                end += 1;
+            }
+            let dark = (start..end).any(|k| {
+                let c = self.stages[k].cfg[2] as usize;
+                c < 4 && self.constants[c][..3].iter().all(|v| *v <= 0.0) && (!alpha_matters || self.constants[c][3] <= 0.0)
+            });
+            let holds_view = (start..end).any(|k| k as u32 == self.misc[2]);
+            if dark && !holds_view {
+                for k in start..end {
+                    self.stages[k].cfg[3] = 0;
+                    skipped += 1;
+                }
+            }
+            start = end;
+        }
+        skipped
+    }
+
+    /// Applies a frame's colours, UV offsets and placement; `sky_view_stage` is the gradient
+    /// stage when a physical sky model colours it.
+    pub fn with_frame(mut self, pass: &VersionFrame, shape: &Shape, placement: Option<(Vec3, f32)>, camera_up: Vec3, sky_view_stage: Option<usize>) -> Self {
+        self.misc[2] = sky_view_stage.map_or(NO_STAGE, |k| k as u32);
+        self.diffuse = pass.diffuse;
+        self.constants = pass.constants;
+        for (k, off) in pass.uv_offsets.iter().enumerate() {
+            self.stages[k].scale_offset[2] = off[0];
+            self.stages[k].scale_offset[3] = off[1];
+        }
+        if let (Some((dir, roll_deg)), Shape::Billboard { size_deg } | Shape::Quad { size_deg }) = (placement, shape) {
+            // Billboards keep the screen's up; quads keep the world's up turned by the path's roll.
+            let (up_hint, roll) = match shape {
+                Shape::Billboard { .. } => (camera_up, 0.0),
+                _ => (Vec3::Y, roll_deg.to_radians()),
+            };
+            let mut right = dir.cross(up_hint).try_normalize().unwrap_or(Vec3::X);
+            let mut up = right.cross(dir);
+            let q = Quat::from_axis_angle(dir, roll);
+            right = q * right;
+            up = q * up;
+            let half = (size_deg.get().to_radians() * 0.5).tan();
+            self.object_from_local = Mat4::from_cols((right * half).extend(0.0), (up * half).extend(0.0), dir.extend(0.0), Vec4::W).to_cols_array_2d();
+        }
+        self
+    }
+}
