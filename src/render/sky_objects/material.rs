@@ -66,6 +66,15 @@ pub(super) fn uv_mode(uv: &UvSource) -> (u32, [f32; 4]) {
     }
 }
 
+/// The shader's index of a lighting (`misc[1]` of the uniform, `LIGHTING` of a variant).
+pub(super) fn lighting_index(l: Lighting) -> u32 {
+    match l {
+        Lighting::Flat => 0,
+        Lighting::Moon => 1,
+        Lighting::Cloud => 2,
+    }
+}
+
 impl From<&Version> for DrawUniform {
     /// The parts of a draw that do not change from frame to frame.
     fn from(v: &Version) -> Self {
@@ -83,16 +92,7 @@ impl From<&Version> for DrawUniform {
             diffuse: [1.0; 4],
             constants: [[1.0; 4]; 4],
             stages,
-            misc: [
-                v.stages.len() as u32,
-                match v.lighting {
-                    Lighting::Flat => 0,
-                    Lighting::Moon => 1,
-                    Lighting::Cloud => 2,
-                },
-                NO_STAGE,
-                v.cloud_density.to_bits(),
-            ],
+            misc: [v.stages.len() as u32, lighting_index(v.lighting), NO_STAGE, v.cloud_density.to_bits()],
         }
     }
 }
@@ -102,6 +102,11 @@ impl DrawUniform {
     /// and transparent too when alpha weighs the colour) so the shader does not sample them;
     /// returns how many. The sky-model stage is never skipped.
     pub fn skip_dark_terms(&mut self, alpha_matters: bool) -> u32 {
+        self.skip_dark_stages(alpha_matters).0
+    }
+
+    /// [`Self::skip_dark_terms`], also returning the stages still sampled.
+    pub(super) fn skip_dark_stages(&mut self, alpha_matters: bool) -> (u32, [bool; 4]) {
         let count = (self.misc[0] as usize).min(4);
         let mut skipped = 0;
         let mut start = 0;
@@ -123,7 +128,7 @@ impl DrawUniform {
             }
             start = end;
         }
-        skipped
+        (skipped, std::array::from_fn(|k| k < count && self.stages[k].cfg[3] != 0))
     }
 
     /// Applies a frame's colours, UV offsets and placement; `sky_view_stage` is the gradient

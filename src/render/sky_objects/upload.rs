@@ -22,6 +22,8 @@ pub(super) struct VersionDraw {
     pub(super) blend: BlendMode,
     pub(super) shape: Shape,
     pub(super) base: DrawUniform,
+    /// Its pipeline signature's part that the sky's data fixes.
+    pub(super) signature: MaterialSignature,
     /// Finest detail of each stage's texture on the sky, texels per degree (0: no stage).
     pub(super) texels_per_deg: [f32; 4],
     /// A sparse stage's texels as polygons on the grid ([`crate::render::texel_quads`]): the stage and
@@ -212,6 +214,7 @@ impl SkyObjectDraws {
                             blend: v.blend,
                             shape: v.shape,
                             base,
+                            signature: MaterialSignature::of(v, &folds.iter().map(|f| f.stage).collect::<Vec<_>>()),
                             texels_per_deg,
                             texels,
                         }
@@ -243,11 +246,21 @@ impl SkyObjectDraws {
                 let mut u = d.base.with_frame(p, &d.shape, of.placement, camera.screen_up(), sky_view_stage);
                 // Alpha weighs the colour under alpha and additive blending: a term only counts as
                 // nothing there when it is transparent too.
-                if skip_dark {
-                    skipped += u.skip_dark_terms(d.blend != BlendMode::Opaque);
-                }
+                let live = if skip_dark {
+                    let (n, live) = u.skip_dark_stages(d.blend != BlendMode::Opaque);
+                    skipped += n;
+                    live
+                } else {
+                    std::array::from_fn(|k| k < d.signature.count as usize)
+                };
                 queue.write_buffer(&d.uniform, 0, bytemuck::bytes_of(&u));
-                keys.insert((of.index, p.version), VariantKey::of(&u, d.blend, target, neutral));
+                let key = VariantKey::of(&d.signature, (live, sky_view_stage), d.blend, target, neutral);
+                // The signature from the sky's data is what the shader's generic path reads.
+                debug_assert_eq!(
+                    (key.count, key.modes, key.ops, key.constants, key.live, key.view_stage, key.lighting),
+                    (u.misc[0], u.stages.map(|s| s.cfg[1]), u.stages.map(|s| s.cfg[0]), u.stages.map(|s| s.cfg[2]), u.stages.map(|s| s.cfg[3] != 0), u.misc[2], u.misc[1])
+                );
+                keys.insert((of.index, p.version), key);
                 if let (Some((tex, h)), Some(g)) = (&d.gradient, &p.gradient) {
                     let bytes: Vec<u8> = g.iter().flat_map(|c| c.map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8)).collect();
                     textures::write(queue, tex, 1, *h, &bytes);

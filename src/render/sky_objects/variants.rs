@@ -68,22 +68,60 @@ impl Slot {
     }
 }
 
+/// The part of a pipeline signature that a version's data fixes: its stages after folding (count,
+/// UV mode, op and constant of each) and its lighting. Computed once per upload from the sky, not
+/// read back from the uniform the GPU gets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct MaterialSignature {
+    pub(super) count: u32,
+    pub(super) modes: [u32; 4],
+    pub(super) ops: [u32; 4],
+    pub(super) constants: [u32; 4],
+    pub(super) lighting: u32,
+}
+
+impl MaterialSignature {
+    /// The signature of version `v` with the stages `folded_into` (the first of each folded pair)
+    /// each sampling the folded texture, the stage after it left white.
+    pub(super) fn of(v: &Version, folded_into: &[usize]) -> Self {
+        let mut sig = Self { count: v.stages.len() as u32, modes: [0; 4], ops: [0; 4], constants: [0; 4], lighting: lighting_index(v.lighting) };
+        for (k, s) in v.stages.iter().enumerate().take(4) {
+            sig.modes[k] = uv_mode(&s.uv).0;
+            sig.ops[k] = u32::from(s.op == StageOp::Modulate);
+            sig.constants[k] = s.constant.map_or(NO_STAGE, |c| c as u32);
+        }
+        for &first in folded_into {
+            let second = first + 1;
+            if second < 4 {
+                if sig.constants[first] == NO_STAGE {
+                    sig.constants[first] = sig.constants[second];
+                }
+                sig.modes[second] = UV_WHITE;
+                sig.constants[second] = NO_STAGE;
+            }
+        }
+        sig
+    }
+}
+
 impl VariantKey {
-    /// The signature of a draw with this frame's uniform `u`.
-    pub(super) fn of(u: &DrawUniform, blend: BlendMode, target: Target, neutral_tone: bool) -> Self {
+    /// The signature of a draw of a version with material `sig`, this frame's `live` stages
+    /// (those whose term is not black: [`DrawUniform::skip_dark_terms`]) and the stage the
+    /// sky-view map feeds.
+    pub(super) fn of(sig: &MaterialSignature, (live, view_stage): ([bool; 4], Option<usize>), blend: BlendMode, target: Target, neutral_tone: bool) -> Self {
         let tone = match (target, neutral_tone) {
             (Target::Display, _) => 0,
             (Target::Hdr, false) => 1,
             (Target::Hdr, true) => 2,
         };
         Self {
-            count: u.misc[0],
-            modes: u.stages.map(|s| s.cfg[1]),
-            ops: u.stages.map(|s| s.cfg[0]),
-            constants: u.stages.map(|s| s.cfg[2]),
-            live: u.stages.map(|s| s.cfg[3] != 0),
-            view_stage: u.misc[2],
-            lighting: u.misc[1],
+            count: sig.count,
+            modes: sig.modes,
+            ops: sig.ops,
+            constants: sig.constants,
+            live,
+            view_stage: view_stage.map_or(NO_STAGE, |k| k as u32),
+            lighting: sig.lighting,
             blend: blend_index(blend),
             target,
             tone,
