@@ -193,6 +193,9 @@ struct HdrTarget {
     generation: u64,
 }
 
+/// One draw item of a phase and the index of its pass.
+type PhaseItem = (usize, DrawItem);
+
 /// Records frames of a sky.
 pub struct SkyRenderer {
     globals: GlobalsBinding,
@@ -432,8 +435,8 @@ impl SkyRenderer {
     }
 
     /// Every pass's items this frame, per phase: (pass index, item), in list order.
-    fn collect_items(&self, cx: &FrameContext<'_>) -> [Vec<(usize, DrawItem)>; Phase::ALL.len()] {
-        let mut items: [Vec<(usize, DrawItem)>; Phase::ALL.len()] = Default::default();
+    fn collect_items(&self, cx: &FrameContext<'_>) -> [Vec<PhaseItem>; Phase::ALL.len()] {
+        let mut items: [Vec<PhaseItem>; Phase::ALL.len()] = Default::default();
         let mut scratch = Vec::new();
         for (i, pass) in self.passes.iter().enumerate() {
             scratch.clear();
@@ -474,7 +477,7 @@ impl SkyRenderer {
         target: &RenderTarget<'_>,
         (phase, kind): (Phase, Target),
         options: &RenderOptions,
-        (plan, scene, list): (&SkyPlan, &[(usize, DrawItem)], &[(usize, DrawItem)]),
+        (plan, scene, list): (&SkyPlan, &[PhaseItem], &[PhaseItem]),
     ) -> u32 {
         let (wf, hf) = (target.size.0 as f32, target.size.1 as f32);
         let split = options.depth_split;
