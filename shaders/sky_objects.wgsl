@@ -5,14 +5,14 @@
 //
 // (globals.wgsl is prepended by the loader.)
 
-// Keep in sync with `StageUniform` in src/render/sky_objects.rs.
+// Keep in sync with `StageUniform` in src/render/sky_objects/material.rs.
 struct Stage {
     scale_offset: vec4<f32>, // uv scale (xy) and offset (zw), repeats
     params: vec4<f32>,       // sun: size_rad; quake: z_scale, z_offset, t_scale, time_scale
     cfg: vec4<u32>,          // op (0 add, 1 modulate), uv mode (4: white, folded into the stage before), constant index (4 = none), live (0: its term is black this frame, not sampled)
 };
 
-// Keep in sync with `DrawUniform` in src/render/sky_objects.rs.
+// Keep in sync with `DrawUniform` in src/render/sky_objects/material.rs.
 struct Draw {
     // Columns: right * half size, up * half size, centre direction (quads); identity for domes.
     object_from_local: mat4x4<f32>,
@@ -52,12 +52,12 @@ const UV_MESH: u32 = 0u;
 const UV_SUN: u32 = 1u;
 const UV_CELESTIAL: u32 = 2u;
 const UV_QUAKE: u32 = 3u;
-// A stage folded into the one before it at load (src/render/stage_fold.rs): white, not sampled.
-// Keep in sync with `UV_WHITE` in src/render/sky_objects.rs.
+// A stage folded into the one before it at load (src/render/sky_objects/stage_fold.rs): white, not sampled.
+// Keep in sync with `UV_WHITE` in src/render/sky_objects/material.rs.
 const UV_WHITE: u32 = 4u;
 // The celestial mapping where no pixel of the draw minifies its texture this frame (a variant
-// only, set by src/render/sky_objects.rs): level 0, without the derivatives below. Keep in sync
-// with `UV_CELESTIAL_LEVEL0` in src/render/sky_objects.rs.
+// only, set by src/render/sky_objects/): level 0, without the derivatives below. Keep in sync
+// with `UV_CELESTIAL_LEVEL0` in src/render/sky_objects/material.rs.
 const UV_CELESTIAL_LEVEL0: u32 = 5u;
 
 struct VertexOut {
@@ -117,7 +117,7 @@ fn vs_fullscreen(@builtin(vertex_index) vi: u32) -> VertexOut {
 }
 
 // Specialisation: a pipeline per material signature sets SPECIALISED and the constants below from
-// the draw's uniform (src/render/sky_objects.rs, `VariantKey`), so the compiler drops what the draw
+// the draw's uniform (src/render/sky_objects/variants.rs, `VariantKey`), so the compiler drops what the draw
 // does not use. This matters on SIMD rasterisers such as lavapipe, which run both sides of every
 // branch (a uniform condition included) under a lane mask and sample textures even in lanes that
 // are off: every branch left on a uniform costs as if taken. The generic pipeline keeps the
@@ -145,18 +145,18 @@ override LIVE_3: bool = true;
 // the target holds comes with TARGET_KIND and TONE_KIND (tone.wgsl).
 override VIEW_STAGE: u32 = 4u;
 override LIGHTING: u32 = 0u;
-// Drawn after the composite of the run above it (src/render/sky_objects.rs, `UNDER_RUN_BLENDS`),
+// Drawn after the composite of the run above it (src/render/sky_objects/variants.rs, `UNDER_RUN_BLENDS`),
 // with its blend (0 opaque, 1 alpha, 2 additive weighted by alpha, 3 additive).
 override UNDER_RUN: bool = false;
 override BLEND_KIND: u32 = 0u;
 // An additive draw that spans the frame drawn as the frame's background, first onto it
-// (src/render/sky_objects.rs, `Placement::Background`): it writes the background run's colour plus
+// (src/render/pass.rs, `Placement::Background`): it writes the background run's colour plus
 // its own term, neither blended nor depth-tested, in place of the background's composite. 0: not;
 // 1: the background is one run, which lies under the draw; 2: it is the joined runs' combination,
 // whose transmittance (the runs above the draw) weighs the term.
 override BACKGROUND: u32 = 0u;
 // The first layer of a seeded reduced buffer drawn over the lower run itself (group 2), replacing
-// the buffer's clear colour, unblended (src/render/sky_objects.rs, `Placement::OverSeed`).
+// the buffer's clear colour, unblended (src/render/pass.rs, `Placement::OverSeed`).
 override OVER_SEED: bool = false;
 // The upper layer of a pair (`fs_pair`, group 3), specialised as the draw's own constants above.
 override UPPER_STAGE_COUNT: u32 = 0u;
@@ -527,7 +527,7 @@ fn under_run(color: vec4<f32>, pixel: vec2<f32>) -> vec4<f32> {
 }
 
 // A pair of alpha-blended dome layers on the same mesh drawn at once into a reduced buffer
-// (src/render/sky_objects.rs, `Pass::draw_pair_reduced`): each one's mesh coordinates.
+// (src/render/sky_objects/pairs.rs, `Placement::Pair`): each one's mesh coordinates.
 struct PairOut {
     @builtin(position) clip: vec4<f32>,
     @location(1) world_dir: vec3<f32>,
@@ -552,7 +552,7 @@ fn vs_pair(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> Pair
 
 // The upper layer over the draw's own, as the two alpha blends one after the other would leave
 // them: premultiplied colour, and in alpha what the pair covers (the buffer's transmittance is
-// multiplied by what it lets through: `PAIR_BLEND` in src/render/sky_objects.rs). Over the seed
+// multiplied by what it lets through: `PAIR_BLEND` in src/render/sky_objects/variants.rs). Over the seed
 // (`OVER_SEED`), written as it is, with the transmittance left.
 @fragment
 fn fs_pair(in: PairOut) -> @location(0) vec4<f32> {
@@ -569,11 +569,11 @@ fn fs_pair(in: PairOut) -> @location(0) vec4<f32> {
     return vec4<f32>(rgb, 1.0 - through);
 }
 
-// A sparse stage drawn texel by texel (src/render/texel_quads.rs): the stage these polygons stand
+// A sparse stage drawn texel by texel (src/render/sky_objects/texel_quads.rs): the stage these polygons stand
 // for, in a term of its own that the specialising constants describe.
 override TEXEL_STAGE: u32 = 0u;
 
-// Keep in sync with `TexelVertex` in src/render/texel_quads.rs.
+// Keep in sync with `TexelVertex` in src/render/sky_objects/texel_quads.rs.
 struct TexelOut {
     @builtin(position) clip: vec4<f32>,
     // Texels from the texel's centre, interpolated as the grid triangle under the polygon

@@ -47,7 +47,7 @@ fn star_color(in: VertexOut) -> vec4<f32> {
 }
 
 // Added light under the run above the stars (drawn after its composite: src/render/stars.rs,
-// `draw_under_run`) shows through the run's transmittance.
+// `Placement::UnderRun`) shows through the run's transmittance.
 @fragment
 fn fs_under_run(in: VertexOut) -> @location(0) vec4<f32> {
     let transmittance = run_at(in.clip.xy).a;

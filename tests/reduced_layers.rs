@@ -1,4 +1,4 @@
-//! Dome layers at reduced resolution (`RenderOptions::dome_resolution`): the frame stays close to
+//! Dome layers at reduced resolution (`FillStrategy::dome_resolution`): the frame stays close to
 //! the full-resolution one on both targets, layers with finer texture detail than the reduced
 //! buffer (the skydome's stars at night) stay at full resolution, and billboards never go there.
 
@@ -297,7 +297,7 @@ fn additive_draws_under_the_background_give_the_same_picture() {
         ("lut on the HDR target, looking up", &sky, lut, up, RenderOptions::default(), true, true),
         ("night, horizon", &sky, FrameInput::new(23.0, 0.0), Camera { pitch_deg: 10.0, ..Camera::default() }, RenderOptions::default(), false, false),
         // No scene, the frame reaching below the skydome's lowest row (-20 degrees): fused, the
-        // background composited below that row first (`Pass::background_gap`).
+        // background composited below that row first (`Caps::background_gap`).
         ("night, no scene, horizon", &sky, FrameInput::new(23.0, 0.0), Camera::default(), no_scene, true, true),
         ("dusk, no scene, looking down", &sky, FrameInput::new(18.5, 0.3), Camera { pitch_deg: -5.0, ..Camera::default() }, no_scene, true, true),
         (

@@ -1,4 +1,4 @@
-//! A sparse stage drawn texel by texel (`SparseStages::TexelPolygons`, src/render/texel_quads.rs):
+//! A sparse stage drawn texel by texel (`SparseStages::TexelPolygons`, src/render/sky_objects/texel_quads.rs):
 //! the skydome's stars times their mask, in the fused background, as one polygon per lit texel
 //! where they are sampled from level 0. The polygons add up to the bilinear sample: frames with
 //! and without them differ by the blend's rounding of each texel's share (a level or two).

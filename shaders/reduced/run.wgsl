@@ -1,6 +1,6 @@
 // A run of dome layers in its reduced buffer, read by full-resolution draws as bind group 2: the
 // combination of two joined runs (reduced_layers.wgsl) and draws moved after a run's composite
-// (sky objects, stars, dome particles: `Pass::draw_under_run`). Premultiplied colour and, in
+// (sky objects, stars, dome particles: `Placement::UnderRun`). Premultiplied colour and, in
 // alpha, the run's transmittance. Bindings as `run_layout` in src/render/reduced_layers.rs.
 
 // Keep in sync with `CompositeUniform` in src/render/reduced_layers.rs.

@@ -236,8 +236,8 @@ pub struct Caps {
     /// A rectangle of pixels (x, y, width, height) holding every pixel the item leaves uncovered
     /// as the background or over a seed (below a dome's lowest row). None: it covers the frame.
     pub background_gap: Option<[u32; 4]>,
-    /// The pass's next item (its key) in priority order, when the two can be drawn at once as
-    /// [`Placement::Pair`]: plain (index 0) and over a seed (index 1).
+    /// The pass's next item (its key) in priority order, and whether the two can be drawn at once
+    /// as [`Placement::Pair`]: plain (index 0) and over a seed (index 1).
     pub pair_next: Option<(usize, [bool; 2])>,
 }
 

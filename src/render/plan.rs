@@ -342,7 +342,11 @@ fn sky_steps(items: &[(usize, DrawItem)], runs: &[(usize, usize)], chain: usize,
 }
 
 /// The key of the item after item `k` of a run ending at `end` when the two can be drawn at once
-/// by their pass (`over_seed`: item `k` as a seeded buffer's first layer).
+/// by their pass (`over_seed`: item `k` as a seeded buffer's first layer). A pass states pairs
+/// with its next item in its own priority order ([`super::pass::Caps::pair_next`]): two items of
+/// one pass next to each other here are next to each other there, since the sort is stable and
+/// [`join_additive_runs`] moves only additive draws past additive layers, never between the
+/// alpha-blended layers that pair.
 fn pair_at(items: &[(usize, DrawItem)], k: usize, end: usize, over_seed: bool) -> Option<usize> {
     let ((i, lower), (j, upper)) = (items.get(k)?, items.get(k + 1).filter(|_| k + 1 < end)?);
     (i == j && lower.caps.pair_next.is_some_and(|(key, ok)| key == upper.key && ok[usize::from(over_seed)])).then_some(upper.key)

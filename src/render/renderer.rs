@@ -548,13 +548,17 @@ impl SkyRenderer {
         match (step.input, self.run_input(step.input)) {
             (RunInput::None, _) => self.passes[*i].draw(rpass, it.key, kind, step.placement, None),
             (_, Some(run)) => self.passes[*i].draw(rpass, it.key, kind, step.placement, Some(run)),
-            // Never while the plan and the buffers agree: drawn in its place, at its resolution.
+            // Never while the plan and the buffers agree (`ReducedLayersPass::ensure` makes every
+            // buffer the plan reads): drawn without the run, at its resolution, both of a pair.
             (_, None) => {
-                let alone = match step.placement {
-                    Placement::OverSeed | Placement::Pair { .. } => Placement::Reduced,
-                    _ => Placement::Plain,
-                };
-                self.passes[*i].draw(rpass, it.key, kind, alone, None)
+                debug_assert!(step.input == RunInput::None, "the plan reads a run buffer that was not made: {step:?}");
+                match step.placement {
+                    Placement::Pair { upper, .. } => {
+                        self.passes[*i].draw(rpass, it.key, kind, Placement::Reduced, None) + self.passes[*i].draw(rpass, upper, kind, Placement::Reduced, None)
+                    }
+                    Placement::OverSeed => self.passes[*i].draw(rpass, it.key, kind, Placement::Reduced, None),
+                    _ => self.passes[*i].draw(rpass, it.key, kind, Placement::Plain, None),
+                }
             }
         }
     }

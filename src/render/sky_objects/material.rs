@@ -39,7 +39,7 @@ const _: () = assert!(std::mem::size_of::<DrawUniform>() == 64 + 16 + 64 + 4 * 4
 /// "No stage" in stage-index fields shared with the shader.
 pub(super) const NO_STAGE: u32 = 4;
 
-/// UV mode of a stage folded into the one before it ([`crate::render::stage_fold`]): reads as white,
+/// UV mode of a stage folded into the one before it ([`crate::render::sky_objects::stage_fold`]): reads as white,
 /// not sampled. Keep in sync with `UV_WHITE` in shaders/sky_objects.wgsl.
 pub(super) const UV_WHITE: u32 = 4;
 

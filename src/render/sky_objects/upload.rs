@@ -26,7 +26,7 @@ pub(super) struct VersionDraw {
     pub(super) signature: MaterialSignature,
     /// Finest detail of each stage's texture on the sky, texels per degree (0: no stage).
     pub(super) texels_per_deg: [f32; 4],
-    /// A sparse stage's texels as polygons on the grid ([`crate::render::texel_quads`]): the stage and
+    /// A sparse stage's texels as polygons on the grid ([`crate::render::sky_objects::texel_quads`]): the stage and
     /// its polygons.
     pub(super) texels: Option<(usize, Arc<GpuTexelMesh>)>,
 }
