@@ -296,7 +296,7 @@ fn adapter(cpu: bool) -> AdapterChoice {
 /// Renders `sky` as `args` says into `args.out`.
 fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyhow::Result<()> {
     let (input, camera) = frame_from_args(&args.frame)?;
-    let options = RenderOptions { scene: !args.frame.no_scene, ..RenderOptions::default().with_strategy(strategy_from_args(&args.frame, &headless.ctx)?) };
+    let options = RenderOptions { scene: !args.frame.no_scene, strategy: strategy_from_args(&args.frame, &headless.ctx)?, ..Default::default() };
     let mut input = input;
     input.sky_model = model_override(sky, &args.frame)?;
     let frame = sky.evaluate(&input);
@@ -437,7 +437,7 @@ fn compare(args: &cli::CompareArgs) -> anyhow::Result<()> {
     let (w, h) = cli::parse_size(&args.size)?;
     let ctx = GpuContext::headless(adapter(args.frame.cpu))?;
     println!("adapter: {}", ctx.adapter_line());
-    let options = RenderOptions { scene: !args.frame.no_scene, glare: !args.no_glare, ..RenderOptions::default().with_strategy(strategy_from_args(&args.frame, &ctx)?) };
+    let options = RenderOptions { scene: !args.frame.no_scene, glare: !args.no_glare, strategy: strategy_from_args(&args.frame, &ctx)?, ..Default::default() };
     let mut images = Vec::new();
     for (label, side) in ["A", "B"].iter().zip(&sides) {
         let path = side.sky.as_deref().or(args.sky.as_deref());

@@ -77,14 +77,14 @@ fn skipped(ui: &mut egui::Ui, info: &UiInfo<'_>) {
 /// now against the median when they were last all on.
 fn switches(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     let s = info.stats;
-    use crate::render::strategy::{FillStrategy, FlashPlacement, LayerPairs, RunJoining, SparseStages, UnderBackground, PRESETS};
+    use crate::render::strategy::{FlashPlacement, LayerPairs, RunJoining, SparseStages, UnderBackground, PRESETS};
     let st = &mut c.options.strategy;
     ui.horizontal_wrapped(|ui| {
         ui.label(format!("fill strategy: {} (preset", st.name()));
         for (name, preset) in PRESETS {
             ui.radio_value(st, preset, name);
         }
-        ui.label(format!("; {} for this adapter)", FillStrategy::for_device(info.device_type).name()));
+        ui.label(format!("; {} for this adapter)", info.adapter_strategy.name()));
     });
     ui.horizontal_wrapped(|ui| {
         ui.label("dome layers at");

@@ -242,7 +242,7 @@ impl App {
             glare: glare.as_ref(),
             errors: &errors,
             adapter: &adapter,
-            device_type: gpu.ctx.adapter.get_info().device_type,
+            adapter_strategy: self.adapter_strategy,
             source: &spec.display(),
             continent: matches!(spec, SkySpec::Continent { .. }),
             recent: &self.settings.recent,

@@ -158,6 +158,7 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         auto: auto_pick::AutoPicker::default(),
         title: String::new(),
         strategy: Some(strategy),
+        adapter_strategy: FillStrategy::default(),
     };
     event_loop.run_app(&mut app).context("running the window")?;
     app.settings.panels = app.controls.layout.clone();
@@ -219,6 +220,8 @@ pub struct App {
     /// The fill strategy to start with, until the first device is made (None afterwards: a new
     /// device keeps the panel's choice). `Some(None)`: the adapter's.
     strategy: Option<Option<FillStrategy>>,
+    /// The strategy the current device's adapter defaults to.
+    adapter_strategy: FillStrategy,
 }
 
 impl App {
@@ -241,9 +244,9 @@ impl App {
         let (gpu, shader_error) = WindowGpu::new(event_loop, &self.title, self.settings.window_size, adapter, library, self.live.sky())?;
         self.shader_error = shader_error;
         // The adapter's strategy unless one was asked for.
+        self.adapter_strategy = FillStrategy::for_device(gpu.ctx.adapter.get_info().device_type);
         if let Some(asked) = self.strategy.take() {
-            let device_type = gpu.ctx.adapter.get_info().device_type;
-            self.controls.options.strategy = asked.unwrap_or_else(|| FillStrategy::for_device(device_type));
+            self.controls.options.strategy = asked.unwrap_or(self.adapter_strategy);
         }
         self.gpu = Some(gpu);
         self.refresh_snapshots();

@@ -173,8 +173,8 @@ pub struct UiInfo<'a> {
     pub errors: &'a [String],
     /// Adapter description.
     pub adapter: &'a str,
-    /// The adapter's type (which fill strategy it defaults to).
-    pub device_type: wgpu::DeviceType,
+    /// The fill strategy the adapter defaults to ([`crate::render::FillStrategy::for_device`]).
+    pub adapter_strategy: crate::render::FillStrategy,
     /// What is shown (path or "default").
     pub source: &'a str,
     /// Whether the source is a continent file.

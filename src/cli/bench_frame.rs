@@ -108,10 +108,12 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     // Each preset measured (both unless `--strategy` names one), side by side in every case; the
     // adapter's own is the one the summary line is about.
     let strategies: Vec<(&'static str, FillStrategy)> = match &args.strategy {
-        Some(name) => PRESETS.iter().copied().filter(|(n, _)| n == name).collect(),
+        Some(name) => {
+            let preset = FillStrategy::preset_arg(name).map_err(|e| anyhow!(e))?;
+            vec![(preset.name(), preset)]
+        }
         None => PRESETS.to_vec(),
     };
-    anyhow::ensure!(!strategies.is_empty(), "{}", FillStrategy::preset_arg(args.strategy.as_deref().unwrap_or_default()).err().unwrap_or_default());
     let adapter_strategy = FillStrategy::for_device(ctx.adapter.get_info().device_type).name();
     let summarised = strategies.iter().find(|(n, _)| *n == adapter_strategy).unwrap_or(&strategies[0]).0;
     // The timed frames come from renderers that record no timestamps (they cost lavapipe about
@@ -124,7 +126,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
         [("horizon", Camera { yaw_deg: 180.0, pitch_deg: 10.0, ..Camera::default() }), ("zenith", Camera::preset("zenith").ok_or_else(|| anyhow!("no zenith view"))?)];
     // The sky alone, filling the frame (what the goal is about); the frame with the main-scene
     // stand-in is measured beside it, for reference.
-    let measured: Vec<Measured> = strategies
+    let mut measured: Vec<Measured> = strategies
         .iter()
         .map(|&(name, strategy)| {
             let mut strategy = strategy;
@@ -141,7 +143,6 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
             })
         })
         .collect::<anyhow::Result<_>>()?;
-    let mut measured = measured;
 
     let mut cases = Vec::new();
     for (name, sky) in &skies {
@@ -224,11 +225,8 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
         .collect();
     let all_cases = cases;
     let cases: Vec<&Case> = all_cases.iter().filter(|c| c.strategy == summarised).collect();
-    let options = measured.iter().find(|m| m.name == summarised).map_or_else(RenderOptions::default, |m| m.options);
-    let Measured { mut plain, timing: mut hl, .. } = measured.into_iter().find(|m| m.name == summarised).ok_or_else(|| anyhow!("no renderer for {summarised}"))?;
-    let ratios: Vec<f64> = cases.iter().map(|c| c.sky_ms / c.floor_ms).collect();
-    let worst = ratios.iter().copied().fold(0.0, f64::max);
-    let med = median(&ratios);
+    let (_, worst, med, _) = per_strategy.iter().copied().find(|s| s.0 == summarised).ok_or_else(|| anyhow!("no cases of {summarised}"))?;
+    let Measured { mut plain, timing: mut hl, options, .. } = measured.into_iter().find(|m| m.name == summarised).ok_or_else(|| anyhow!("no renderer for {summarised}"))?;
     let scene_ratios: Vec<f64> = cases.iter().map(|c| c.with_scene_ms / c.floor_ms).collect();
     let (scene_worst, scene_med) = (scene_ratios.iter().copied().fold(0.0, f64::max), median(&scene_ratios));
     let stand_in_ms = median(&cases.iter().filter(|c| c.view == "horizon").map(|c| c.with_scene_ms - c.sky_ms).collect::<Vec<_>>());

@@ -534,7 +534,7 @@ impl SkyRenderer {
 
     /// The run buffer a step reads.
     fn run_input(&self, input: RunInput) -> Option<&wgpu::BindGroup> {
-        let layers = self.pass::<ReducedLayersPass>()?;
+        let layers = reduced_layers(&self.passes)?;
         match input {
             RunInput::None => None,
             RunInput::Upper(j) => layers.upper_bind_group(j),
@@ -569,7 +569,7 @@ impl SkyRenderer {
         let n = plan.runs.len();
         for (r, run) in plan.runs.iter().enumerate() {
             let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(r == 0, r + 1 == n && (!plan.joined() || plan.seeded)));
-            let Some(layers) = self.passes.iter().find_map(|p| (p.as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>()) else { return calls };
+            let Some(layers) = reduced_layers(&self.passes) else { return calls };
             let Some(mut rpass) = layers.begin(encoder, r, run_writes) else { continue };
             match run.seeding {
                 Seeding::None => {}
@@ -583,7 +583,7 @@ impl SkyRenderer {
         }
         if let (true, false) = (plan.joined(), plan.seeded) {
             let writes = self.timer.as_mut().and_then(|t| t.reduced_writes(false, true));
-            if let Some(layers) = self.passes.iter().find_map(|p| (p.as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>()) {
+            if let Some(layers) = reduced_layers(&self.passes) {
                 calls += layers.record_combined(encoder, &self.globals.bind_group, kind, writes);
             }
         }
@@ -621,12 +621,12 @@ impl SkyRenderer {
 
     /// The sky phase's steps.
     fn record_sky(&self, rpass: &mut wgpu::RenderPass<'_>, kind: Target, plan: &SkyPlan) -> u32 {
-        let reduced = self.passes.iter().position(|p| (p.as_ref() as &dyn std::any::Any).is::<ReducedLayersPass>());
+        let layers = reduced_layers(&self.passes);
         plan.steps
             .iter()
-            .map(|step| match (step, reduced) {
+            .map(|step| match (step, layers) {
                 (SkyStep::Draw(step), _) => self.record_step(rpass, kind, plan, step),
-                (SkyStep::Composite(r), Some(rp)) => self.passes[rp].draw(rpass, *r, kind, Placement::Plain, None),
+                (SkyStep::Composite(r), Some(layers)) => layers.draw(rpass, *r, kind, Placement::Plain, None),
                 (SkyStep::Composite(_), None) => 0,
             })
             .sum()
@@ -698,6 +698,12 @@ pub fn release_freed_memory() {
             malloc_trim(0);
         }
     }
+}
+
+/// The pass drawing reduced buffers, found through the pass list alone (so that the timer may be
+/// borrowed beside it).
+fn reduced_layers(passes: &[Box<dyn Pass>]) -> Option<&ReducedLayersPass> {
+    passes.iter().find_map(|p| (p.as_ref() as &dyn std::any::Any).downcast_ref::<ReducedLayersPass>())
 }
 
 /// Begins one phase's render pass on the shared colour and depth targets.

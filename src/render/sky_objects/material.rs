@@ -75,29 +75,71 @@ pub(super) fn lighting_index(l: Lighting) -> u32 {
     }
 }
 
+/// The part of a pipeline signature that a version's data fixes: its stages after folding (count,
+/// UV mode, op and constant of each) and its lighting. Computed once per upload from the sky, not
+/// read back from the uniform the GPU gets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct MaterialSignature {
+    pub(super) count: u32,
+    pub(super) modes: [u32; 4],
+    pub(super) ops: [u32; 4],
+    pub(super) constants: [u32; 4],
+    pub(super) lighting: u32,
+}
+
+impl MaterialSignature {
+    /// The signature of version `v` with the stages `folded_into` (the first of each folded pair)
+    /// each sampling the folded texture, the stage after it left white.
+    pub(super) fn of(v: &Version, folded_into: &[usize]) -> Self {
+        let mut sig = Self { count: v.stages.len() as u32, modes: [0; 4], ops: [0; 4], constants: [0; 4], lighting: lighting_index(v.lighting) };
+        for (k, s) in v.stages.iter().enumerate().take(4) {
+            sig.modes[k] = uv_mode(&s.uv).0;
+            sig.ops[k] = u32::from(s.op == StageOp::Modulate);
+            sig.constants[k] = s.constant.map_or(NO_STAGE, |c| c as u32);
+        }
+        for &first in folded_into {
+            let second = first + 1;
+            if second < 4 {
+                if sig.constants[first] == NO_STAGE {
+                    sig.constants[first] = sig.constants[second];
+                }
+                sig.modes[second] = UV_WHITE;
+                sig.constants[second] = NO_STAGE;
+            }
+        }
+        sig
+    }
+}
+
 impl From<&Version> for DrawUniform {
-    /// The parts of a draw that do not change from frame to frame.
+    /// The parts of a draw that do not change from frame to frame, no stage folded.
     fn from(v: &Version) -> Self {
         let mut stages = [StageUniform::zeroed(); 4];
         for (k, s) in v.stages.iter().enumerate() {
-            let (mode, params) = uv_mode(&s.uv);
-            let op = match s.op {
-                StageOp::Add => 0,
-                StageOp::Modulate => 1,
-            };
-            stages[k] = StageUniform { scale_offset: [s.uv_scale[0], s.uv_scale[1], 0.0, 0.0], params, cfg: [op, mode, s.constant.map_or(4, |c| c as u32), 1] };
+            stages[k] = StageUniform { scale_offset: [s.uv_scale[0], s.uv_scale[1], 0.0, 0.0], params: uv_mode(&s.uv).1, cfg: [0; 4] };
         }
-        DrawUniform {
+        let u = DrawUniform {
             object_from_local: Mat4::IDENTITY.to_cols_array_2d(),
             diffuse: [1.0; 4],
             constants: [[1.0; 4]; 4],
             stages,
-            misc: [v.stages.len() as u32, lighting_index(v.lighting), NO_STAGE, v.cloud_density.to_bits()],
-        }
+            misc: [0, 0, NO_STAGE, v.cloud_density.to_bits()],
+        };
+        u.with_signature(&MaterialSignature::of(v, &[]))
     }
 }
 
 impl DrawUniform {
+    /// The uniform with the configuration words of `sig` (stage count, lighting, and each
+    /// stage's op, UV mode and constant, every stage sampled): the one place they are written.
+    pub(super) fn with_signature(mut self, sig: &MaterialSignature) -> Self {
+        (self.misc[0], self.misc[1]) = (sig.count, sig.lighting);
+        for k in 0..(sig.count as usize).min(4) {
+            self.stages[k].cfg = [sig.ops[k], sig.modes[k], sig.constants[k], 1];
+        }
+        self
+    }
+
     /// Marks the stages of terms that contribute nothing this frame (a factor's constant is black,
     /// and transparent too when alpha weighs the colour) so the shader does not sample them;
     /// returns how many. The sky-model stage is never skipped.

@@ -148,18 +148,14 @@ impl SkyObjectDraws {
                             let oversampling = s.texture.as_ref().map_or(1.0, |t| *oversampling.entry(t.key.clone()).or_insert_with(|| texture_oversampling(t)));
                             texels_per_deg[k] = stage_texels_per_deg(s, &v.shape) / oversampling;
                         }
-                        let mut base = DrawUniform::from(v);
+                        let signature = MaterialSignature::of(v, &folds.iter().map(|f| f.stage).collect::<Vec<_>>());
+                        let mut base = DrawUniform::from(v).with_signature(&signature);
                         for f in &folds {
                             let (first, second) = (f.stage, f.stage + 1);
                             // A folded texture carries the finer detail of its two stages.
                             texels_per_deg[first] = texels_per_deg[first].max(texels_per_deg[second]);
                             texels_per_deg[second] = 0.0;
                             base.stages[first].scale_offset = [1.0, 1.0, 0.0, 0.0];
-                            if base.stages[first].cfg[2] == NO_STAGE {
-                                base.stages[first].cfg[2] = base.stages[second].cfg[2];
-                            }
-                            base.stages[second].cfg[1] = UV_WHITE;
-                            base.stages[second].cfg[2] = NO_STAGE;
                         }
                         // A sparse stage under the dome's mesh mapping, static: the folded one, or
                         // one of its own that repeats.
@@ -214,7 +210,7 @@ impl SkyObjectDraws {
                             blend: v.blend,
                             shape: v.shape,
                             base,
-                            signature: MaterialSignature::of(v, &folds.iter().map(|f| f.stage).collect::<Vec<_>>()),
+                            signature,
                             texels_per_deg,
                             texels,
                         }

@@ -68,42 +68,6 @@ impl Slot {
     }
 }
 
-/// The part of a pipeline signature that a version's data fixes: its stages after folding (count,
-/// UV mode, op and constant of each) and its lighting. Computed once per upload from the sky, not
-/// read back from the uniform the GPU gets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) struct MaterialSignature {
-    pub(super) count: u32,
-    pub(super) modes: [u32; 4],
-    pub(super) ops: [u32; 4],
-    pub(super) constants: [u32; 4],
-    pub(super) lighting: u32,
-}
-
-impl MaterialSignature {
-    /// The signature of version `v` with the stages `folded_into` (the first of each folded pair)
-    /// each sampling the folded texture, the stage after it left white.
-    pub(super) fn of(v: &Version, folded_into: &[usize]) -> Self {
-        let mut sig = Self { count: v.stages.len() as u32, modes: [0; 4], ops: [0; 4], constants: [0; 4], lighting: lighting_index(v.lighting) };
-        for (k, s) in v.stages.iter().enumerate().take(4) {
-            sig.modes[k] = uv_mode(&s.uv).0;
-            sig.ops[k] = u32::from(s.op == StageOp::Modulate);
-            sig.constants[k] = s.constant.map_or(NO_STAGE, |c| c as u32);
-        }
-        for &first in folded_into {
-            let second = first + 1;
-            if second < 4 {
-                if sig.constants[first] == NO_STAGE {
-                    sig.constants[first] = sig.constants[second];
-                }
-                sig.modes[second] = UV_WHITE;
-                sig.constants[second] = NO_STAGE;
-            }
-        }
-        sig
-    }
-}
-
 impl VariantKey {
     /// The signature of a draw of a version with material `sig`, this frame's `live` stages
     /// (those whose term is not black: [`DrawUniform::skip_dark_terms`]) and the stage the
