@@ -2,7 +2,7 @@
 // Sun glare: the occlusion-tested solar disc (no colour output) and the additive halo and
 // lens-flare sprites. (globals.wgsl is prepended by the loader.)
 
-// Keep in sync with `DiscUniform` in src/render/glare.rs.
+// Keep in sync with `DiscUniform` in src/render/passes/glare.rs.
 struct Disc {
     // Columns: right x half size, up x half size, towards_sun.
     sky_from_disc: mat4x4<f32>,

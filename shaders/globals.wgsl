@@ -1,5 +1,5 @@
 // Per-frame globals, bind group 0, shared by every pass.
-// Keep in sync with `Globals` in src/render/globals.rs.
+// Keep in sync with `Globals` in src/render/frame/globals.rs.
 struct Globals {
     clip_from_world: mat4x4<f32>,      // main-scene camera
     clip_from_sky: mat4x4<f32>,        // rotation-only camera: sky objects sit at the dome centre

@@ -4,7 +4,7 @@
 // order and as deterministic as the CPU's. Birth conditions come per bucket of time from the CPU
 // (emission switch, user parameters, weather). Its random numbers are a 32-bit PCG hash (WGSL
 // has no u64): the particles are the CPU's in kind, not one by one.
-// Keep `SimParams` in sync with `SimUniform` in src/render/particle_sim.rs.
+// Keep `SimParams` in sync with `SimUniform` in src/render/passes/particle_sim.rs.
 struct SimParams {
     clock: vec4<f32>,     // x: age of the first slot (s), y: seconds between slots, z: acceptance, w: slots
     life: vec4<f32>,      // lifetime, spread, speed, speed spread

@@ -30,7 +30,7 @@ fn fs_flash(in: ParticleOut) -> @location(0) vec4<f32> {
 }
 
 // Dome emitters' particles drawn after the composite of the run of reduced layers above them
-// (src/render/particles.rs, `Placement::UnderRun`).
+// (src/render/passes/particles.rs, `Placement::UnderRun`).
 
 // Additive under the run: the added light shows through its transmittance.
 @fragment

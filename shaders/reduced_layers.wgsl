@@ -1,5 +1,5 @@
 //! requires: reduced/run
-// Composite of a run of dome layers drawn at reduced resolution (src/render/reduced_layers.rs).
+// Composite of a run of dome layers drawn at reduced resolution (src/render/passes/reduced_layers.rs).
 // The run's buffer holds premultiplied colour and, in alpha, the transmittance of the run over
 // what lies behind it; upsampled bilinearly, it goes over the frame as target = colour +
 // transmittance * target (the pipeline's blend), depth-tested against the main scene like the

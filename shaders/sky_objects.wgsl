@@ -150,13 +150,13 @@ override LIGHTING: u32 = 0u;
 override UNDER_RUN: bool = false;
 override BLEND_KIND: u32 = 0u;
 // An additive draw that spans the frame drawn as the frame's background, first onto it
-// (src/render/pass.rs, `Placement::Background`): it writes the background run's colour plus
+// (src/render/frame/pass.rs, `Placement::Background`): it writes the background run's colour plus
 // its own term, neither blended nor depth-tested, in place of the background's composite. 0: not;
 // 1: the background is one run, which lies under the draw; 2: it is the joined runs' combination,
 // whose transmittance (the runs above the draw) weighs the term.
 override BACKGROUND: u32 = 0u;
 // The first layer of a seeded reduced buffer drawn over the lower run itself (group 2), replacing
-// the buffer's clear colour, unblended (src/render/pass.rs, `Placement::OverSeed`).
+// the buffer's clear colour, unblended (src/render/frame/pass.rs, `Placement::OverSeed`).
 override OVER_SEED: bool = false;
 // The upper layer of a pair (`fs_pair`, group 3), specialised as the draw's own constants above.
 override UPPER_STAGE_COUNT: u32 = 0u;
@@ -479,7 +479,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     return color;
 }
 
-// What the layer's blend into a reduced buffer (`REDUCED_BLENDS` in src/render/reduced_layers.rs)
+// What the layer's blend into a reduced buffer (`REDUCED_BLENDS` in src/render/passes/reduced_layers.rs)
 // would leave over the seed, the lower run's colour with transmittance 1: premultiplied colour
 // and the transmittance left.
 fn over_seed(color: vec4<f32>, pixel: vec2<f32>) -> vec4<f32> {

@@ -2,7 +2,7 @@
 // Point-star field: one screen-aligned sprite per star, rotating with the celestial frame.
 // (globals.wgsl is prepended by the loader.)
 
-// Keep in sync with `StarsUniform` in src/render/stars.rs.
+// Keep in sync with `StarsUniform` in src/render/passes/stars.rs.
 struct StarsParams {
     color: vec4<f32>,   // rgb tint, a = visibility
     size: vec4<f32>,    // x: size of a magnitude-0 star, pixels
@@ -46,7 +46,7 @@ fn star_color(in: VertexOut) -> vec4<f32> {
     return vec4<f32>(to_target(params.color.rgb * a), 1.0);
 }
 
-// Added light under the run above the stars (drawn after its composite: src/render/stars.rs,
+// Added light under the run above the stars (drawn after its composite: src/render/passes/stars.rs,
 // `Placement::UnderRun`) shows through the run's transmittance.
 @fragment
 fn fs_under_run(in: VertexOut) -> @location(0) vec4<f32> {

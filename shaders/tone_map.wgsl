@@ -3,7 +3,7 @@
 // decoded to linear) through the sky model's tone mapper and sRGB encoding into the display
 // target. One full-screen triangle. (globals.wgsl is prepended by the loader.)
 
-// Keep in sync with `ToneMapUniform` in src/render/tone_map.rs.
+// Keep in sync with `ToneMapUniform` in src/render/passes/tone_map.rs.
 struct ToneMapParams {
     settings: vec4<u32>, // x: tone mapper (0 ACES fitted, 1 Khronos PBR Neutral)
 };

@@ -5,7 +5,7 @@
 
 mod common;
 
-use skytune::render::strategy::FlashPlacement;
+use skytune::render::plan::strategy::FlashPlacement;
 use skytune::render::{Camera, FillStrategy, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::particles::{Burst, ParticleClock};
@@ -190,7 +190,7 @@ fn the_gpu_evaluation_matches_the_cpu_in_number_and_kind() {
         e.max_particles = 4000;
     }
     let e = sky.emitters[index].clone();
-    let mut gpu = skytune::render::particle_sim::StandaloneSim::new(&ctx, &skytune::render::ShaderLibrary::embedded(), e.max_particles).unwrap();
+    let mut gpu = skytune::render::passes::particle_sim::StandaloneSim::new(&ctx, &skytune::render::ShaderLibrary::embedded(), e.max_particles).unwrap();
     // Full storm (every slot born), light rain (thinned by the weather), and fair weather (none).
     for (weather, time_s) in [(1.0f32, 3.0), (1.0, 1000.125), (0.7, 17.25), (0.3, 40.0)] {
         let cpu = at(&sky, 12.0, weather, time_s);

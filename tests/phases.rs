@@ -6,8 +6,8 @@ mod common;
 
 use std::path::Path;
 
-use skytune::render::error::RenderResult;
-use skytune::render::pass::{DrawItem, FrameContext, Pass, PassBuild, PassConstructor, Phase, Pipelines, Target};
+use skytune::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, PassConstructor, Phase, Pipelines, Target};
+use skytune::render::gpu::error::RenderResult;
 use skytune::render::{Camera, GpuContext, Headless, RenderOptions, ShaderLibrary, SkyRenderer, OFFSCREEN_FORMAT};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::{load_sky_file, Clock, FrameInput, Stepping};
@@ -65,8 +65,8 @@ impl HourProbe {
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::ComputePipeline> {
-        let module = skytune::render::shaders::module(b.device, b.library, "hour_probe")?;
-        skytune::render::shaders::compute_pipeline(b.device, layout, &module, "cs_main", "HourProbe::pipeline")
+        let module = skytune::render::gpu::shaders::module(b.device, b.library, "hour_probe")?;
+        skytune::render::gpu::shaders::compute_pipeline(b.device, layout, &module, "cs_main", "HourProbe::pipeline")
     }
 
     /// The probe's buffer after the last frame (blocks).
@@ -121,8 +121,8 @@ impl Tint {
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::RenderPipeline> {
-        let module = skytune::render::shaders::module(b.device, b.library, "tint")?;
-        skytune::render::shaders::validated(b.device, "Tint::pipeline", || {
+        let module = skytune::render::gpu::shaders::module(b.device, b.library, "tint")?;
+        skytune::render::gpu::shaders::validated(b.device, "Tint::pipeline", || {
             b.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("Tint::pipeline"),
                 layout: Some(layout),
@@ -165,7 +165,7 @@ impl Pass for Tint {
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
         out.push(DrawItem::new(0, 0));
     }
-    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target, _placement: skytune::render::pass::Placement, _run: Option<&wgpu::BindGroup>) -> u32 {
+    fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, _key: usize, target: Target, _placement: skytune::render::frame::pass::Placement, _run: Option<&wgpu::BindGroup>) -> u32 {
         rpass.set_pipeline(self.pipeline.for_target(target));
         rpass.draw(0..3, 0..1);
         1
@@ -173,7 +173,8 @@ impl Pass for Tint {
 }
 
 /// The recipe's "one line in the phase list", here in a list of the test's own.
-const EXTRA: &[(&str, PassConstructor)] = &[("hour_probe", |b| skytune::render::pass::boxed(HourProbe::new, b)), ("tint", |b| skytune::render::pass::boxed(Tint::new, b))];
+const EXTRA: &[(&str, PassConstructor)] =
+    &[("hour_probe", |b| skytune::render::frame::pass::boxed(HourProbe::new, b)), ("tint", |b| skytune::render::frame::pass::boxed(Tint::new, b))];
 
 /// The checkout's shaders plus the test passes' files, in one folder.
 fn library_with_test_passes() -> (tempfile::TempDir, ShaderLibrary) {

@@ -4,7 +4,7 @@
 
 mod common;
 
-use skytune::render::strategy::{FlashPlacement, LayerPairs, RunJoining, UnderBackground};
+use skytune::render::plan::strategy::{FlashPlacement, LayerPairs, RunJoining, UnderBackground};
 use skytune::render::{Camera, Divisor, DomeResolution, FillStrategy, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::particles::ParticleClock;

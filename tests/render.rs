@@ -230,7 +230,7 @@ fn switching_the_sky_model_live_leaves_the_bitmap_path_exact() {
     let (d, _) = common::diff(&single, &before, 10);
     assert!(d.differing > 0.2, "the physical model colours the skydome: {d:?}");
     // The sky-view map is recomputed only when something it depends on changes.
-    let maps = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::sky_view::SkyViewPass>().unwrap().maps_computed;
+    let maps = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::passes::sky_view::SkyViewPass>().unwrap().maps_computed;
     let single_input = FrameInput { sky_model: Some(single_model(&sky)), ..bitmap.clone() };
     let n = maps(&h);
     h.frame(&sky, &single_input, &camera(), &opts, 0.0);
@@ -252,7 +252,7 @@ fn render_lut(name: &str, hour: f32, weather: f32) {
     let img = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
     common::check_reference(name, &img);
     // The tables were built once; a moving sun only recomputes the sky-view map.
-    let builds = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::sky_luts::SkyLutsPass>().unwrap().builds;
+    let builds = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::passes::sky_luts::SkyLutsPass>().unwrap().builds;
     let before = builds(&h);
     h.frame(&sky, &FrameInput { hour: hour + 0.5, ..input.clone() }, &camera(), &RenderOptions::default(), 0.0);
     assert_eq!(builds(&h), before, "the sun moved: the LUTs stay");
@@ -314,7 +314,7 @@ fn reference_model_renders_in_the_background() {
     let input = FrameInput { sky_model: Some(model), ..FrameInput::new(13.0, 0.0) };
     let opts = RenderOptions { glare: false, ..Default::default() };
     h.frame(&sky, &input, &camera(), &opts, 0.0);
-    let view = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::sky_view::SkyViewPass>().unwrap().progress();
+    let view = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::passes::sky_view::SkyViewPass>().unwrap().progress();
     assert!(h.renderer.busy() && view(&h).is_some(), "the first frame starts the background work");
     let img = h.render(&sky, &input, &camera(), &opts).unwrap();
     assert!(!h.renderer.busy() && view(&h).is_none(), "the still waited for it");

@@ -3,7 +3,7 @@
 
 mod common;
 
-use skytune::render::strategy::RunJoining;
+use skytune::render::plan::strategy::RunJoining;
 use skytune::render::{Camera, DomeResolution, FillStrategy, FrameStats, Headless, RenderOptions, Skips};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};

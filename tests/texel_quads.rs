@@ -5,7 +5,7 @@
 
 mod common;
 
-use skytune::render::strategy::SparseStages;
+use skytune::render::plan::strategy::SparseStages;
 use skytune::render::{Camera, FillStrategy, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};

@@ -1,9 +1,9 @@
 // A run of dome layers in its reduced buffer, read by full-resolution draws as bind group 2: the
 // combination of two joined runs (reduced_layers.wgsl) and draws moved after a run's composite
 // (sky objects, stars, dome particles: `Placement::UnderRun`). Premultiplied colour and, in
-// alpha, the run's transmittance. Bindings as `run_layout` in src/render/reduced_layers.rs.
+// alpha, the run's transmittance. Bindings as `run_layout` in src/render/passes/reduced_layers.rs.
 
-// Keep in sync with `CompositeUniform` in src/render/reduced_layers.rs.
+// Keep in sync with `CompositeUniform` in src/render/passes/reduced_layers.rs.
 struct Composite {
     // Pixel to texture coordinates (every buffer holds the whole frame): xy of a frame pixel
     // (1 / frame size), zw of a pixel of the seeded buffer (1 / its size).
@@ -14,7 +14,7 @@ struct Composite {
 @group(2) @binding(1) var run_layers: texture_2d<f32>;
 @group(2) @binding(2) var run_sampler: sampler;
 // The run below, where this run's buffer was seeded with it (then the buffer holds both runs'
-// combination, ReducedLayersPass::seed in src/render/reduced_layers.rs); else black.
+// combination, ReducedLayersPass::seed in src/render/passes/reduced_layers.rs); else black.
 @group(2) @binding(3) var run_lower: texture_2d<f32>;
 
 // The run at frame pixel `pixel` (a fragment's position), upsampled bilinearly.

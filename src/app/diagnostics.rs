@@ -77,7 +77,7 @@ fn skipped(ui: &mut egui::Ui, info: &UiInfo<'_>) {
 /// now against the median when they were last all on.
 fn switches(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     let s = info.stats;
-    use crate::render::strategy::{FlashPlacement, LayerPairs, RunJoining, SparseStages, UnderBackground, PRESETS};
+    use crate::render::plan::strategy::{FlashPlacement, LayerPairs, RunJoining, SparseStages, UnderBackground, PRESETS};
     let st = &mut c.options.strategy;
     ui.horizontal_wrapped(|ui| {
         ui.label(format!("fill strategy: {} (preset", st.name()));

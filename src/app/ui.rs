@@ -8,8 +8,8 @@ use std::sync::Arc;
 use egui::{Color32, RichText};
 
 use crate::atmosphere::OpticalDepth;
-use crate::render::camera::PRESETS;
-use crate::render::glare::GlareState;
+use crate::render::frame::camera::PRESETS;
+use crate::render::passes::glare::GlareState;
 use crate::render::{Camera, FrameStats, RenderOptions};
 use crate::sky::bitmap::ColorBitmap;
 use crate::sky::eval::{FrameSky, Tier};
@@ -197,7 +197,7 @@ pub struct UiInfo<'a> {
     pub compare: Option<CompareInfo>,
     /// The GPU device was lost (the errors panel offers to recreate it).
     pub device_lost: bool,
-    /// The fill-rate floor at the window's size, ms (see `render::baseline`), once measured.
+    /// The fill-rate floor at the window's size, ms (see `render::passes::baseline`), once measured.
     pub floor_ms: Option<f32>,
     /// `kind = "auto"`: the pick (model, error, cost, runner-up), what is shown meanwhile, or why
     /// there is none.

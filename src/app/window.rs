@@ -8,7 +8,7 @@ use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
 use super::layout::SkyViewport;
-use crate::render::headless::depth_view;
+use crate::render::gpu::headless::depth_view;
 use crate::render::{AdapterChoice, Camera, GpuContext, Headless, Offscreen, RenderOptions, RenderTarget, ShaderLibrary, SkyRenderer};
 use crate::sky::{FrameSky, Sky};
 
@@ -57,7 +57,7 @@ pub struct WindowGpu {
 }
 
 /// The fill-rate floor pass, its target at the window's size, and its last measurement (ms, frame).
-type FloorProbe = (crate::render::baseline::Baseline, crate::render::Offscreen, Option<(f32, u64)>);
+type FloorProbe = (crate::render::passes::baseline::Baseline, crate::render::Offscreen, Option<(f32, u64)>);
 
 impl WindowGpu {
     /// Opens the window and its device, builds the renderer (falling back to the embedded shaders
@@ -71,7 +71,7 @@ impl WindowGpu {
     /// Builds the device and everything on it for an existing window (start-up, and after the
     /// device was lost).
     pub fn with_window(window: Arc<Window>, adapter: AdapterChoice, library: ShaderLibrary, sky: &Sky) -> anyhow::Result<(Self, Option<String>)> {
-        let instance = crate::render::context::new_instance();
+        let instance = crate::render::gpu::context::new_instance();
         let surface = instance.create_surface(window.clone()).context("creating the window surface")?;
         let ctx = GpuContext::new(instance, adapter, Some(&surface))?;
         log::info!("adapter: {}", ctx.adapter_line());
@@ -197,7 +197,7 @@ impl WindowGpu {
         };
         if stale {
             if self.floor.as_ref().is_none_or(|(_, t, _)| (t.width, t.height) != (w, h)) {
-                let baseline = crate::render::baseline::Baseline::new(&self.ctx.device, &self.ctx.queue, self.renderer.library(), crate::render::OFFSCREEN_FORMAT).ok()?;
+                let baseline = crate::render::passes::baseline::Baseline::new(&self.ctx.device, &self.ctx.queue, self.renderer.library(), crate::render::OFFSCREEN_FORMAT).ok()?;
                 self.floor = Some((baseline, crate::render::Offscreen::new(&self.ctx.device, w, h), None));
             }
             let (baseline, target, last) = self.floor.as_mut()?;

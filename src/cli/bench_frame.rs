@@ -12,8 +12,8 @@ use anyhow::{anyhow, Context as _};
 
 use crate::cli::{self, FrameBenchArgs};
 use skytune::files::hot_reload::{LiveSky, ReloadEvent, SkySpec};
-use skytune::render::baseline::Baseline;
-use skytune::render::strategy::PRESETS;
+use skytune::render::passes::baseline::Baseline;
+use skytune::render::plan::strategy::PRESETS;
 use skytune::render::{AdapterChoice, Camera, FillStrategy, GpuContext, Headless, RenderOptions, ShaderLibrary, OFFSCREEN_FORMAT};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::{FrameInput, Sky};
@@ -441,7 +441,7 @@ fn particle_costs(ctx: &GpuContext, runs: u32, caps: &[u32]) -> anyhow::Result<V
         e.lifetime_spread = 0.0;
         e.rate = cap as f32 / e.lifetime_s;
         sky.emitters = vec![e.clone()];
-        let mut gpu = skytune::render::particle_sim::StandaloneSim::new(ctx, &ShaderLibrary::embedded(), cap)?;
+        let mut gpu = skytune::render::passes::particle_sim::StandaloneSim::new(ctx, &ShaderLibrary::embedded(), cap)?;
         let upload = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("BenchFrame::particle_upload"),
             size: cap as u64 * 64,

@@ -124,7 +124,7 @@ fn cpu_fill_ms(ev: &Evaluator<'_>, prepared: &Prepared) -> anyhow::Result<f64> {
     if matches!(prepared, Prepared::Gpu(_) | Prepared::Analytic(..) | Prepared::Baked(_)) {
         return Ok(0.0);
     }
-    let (w, h) = skytune::render::pass::SharedResources::SKY_VIEW_SIZE;
+    let (w, h) = skytune::render::frame::pass::SharedResources::SKY_VIEW_SIZE;
     let cases: Vec<Case> = (0..w * h)
         .map(|k| Case {
             camera_km: dome::CAMERA_KM,

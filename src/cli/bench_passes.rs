@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::anyhow;
 
 use crate::cli::{self, BenchArgs};
-use skytune::render::strategy::{RunJoining, UnderBackground};
+use skytune::render::plan::strategy::{RunJoining, UnderBackground};
 use skytune::render::{AdapterChoice, Camera, FillStrategy, GpuContext, Headless, RenderOptions, Skips};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};

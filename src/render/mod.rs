@@ -1,43 +1,21 @@
 //! wgpu renderer of sky scenes, organised as an ordered list of phases (see [`pass`]). One pass =
 //! one module here + one `.wgsl` file in `shaders/` of the same name.
 
-pub mod baseline;
-pub mod camera;
-pub mod context;
-pub mod error;
-pub mod glare;
-pub mod globals;
-pub mod headless;
-pub mod mesh;
-pub mod particle_sim;
-pub mod particles;
-pub mod pass;
+pub mod frame;
+pub mod gpu;
+pub mod passes;
 pub mod plan;
-pub mod precipitation;
-pub mod radiance_probe;
-pub mod reduced_layers;
-pub mod renderer;
-pub mod scene;
-pub mod shaders;
-pub mod sky_luts;
-pub mod sky_model;
 pub mod sky_objects;
-pub mod sky_view;
-pub mod stars;
-pub mod strategy;
-pub mod textures;
-pub mod timing;
-pub mod tone_map;
 
-pub use camera::Camera;
-pub use context::{AdapterChoice, GpuContext};
-pub use error::{RenderError, RenderResult};
-pub use headless::{Headless, Offscreen};
-pub use pass::{Pass, Phase, PASSES};
-pub use reduced_layers::{Divisor, DomeResolution};
-pub use renderer::{release_freed_memory, FrameStats, RenderOptions, RenderTarget, Skips, SkyRenderer, UploadStats, SCENE_DEPTH, SKY_DEPTH};
-pub use shaders::ShaderLibrary;
-pub use strategy::FillStrategy;
+pub use frame::camera::Camera;
+pub use frame::pass::{Pass, Phase, PASSES};
+pub use frame::renderer::{release_freed_memory, FrameStats, RenderOptions, RenderTarget, Skips, SkyRenderer, UploadStats, SCENE_DEPTH, SKY_DEPTH};
+pub use gpu::context::{AdapterChoice, GpuContext};
+pub use gpu::error::{RenderError, RenderResult};
+pub use gpu::headless::{self, Headless, Offscreen};
+pub use gpu::shaders::ShaderLibrary;
+pub use passes::reduced_layers::{Divisor, DomeResolution};
+pub use plan::strategy::FillStrategy;
 
 /// Colour format of the HDR target that frames of a physical sky model draw into (exposed linear
 /// radiance; the display phase tone-maps it into the display target).

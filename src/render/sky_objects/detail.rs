@@ -99,7 +99,7 @@ impl StageMap {
     /// A texture `texels` across one repeat of mapping `uv` on `shape`.
     pub(super) fn with_texels(uv: UvSource, texels: (f32, f32), shape: &Shape) -> Self {
         let mut map = Self { uv, texels, ring_peaks: Vec::new() };
-        if let (UvSource::Mesh | UvSource::Quake { .. }, Some((top_deg, bottom_deg, rings, _))) = (uv, crate::render::mesh::dome_grid(shape)) {
+        if let (UvSource::Mesh | UvSource::Quake { .. }, Some((top_deg, bottom_deg, rings, _))) = (uv, crate::render::gpu::mesh::dome_grid(shape)) {
             map.ring_peaks = (0..rings)
                 .map(|r| {
                     let (a, b) = (top_deg + (bottom_deg - top_deg) * r as f32 / rings as f32, top_deg + (bottom_deg - top_deg) * (r + 1) as f32 / rings as f32);
@@ -127,7 +127,7 @@ impl StageMap {
         let (w, h) = self.texels;
         let (lo, hi) = view.elevation_deg;
         match self.uv {
-            UvSource::Mesh => match crate::render::mesh::dome_grid(shape) {
+            UvSource::Mesh => match crate::render::gpu::mesh::dome_grid(shape) {
                 // u runs once round the azimuth, v once from the top ring to the bottom one. Along
                 // a ring a degree of view crosses 1 / cos(elevation) degrees of azimuth. Each band
                 // of triangles between two rings spans a chord of both; the triangles round a pole

@@ -34,14 +34,14 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Quat, Vec3, Vec4};
 
 use self::texel_quads::{GpuTexelMesh, TexelSource, TexelVertex};
-use crate::render::camera::Camera;
-use crate::render::error::RenderResult;
-use crate::render::mesh::{outline_mesh, shape_key, shape_mesh, GpuMesh, SkyVertex};
-use crate::render::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
-use crate::render::reduced_layers::Divisor;
-use crate::render::renderer::FrameStats;
-use crate::render::shaders;
-use crate::render::textures::{self, TextureCache};
+use crate::render::frame::camera::Camera;
+use crate::render::frame::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
+use crate::render::frame::renderer::FrameStats;
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::mesh::{outline_mesh, shape_key, shape_mesh, GpuMesh, SkyVertex};
+use crate::render::gpu::shaders;
+use crate::render::gpu::textures::{self, TextureCache};
+use crate::render::passes::reduced_layers::Divisor;
 use crate::sky::eval::{FrameSky, VersionFrame};
 use crate::sky::resolved::{BlendMode, Lighting, Shape, Sky, StageOp, TextureImage, UvSource, Version, MAX_STAGES};
 
@@ -68,12 +68,12 @@ pub struct SkyObjectsPass {
     /// the shaders change.
     texel_pipelines: HashMap<VariantKey, Option<wgpu::RenderPipeline>>,
     /// The background without its sparse stage as one triangle over the frame
-    /// ([`crate::render::strategy::SparseStages::TexelPolygonsOnBands`]), by the signature without the stage.
+    /// ([`crate::render::plan::strategy::SparseStages::TexelPolygonsOnBands`]), by the signature without the stage.
     fullscreen_pipelines: HashMap<VariantKey, Option<wgpu::RenderPipeline>>,
-    /// Sparse stages are drawn texel by texel this frame ([`crate::render::strategy::SparseStages::TexelPolygons`]).
+    /// Sparse stages are drawn texel by texel this frame ([`crate::render::plan::strategy::SparseStages::TexelPolygons`]).
     texels_on: bool,
     /// The rest of such a draw goes as bands where the polygons stand for the stage
-    /// ([`crate::render::strategy::SparseStages::TexelPolygonsOnBands`]).
+    /// ([`crate::render::plan::strategy::SparseStages::TexelPolygonsOnBands`]).
     bands_on: bool,
     /// Triangles of texel polygons recorded this frame (counted as they are recorded).
     texel_triangles: std::cell::Cell<u32>,
@@ -141,7 +141,7 @@ impl SkyObjectsPass {
         entries.extend((0..4).map(|i| crate::render::sampler_entry(5 + i)));
         entries.extend([crate::render::texture_entry(9), crate::render::sampler_entry(10)]);
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("SkyObjects::draw_layout"), entries: &entries });
-        let run_layout = crate::render::reduced_layers::run_layout(device, "SkyObjects::run_layout");
+        let run_layout = crate::render::passes::reduced_layers::run_layout(device, "SkyObjects::run_layout");
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("SkyObjects::pipeline_layout"),
             bind_group_layouts: &[Some(globals), Some(&bind_layout), Some(&run_layout)],
@@ -159,7 +159,7 @@ impl SkyObjectsPass {
                 usage: wgpu::BufferUsages::UNIFORM,
                 mapped_at_creation: false,
             });
-            let view = crate::render::textures::unused_view(device, "SkyObjects::no_run_texture");
+            let view = crate::render::gpu::textures::unused_view(device, "SkyObjects::no_run_texture");
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("SkyObjects::no_run"),
                 layout: &run_layout,
@@ -401,7 +401,7 @@ impl Pass for SkyObjectsPass {
         self.texel_triangles.set(0);
         self.background_rects.set(0);
         let Some(draws) = &self.draws.current else { return };
-        let neutral = crate::render::tone_map::ToneMapUniform::from(cx.frame.sky_model.tone_mapper).settings[0] != 0;
+        let neutral = crate::render::passes::tone_map::ToneMapUniform::from(cx.frame.sky_model.tone_mapper).settings[0] != 0;
         self.keys.clear();
         self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera, cx.options.skips.dark_stages, (cx.target, neutral), &mut self.keys);
         self.ref_hidden = 0;
@@ -426,7 +426,7 @@ impl Pass for SkyObjectsPass {
             versions.iter().all(|v| match draws.objects[of.index][v.version].shape {
                 // Half the diagonal of the square: its highest corner at any roll.
                 crate::sky::resolved::Shape::Billboard { size_deg } | crate::sky::resolved::Shape::Quad { size_deg } => {
-                    elevation_deg + size_deg.get() * std::f32::consts::FRAC_1_SQRT_2 < -crate::render::renderer::SCENE_COVERS_BELOW_DEG
+                    elevation_deg + size_deg.get() * std::f32::consts::FRAC_1_SQRT_2 < -crate::render::frame::renderer::SCENE_COVERS_BELOW_DEG
                 }
                 _ => false,
             })
@@ -550,7 +550,7 @@ impl Pass for SkyObjectsPass {
             let view = FrameView::new(cx.camera, cx.aspect(), (lowest_deg, highest_deg), cx.frame.towards_sun, cx.frame.celestial_from_world);
             // Drawn or not, the scene's pixels there are the scene's (reduced buffers keep their
             // clear colour there, too far below the scene's edge for the upsampling to reach).
-            let covered_below_deg = if cx.options.scene && cx.options.skips.below_horizon { -crate::render::renderer::SCENE_COVERS_BELOW_DEG } else { f32::NEG_INFINITY };
+            let covered_below_deg = if cx.options.scene && cx.options.skips.below_horizon { -crate::render::frame::renderer::SCENE_COVERS_BELOW_DEG } else { f32::NEG_INFINITY };
             for e in &mut self.visible {
                 let d = &draws.objects[e.index][e.version];
                 // Frame pixels per degree at the frame's centre (the fewest: a perspective frame
@@ -563,7 +563,7 @@ impl Pass for SkyObjectsPass {
                 };
                 let start = self.parts.len();
                 let mut used = 0u8;
-                match crate::render::mesh::dome_grid(&d.shape) {
+                match crate::render::gpu::mesh::dome_grid(&d.shape) {
                     Some((top_deg, bottom_deg, rings, segments)) => {
                         let per_ring = segments * 6;
                         for r in 0..rings {

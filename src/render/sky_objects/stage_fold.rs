@@ -70,7 +70,7 @@ pub fn identity(v: &Version, f: &Fold) -> (String, u64) {
     let name = format!("fold({} x {:?} * {} x {:?})", key(a), a.uv_scale, key(b), b.uv_scale);
     let mut h = std::collections::hash_map::DefaultHasher::new();
     for s in [a, b] {
-        s.texture.as_deref().map(crate::render::textures::content_hash).hash(&mut h);
+        s.texture.as_deref().map(crate::render::gpu::textures::content_hash).hash(&mut h);
         s.uv_scale.map(f32::to_bits).hash(&mut h);
         s.clamp.hash(&mut h);
     }

@@ -15,7 +15,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use wgpu::util::DeviceExt;
 
-use crate::render::mesh::MeshData;
+use crate::render::gpu::mesh::MeshData;
 
 /// The most texels that are not black a texture may have to be drawn texel by texel (about a
 /// megabyte of vertices); denser textures are sampled.
@@ -201,7 +201,7 @@ pub struct GpuTexelMesh {
     pub segments: u32,
     /// Each cell's bounding cone ([`TexelMesh::cell_cones`]).
     pub cell_cones: Vec<(Vec3, f32)>,
-    /// The grid's bands ([`crate::render::mesh::band_indices`], indices into the grid's own vertices):
+    /// The grid's bands ([`crate::render::gpu::mesh::band_indices`], indices into the grid's own vertices):
     /// where the polygons stand for the sparse stage, the rest of the draw maps nothing from the
     /// grid, and one band over those rings covers the same pixels with fewer triangles, whose
     /// edges a rasteriser shades twice.
@@ -230,7 +230,7 @@ impl GpuTexelMesh {
         let rings = (m.cell_starts.len().saturating_sub(1) as u32) / segments;
         let bands = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(&format!("{label}::grid_bands")),
-            contents: bytemuck::cast_slice(&crate::render::mesh::band_indices(rings, segments)),
+            contents: bytemuck::cast_slice(&crate::render::gpu::mesh::band_indices(rings, segments)),
             usage: wgpu::BufferUsages::INDEX,
         });
         Some(Self { vertices, indices, cell_starts: m.cell_starts.clone(), segments: m.segments, cell_cones: m.cell_cones.clone(), bands, rings })
@@ -242,7 +242,7 @@ impl GpuTexelMesh {
         if a >= b {
             return 0..0;
         }
-        let start = crate::render::mesh::band_start(self.rings, self.segments.max(1), a, b);
+        let start = crate::render::gpu::mesh::band_start(self.rings, self.segments.max(1), a, b);
         start..start + self.segments.max(1) * 6
     }
 
@@ -270,7 +270,7 @@ impl GpuTexelMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::mesh::{dome_grid, shape_mesh};
+    use crate::render::gpu::mesh::{dome_grid, shape_mesh};
     use crate::sky::model::Elevation;
     use crate::sky::resolved::Shape;
 

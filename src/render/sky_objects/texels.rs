@@ -11,7 +11,7 @@ pub(super) struct TexelDraw<'a> {
     pub(super) stage: usize,
     /// The draw without the stage, on the grid or its bands.
     pub(super) without: &'a wgpu::RenderPipeline,
-    /// The same as one triangle over the frame ([`crate::render::strategy::SparseStages::TexelPolygonsOnBands`]), if built.
+    /// The same as one triangle over the frame ([`crate::render::plan::strategy::SparseStages::TexelPolygonsOnBands`]), if built.
     pub(super) fullscreen: Option<&'a wgpu::RenderPipeline>,
     /// The polygons' pipeline and mesh.
     pub(super) polygons: &'a wgpu::RenderPipeline,
@@ -46,7 +46,7 @@ impl SkyObjectsPass {
     /// their rows of vertices, projected. The whole frame when one lies behind the eye (the box
     /// would be unbounded), None for no rings.
     pub(super) fn rings_box(&self, d: &VersionDraw, ring_indices: impl Iterator<Item = std::ops::Range<u32>>) -> Option<[u32; 4]> {
-        let (top_deg, bottom_deg, rings, segments) = crate::render::mesh::dome_grid(&d.shape)?;
+        let (top_deg, bottom_deg, rings, segments) = crate::render::gpu::mesh::dome_grid(&d.shape)?;
         let per_ring = segments * 6;
         let (w, h) = (self.frame_size.0.max(1), self.frame_size.1.max(1));
         let (_, clip_from_sky) = self.frame_camera.matrices(w as f32 / h as f32);
@@ -56,7 +56,7 @@ impl SkyObjectsPass {
             // The rings' region is bounded by its top and bottom rows' chords and the meridians
             // between: its projection lies in the box of those rows' vertices.
             for row in [indices.start / per_ring, indices.end.div_ceil(per_ring)] {
-                let elevation = crate::render::mesh::row_elevation_deg(top_deg, bottom_deg, rings, row.min(rings));
+                let elevation = crate::render::gpu::mesh::row_elevation_deg(top_deg, bottom_deg, rings, row.min(rings));
                 for s in 0..segments {
                     let dir = crate::sky::eval::direction(s as f32 / segments as f32 * 360.0, elevation);
                     let clip = clip_from_sky * dir.extend(1.0);

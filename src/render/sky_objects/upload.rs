@@ -159,7 +159,7 @@ impl SkyObjectDraws {
                         }
                         // A sparse stage under the dome's mesh mapping, static: the folded one, or
                         // one of its own that repeats.
-                        let texels = match (crate::render::mesh::dome_grid(&v.shape), is_outline) {
+                        let texels = match (crate::render::gpu::mesh::dome_grid(&v.shape), is_outline) {
                             (Some((_, _, rings, _)), false) => (0..v.stages.len()).find_map(|k| {
                                 let s = &v.stages[k];
                                 let fixed = matches!(s.uv, UvSource::Mesh) && s.panner == [0.0, 0.0] && s.uv_offset.is_none() && !folded_away(k) && gradient_stage != Some(k);

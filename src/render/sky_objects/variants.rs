@@ -29,14 +29,14 @@ pub(super) struct VariantKey {
     /// The HDR target's tone mapper (`TONE_KIND` of tone.wgsl): 1 ACES, 2 neutral; 0 on the
     /// display target.
     pub(super) tone: u32,
-    /// Drawn into a reduced-resolution buffer ([`crate::render::reduced_layers`]).
+    /// Drawn into a reduced-resolution buffer ([`crate::render::passes::reduced_layers`]).
     pub(super) reduced: bool,
     /// Where on the frame it goes ([`Slot::Plain`] for reduced draws).
     pub(super) placement: Slot,
 }
 
 /// Where a draw on the frame goes, as its pipeline variant sees it (the shader's switches of a
-/// [`crate::render::pass::Placement`]).
+/// [`crate::render::frame::pass::Placement`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub(super) enum Slot {
     /// In its place in the sky phase, depth-tested against the scene.
@@ -45,7 +45,7 @@ pub(super) enum Slot {
     /// transmittance (`UNDER_RUN` in the shader).
     UnderRun,
     /// Additive, first onto the cleared frame under the background run, not depth-tested
-    /// ([`crate::render::strategy::UnderBackground::Additive`]).
+    /// ([`crate::render::plan::strategy::UnderBackground::Additive`]).
     First,
     /// Additive and covering the frame: the background itself, its run's colour plus the
     /// draw's term, neither blended nor depth-tested (`BACKGROUND` in the shader: 1).
@@ -157,7 +157,7 @@ impl PairKey {
 
 /// The blend of a pair of alpha layers into a reduced buffer: `fs_pair` writes premultiplied
 /// colour and what the pair covers, so the buffer ends as two alpha blends would leave it
-/// ([`crate::render::reduced_layers::REDUCED_BLENDS`]): colour + (1 - covered) x buffer, and the
+/// ([`crate::render::passes::reduced_layers::REDUCED_BLENDS`]): colour + (1 - covered) x buffer, and the
 /// transmittance in alpha times what the pair lets through.
 pub(super) const PAIR_BLEND: wgpu::BlendState = wgpu::BlendState {
     color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha, operation: wgpu::BlendOperation::Add },
@@ -326,13 +326,13 @@ impl SkyObjectsPass {
                 }
                 let constants = key.constants();
                 let format = match (key.reduced, key.target) {
-                    (true, target) => crate::render::reduced_layers::reduced_format(target),
+                    (true, target) => crate::render::passes::reduced_layers::reduced_format(target),
                     (false, Target::Hdr) => crate::render::HDR_FORMAT,
                     (false, Target::Display) => self.display_format,
                 };
                 let blend = match (key.reduced, key.placement) {
                     (true, Slot::OverSeed) => None,
-                    (true, _) => Some(crate::render::reduced_layers::REDUCED_BLENDS[key.blend]),
+                    (true, _) => Some(crate::render::passes::reduced_layers::REDUCED_BLENDS[key.blend]),
                     (false, Slot::UnderRun) => UNDER_RUN_BLENDS[key.blend],
                     (false, Slot::Plain | Slot::First) => BLENDS[key.blend],
                     // Not made (`entry_key`): reduced only.
@@ -411,7 +411,7 @@ impl SkyObjectsPass {
             }
             let label = format!("SkyObjects::pair {key:?}");
             let blend = if key.lower.placement == Slot::OverSeed { None } else { Some(PAIR_BLEND) };
-            let format = crate::render::reduced_layers::reduced_format(target);
+            let format = crate::render::passes::reduced_layers::reduced_format(target);
             let built = create_pipeline(device, (&self.pair_layout, &self.pipelines.get().module, PAIR), &label, (blend, format, None), &key.constants());
             if let Err(e) = &built {
                 log::error!("{label}: {e}; the two layers are drawn one after the other");

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::error::{RenderError, RenderResult};
+use crate::render::gpu::error::{RenderError, RenderResult};
 
 include!(concat!(env!("OUT_DIR"), "/embedded_shaders.rs"));
 

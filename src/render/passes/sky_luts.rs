@@ -2,10 +2,10 @@
 //! tables (Hillaire 2020) into the shared buffers, only when the atmosphere, the LUT settings or
 //! the ground albedo change. Idle for every other model.
 
-use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Staged};
-use super::sky_model::{AtmosphereUniform, LutBuilder, LutUniform};
 use crate::atmosphere::LutSettings;
+use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Staged};
+use crate::render::gpu::error::RenderResult;
+use crate::render::passes::sky_model::{AtmosphereUniform, LutBuilder, LutUniform};
 use crate::sky::resolved::SkyModelKind;
 
 /// The sky LUTs pass.

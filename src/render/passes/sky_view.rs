@@ -7,10 +7,10 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SharedResources};
-use super::shaders;
-use super::sky_model::{AtmosphereUniform, SingleUniform};
+use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SharedResources};
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders;
+use crate::render::passes::sky_model::{AtmosphereUniform, SingleUniform};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
@@ -54,7 +54,7 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
         let auto = model.auto_exposure && !display_referred;
         Self {
             towards_sun: towards_sun.extend(model.camera_km).to_array(),
-            exposure: [exposure, super::tone_map::ToneMapUniform::from(model.tone_mapper).settings[0] as f32, w as f32, h as f32],
+            exposure: [exposure, crate::render::passes::tone_map::ToneMapUniform::from(model.tone_mapper).settings[0] as f32, w as f32, h as f32],
             model: [kind, if auto { 1.0 } else { 0.0 }, 0.0, 0.0],
         }
     }
@@ -65,7 +65,7 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
 struct Key {
     atmosphere: AtmosphereUniform,
     single: SingleUniform,
-    lut: super::sky_model::LutUniform,
+    lut: crate::render::passes::sky_model::LutUniform,
     params: SkyViewParams,
     /// `cells` iterations, or `reference` paths and grid.
     cpu: [u32; 3],
@@ -261,7 +261,7 @@ impl SkyViewPass {
     /// Builds the pipeline and binds the shared sky-view map.
     pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
         let device = b.device;
-        let mut entries: Vec<wgpu::BindGroupLayoutEntry> = (0..2).map(|i| super::uniform_entry(i, wgpu::ShaderStages::COMPUTE)).collect();
+        let mut entries: Vec<wgpu::BindGroupLayoutEntry> = (0..2).map(|i| crate::render::uniform_entry(i, wgpu::ShaderStages::COMPUTE)).collect();
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: 2,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -275,12 +275,12 @@ impl SkyViewPass {
             count: None,
         });
         entries.extend([
-            super::sky_model::storage_entry(4, true),
-            super::sky_model::storage_entry(5, true),
-            super::sky_model::storage_entry(6, true),
-            super::sky_model::storage_entry(7, true),
-            super::sky_model::storage_entry(8, false),
-            super::sky_model::storage_entry(9, true),
+            crate::render::passes::sky_model::storage_entry(4, true),
+            crate::render::passes::sky_model::storage_entry(5, true),
+            crate::render::passes::sky_model::storage_entry(6, true),
+            crate::render::passes::sky_model::storage_entry(7, true),
+            crate::render::passes::sky_model::storage_entry(8, false),
+            crate::render::passes::sky_model::storage_entry(9, true),
         ]);
         let analytic = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::analytic"),
@@ -469,7 +469,7 @@ impl Pass for SkyViewPass {
         }
     }
 
-    fn stats(&self, stats: &mut super::FrameStats) {
+    fn stats(&self, stats: &mut crate::render::FrameStats) {
         stats.map_skipped = self.skipped;
     }
 
@@ -481,12 +481,12 @@ impl Pass for SkyViewPass {
         self.copy_map(encoder);
         // Every frame: the renderer rewrites the globals each frame.
         if self.drive_scene {
-            encoder.copy_buffer_to_buffer(&self.sky_light, 16, &self.globals, super::globals::SCENE_LIGHT_OFFSET, 48);
+            encoder.copy_buffer_to_buffer(&self.sky_light, 16, &self.globals, crate::render::frame::globals::SCENE_LIGHT_OFFSET, 48);
         }
         if self.model_light {
             // Lit clouds: the model's sun (sky_light[3]) and ambient (sky_light[2]) light.
-            encoder.copy_buffer_to_buffer(&self.sky_light, 48, &self.globals, super::globals::CLOUD_LIGHT_OFFSET, 16);
-            encoder.copy_buffer_to_buffer(&self.sky_light, 32, &self.globals, super::globals::CLOUD_LIGHT_OFFSET + 16, 16);
+            encoder.copy_buffer_to_buffer(&self.sky_light, 48, &self.globals, crate::render::frame::globals::CLOUD_LIGHT_OFFSET, 16);
+            encoder.copy_buffer_to_buffer(&self.sky_light, 32, &self.globals, crate::render::frame::globals::CLOUD_LIGHT_OFFSET + 16, 16);
         }
     }
 
@@ -515,7 +515,7 @@ impl SkyViewPass {
         let key = Key {
             atmosphere: (&cx.frame.atmosphere).into(),
             single: (&model.single).into(),
-            lut: super::sky_model::LutUniform::new(&model.lut, model.ground_albedo),
+            lut: crate::render::passes::sky_model::LutUniform::new(&model.lut, model.ground_albedo),
             params: (model, cx.frame.towards_sun).into(),
             cpu: match model.kind {
                 SkyModelKind::Reference => [model.reference_paths, model.reference_grid[0], model.reference_grid[1]],

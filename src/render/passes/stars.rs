@@ -3,10 +3,10 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
-use super::error::RenderResult;
-use super::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
-use super::renderer::FrameStats;
-use super::shaders;
+use crate::render::frame::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
+use crate::render::frame::renderer::FrameStats;
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders;
 use crate::sky::starfield;
 use crate::sky::{resolved::Stars, Rgba};
 
@@ -33,9 +33,9 @@ struct StarInstance {
 pub struct StarsPass {
     bind_layout: wgpu::BindGroupLayout,
     pipeline: Pipelines<wgpu::RenderPipeline>,
-    /// The same drawn after the run of reduced layers above the stars ([`Placement::UnderRun`](super::pass::Placement::UnderRun)).
+    /// The same drawn after the run of reduced layers above the stars ([`Placement::UnderRun`](crate::render::frame::pass::Placement::UnderRun)).
     under_run: Pipelines<wgpu::RenderPipeline>,
-    /// The same drawn first under the background, not depth-tested ([`Placement::First`](super::pass::Placement::First)).
+    /// The same drawn first under the background, not depth-tested ([`Placement::First`](crate::render::frame::pass::Placement::First)).
     first: Pipelines<wgpu::RenderPipeline>,
     field: Staged<Option<StarField>>,
     /// Whether the stars show this frame.
@@ -48,8 +48,10 @@ impl StarsPass {
     /// Builds the pipeline.
     pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
         let (device, globals) = (b.device, b.globals_layout);
-        let bind_layout = device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("Stars::layout"), entries: &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)] });
+        let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("Stars::layout"),
+            entries: &[crate::render::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
+        });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Stars::pipeline_layout"),
             bind_group_layouts: &[Some(globals), Some(&bind_layout)],
@@ -57,7 +59,7 @@ impl StarsPass {
         });
         let pipeline = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| Self::build(b, l, "fs_main", wgpu::CompareFunction::Less))?;
         let first = Pipelines::new_render(b, pipeline_layout, |b, l| Self::build(b, l, "fs_main", wgpu::CompareFunction::Always))?;
-        let run_layout = super::reduced_layers::run_layout(device, "Stars::run_layout");
+        let run_layout = crate::render::passes::reduced_layers::run_layout(device, "Stars::run_layout");
         let under_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Stars::under_run_pipeline_layout"),
             bind_group_layouts: &[Some(globals), Some(&bind_layout), Some(&run_layout)],
@@ -87,12 +89,12 @@ impl StarsPass {
                     compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
-                depth_stencil: super::depth_state(false, compare),
+                depth_stencil: crate::render::depth_state(false, compare),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
                     entry_point: Some(entry),
-                    targets: &[Some(wgpu::ColorTargetState { format, blend: Some(super::ADDITIVE_ALPHA), write_mask: wgpu::ColorWrites::ALL })],
+                    targets: &[Some(wgpu::ColorTargetState { format, blend: Some(crate::render::ADDITIVE_ALPHA), write_mask: wgpu::ColorWrites::ALL })],
                     compilation_options: options.clone(),
                 }),
                 multiview_mask: None,

@@ -4,12 +4,12 @@
 //! compute pass on lavapipe: docs/performance.md); this pass uploads the instances and draws them.
 //! `precipitation.rs` draws the emitters attached to the camera with the same GPU resources.
 
-use super::error::RenderResult;
-use super::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
-use super::reduced_layers::Divisor;
-use super::renderer::FrameStats;
-use super::shaders;
-use super::textures::TextureCache;
+use crate::render::frame::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
+use crate::render::frame::renderer::FrameStats;
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders;
+use crate::render::gpu::textures::TextureCache;
+use crate::render::passes::reduced_layers::Divisor;
 use crate::sky::particles::ParticleInstance;
 use crate::sky::resolved::{BlendMode, EmitterAttach};
 use crate::sky::Sky;
@@ -102,7 +102,7 @@ pub fn write_instances(device: &wgpu::Device, queue: &wgpu::Queue, g: &mut Emitt
 
 /// The bind group layout of both particle passes: sprite texture and sampler.
 pub fn bind_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &[super::texture_entry(0), super::sampler_entry(1)] })
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &[crate::render::texture_entry(0), crate::render::sampler_entry(1)] })
 }
 
 /// The sprites' sampler.
@@ -124,7 +124,7 @@ pub fn build_pipelines(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, name: &
         layout,
         name,
         label,
-        [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", super::ADDITIVE_ALPHA, "additive")],
+        [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", crate::render::ADDITIVE_ALPHA, "additive")],
         Some(wgpu::CompareFunction::Less),
     )?;
     Ok([alpha, additive])
@@ -141,7 +141,7 @@ fn build_entries<const N: usize>(
     compare: Option<wgpu::CompareFunction>,
 ) -> RenderResult<[wgpu::RenderPipeline; N]> {
     let device = b.device;
-    let format = if compare.is_some() { b.color_format } else { super::reduced_layers::reduced_format(b.target) };
+    let format = if compare.is_some() { b.color_format } else { crate::render::passes::reduced_layers::reduced_format(b.target) };
     let module = shaders::module(device, b.library, name)?;
     let constants = b.target_constants();
     let options = wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: true };
@@ -162,7 +162,7 @@ fn build_entries<const N: usize>(
                     compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
-                depth_stencil: compare.and_then(|c| super::depth_state(false, c)),
+                depth_stencil: compare.and_then(|c| crate::render::depth_state(false, c)),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
@@ -199,11 +199,11 @@ pub struct ParticlesPass {
     /// Alpha, additive, and the flash's (additive, `fs_flash`).
     pipeline: Pipelines<[wgpu::RenderPipeline; 3]>,
     /// Alpha and additive, drawn after the run of reduced layers above them
-    /// ([`Placement::UnderRun`](super::pass::Placement::UnderRun)).
+    /// ([`Placement::UnderRun`](crate::render::frame::pass::Placement::UnderRun)).
     under_run: Pipelines<[wgpu::RenderPipeline; 2]>,
-    /// Additive, drawn first under the background, not depth-tested ([`Placement::First`](super::pass::Placement::First)).
+    /// Additive, drawn first under the background, not depth-tested ([`Placement::First`](crate::render::frame::pass::Placement::First)).
     first: Pipelines<[wgpu::RenderPipeline; 1]>,
-    /// The flash into a reduced buffer ([`Placement::Reduced`](super::pass::Placement::Reduced)).
+    /// The flash into a reduced buffer ([`Placement::Reduced`](crate::render::frame::pass::Placement::Reduced)).
     reduced: Pipelines<[wgpu::RenderPipeline; 1]>,
     set: Staged<Option<EmitterSet>>,
     /// The flash's one instance.
@@ -229,18 +229,22 @@ impl ParticlesPass {
                 l,
                 "particles",
                 "Particles::pipeline",
-                [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", super::ADDITIVE_ALPHA, "additive"), ("fs_flash", super::ADDITIVE_ALPHA, "flash")],
+                [
+                    ("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"),
+                    ("fs_main", crate::render::ADDITIVE_ALPHA, "additive"),
+                    ("fs_flash", crate::render::ADDITIVE_ALPHA, "flash"),
+                ],
                 Some(wgpu::CompareFunction::Less),
             )
         })?;
-        // The flash added to a run of reduced dome layers ([`FlashPlacement::InRun`](super::strategy::FlashPlacement::InRun)).
+        // The flash added to a run of reduced dome layers ([`FlashPlacement::InRun`](crate::render::plan::strategy::FlashPlacement::InRun)).
         let reduced = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| {
-            build_entries(b, l, "particles", "Particles::reduced_pipeline", [("fs_flash", super::reduced_layers::REDUCED_BLENDS[2], "flash")], None)
+            build_entries(b, l, "particles", "Particles::reduced_pipeline", [("fs_flash", crate::render::passes::reduced_layers::REDUCED_BLENDS[2], "flash")], None)
         })?;
         let first = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| {
-            build_entries(b, l, "particles", "Particles::first_pipeline", [("fs_main", super::ADDITIVE_ALPHA, "additive")], Some(wgpu::CompareFunction::Always))
+            build_entries(b, l, "particles", "Particles::first_pipeline", [("fs_main", crate::render::ADDITIVE_ALPHA, "additive")], Some(wgpu::CompareFunction::Always))
         })?;
-        let run_layout = super::reduced_layers::run_layout(b.device, "Particles::run_layout");
+        let run_layout = crate::render::passes::reduced_layers::run_layout(b.device, "Particles::run_layout");
         let under_layout = b.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Particles::under_run_pipeline_layout"),
             bind_group_layouts: &[Some(b.globals_layout), Some(&bind_layout), Some(&run_layout)],
@@ -249,12 +253,12 @@ impl ParticlesPass {
         let under_run = Pipelines::new_render(b, under_layout, |b, l| {
             // Premultiplied by the shader (fs_alpha_under_run).
             let over = wgpu::BlendState { color: wgpu::BlendComponent::OVER, alpha: wgpu::BlendComponent::OVER };
-            let entries = [("fs_alpha_under_run", over, "alpha"), ("fs_main_under_run", super::ADDITIVE_ALPHA, "additive")];
+            let entries = [("fs_alpha_under_run", over, "alpha"), ("fs_main_under_run", crate::render::ADDITIVE_ALPHA, "additive")];
             build_entries(b, l, "particles", "Particles::under_run_pipeline", entries, Some(wgpu::CompareFunction::Less))
         })?;
         let sampler = sampler(b.device, "Particles::sampler");
         // The flash's bind group: its texture is never sampled (fs_flash).
-        let view = super::textures::unused_view(b.device, "Particles::flash_texture");
+        let view = crate::render::gpu::textures::unused_view(b.device, "Particles::flash_texture");
         let bind_group = b.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("Particles::flash_bind_group"),
             layout: &bind_layout,

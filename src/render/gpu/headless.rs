@@ -1,9 +1,9 @@
 //! Offscreen rendering: a colour + depth target, readback to an image, and [`Headless`], the one
 //! path of headless renders, stills and the app's screenshots and contact sheets.
 
-use super::error::{RenderError, RenderResult};
-use super::renderer::{RenderOptions, RenderTarget, SkyRenderer};
-use super::{Camera, GpuContext, ShaderLibrary, DEPTH_FORMAT, OFFSCREEN_FORMAT};
+use crate::render::frame::renderer::{RenderOptions, RenderTarget, SkyRenderer};
+use crate::render::gpu::error::{RenderError, RenderResult};
+use crate::render::{Camera, GpuContext, ShaderLibrary, DEPTH_FORMAT, OFFSCREEN_FORMAT};
 use crate::sky::{FrameInput, Sky};
 
 /// An offscreen colour and depth target.

@@ -7,7 +7,7 @@
 //! so the default strategy follows the adapter's device type ([`FillStrategy::for_device`]).
 //! The switches that depend on each other are one enum each: only valid combinations exist.
 
-pub use super::reduced_layers::DomeResolution;
+pub use crate::render::passes::reduced_layers::DomeResolution;
 
 /// How the first runs of reduced dome layers reach the frame (with dome layers in reduced
 /// buffers; nothing to join otherwise).
@@ -57,7 +57,7 @@ pub enum SparseStages {
     /// Sampled everywhere, as every other stage.
     Sampled,
     /// Texel by texel where it is sampled from level 0: one small polygon per lit texel adding
-    /// the texel times its bilinear weight ([`super::sky_objects::texel_quads`]), over the background drawn
+    /// the texel times its bilinear weight ([`crate::render::sky_objects::texel_quads`]), over the background drawn
     /// without that stage. The same sum as the sample, for the pixels near a lit texel only.
     TexelPolygons,
     /// As `TexelPolygons`, and the rest of the background's draw, which then maps nothing from

@@ -1,7 +1,7 @@
 //! GPU device creation: headless (offscreen) or for a window surface. Vulkan only, so CI runs on
 //! Mesa's lavapipe and desktops on their native driver.
 
-use super::error::{RenderError, RenderResult};
+use crate::render::gpu::error::{RenderError, RenderResult};
 
 /// Which adapter to ask for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -2,8 +2,8 @@
 //! target and draws one full-screen triangle sampling one 128 x 128 texture (`shaders/baseline.wgsl`).
 //! Not part of the sky renderer's phases: it stands beside it, in the same target format.
 
-use super::error::RenderResult;
-use super::shaders::{self, ShaderLibrary};
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders::{self, ShaderLibrary};
 
 /// Side of the floor's texture, texels.
 pub const FLOOR_TEXTURE_SIDE: u32 = 128;
@@ -20,7 +20,7 @@ impl Baseline {
         let side = FLOOR_TEXTURE_SIDE;
         let mut rng = fastrand::Rng::with_seed(3);
         let texels: Vec<u8> = (0..side * side * 4).map(|_| rng.u8(..)).collect();
-        let texture = super::textures::upload(device, queue, "Baseline::texture", side, side, &texels);
+        let texture = crate::render::gpu::textures::upload(device, queue, "Baseline::texture", side, side, &texels);
         let view = texture.create_view(&Default::default());
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("Baseline::sampler"),
@@ -30,8 +30,10 @@ impl Baseline {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        let layout =
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("Baseline::layout"), entries: &[super::texture_entry(0), super::sampler_entry(1)] });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("Baseline::layout"),
+            entries: &[crate::render::texture_entry(0), crate::render::sampler_entry(1)],
+        });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("Baseline::bind_group"),
             layout: &layout,

@@ -5,9 +5,9 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
-use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, Target};
-use super::shaders;
+use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, Target};
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders;
 
 /// Vertex of the stand-in scene. Keep in sync with `vs_main` in shaders/scene.wgsl.
 #[repr(C)]
@@ -177,7 +177,7 @@ impl ScenePass {
         let module = shaders::module(device, b.library, "scene")?;
         let constants = b.target_constants();
         let options = wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: true };
-        let depth = super::depth_state(true, wgpu::CompareFunction::Less);
+        let depth = crate::render::depth_state(true, wgpu::CompareFunction::Less);
         let make = |label: &'static str, vs: &'static str, fs: &'static str, buffer: wgpu::VertexBufferLayout<'_>| {
             shaders::validated(device, label, || {
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {

@@ -9,12 +9,12 @@
 
 use std::any::Any;
 
-use super::camera::Camera;
-use super::error::RenderResult;
-use super::reduced_layers::Divisor;
-use super::renderer::{FrameStats, RenderOptions};
-use super::shaders::ShaderLibrary;
-use super::textures::TextureCache;
+use crate::render::frame::camera::Camera;
+use crate::render::frame::renderer::{FrameStats, RenderOptions};
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders::ShaderLibrary;
+use crate::render::gpu::textures::TextureCache;
+use crate::render::passes::reduced_layers::Divisor;
 use crate::sky::{FrameSky, Sky};
 
 /// The slots of a frame, in the order they run. Each is one wgpu pass.
@@ -22,9 +22,9 @@ use crate::sky::{FrameSky, Sky};
 pub enum Phase {
     /// Compute work before any drawing: look-up tables, particle simulation.
     Compute,
-    /// The main scene, drawn first in depth range [`super::SCENE_DEPTH`]; the phase clears the target.
+    /// The main scene, drawn first in depth range [`crate::render::SCENE_DEPTH`]; the phase clears the target.
     Scene,
-    /// Sky objects and stars, merged by priority, in depth range [`super::SKY_DEPTH`].
+    /// Sky objects and stars, merged by priority, in depth range [`crate::render::SKY_DEPTH`].
     Sky,
     /// Things drawn in the scene's depth range after the sky, so the scene occludes them (particles).
     SceneAfterSky,
@@ -64,7 +64,7 @@ pub enum Target {
     /// Display values straight into the display target (the NeL bitmap path, as in 2005).
     #[default]
     Display,
-    /// Exposed linear radiance into the frame's HDR target ([`super::HDR_FORMAT`]); the display
+    /// Exposed linear radiance into the frame's HDR target ([`crate::render::HDR_FORMAT`]); the display
     /// phase tone-maps it (physical sky models).
     Hdr,
 }
@@ -81,7 +81,7 @@ pub struct PassBuild<'a> {
     /// Shader sources.
     pub library: &'a ShaderLibrary,
     /// Colour format of the display target (render pipelines are also built for
-    /// [`super::HDR_FORMAT`]: see [`Pipelines::new_render`]).
+    /// [`crate::render::HDR_FORMAT`]: see [`Pipelines::new_render`]).
     pub color_format: wgpu::TextureFormat,
     /// Textures one pass writes and others read.
     pub shared: &'a SharedResources,
@@ -101,7 +101,7 @@ impl PassBuild<'_> {
 /// Textures and buffers shared between passes, made once by the renderer.
 pub struct SharedResources {
     /// The `lut` model's tables: `sky_luts` builds them, `sky_view` reads them.
-    pub luts: super::sky_model::LutTables,
+    pub luts: crate::render::passes::sky_model::LutTables,
     /// The sky-view map: a physical model's exposed linear radiance by direction (`sky_view`
     /// writes it in the compute phase, `sky_objects` samples it in the gradient stage).
     pub sky_view: wgpu::Texture,
@@ -139,7 +139,7 @@ impl SharedResources {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        Self { luts: super::sky_model::LutTables::new(device), sky_view, sky_view_view, sky_view_sampler }
+        Self { luts: crate::render::passes::sky_model::LutTables::new(device), sky_view, sky_view_view, sky_view_sampler }
     }
 }
 
@@ -191,7 +191,7 @@ pub struct DrawItem {
     pub priority: u8,
     /// The pass's own index of what to draw.
     pub key: usize,
-    /// A dome layer the sky phase may draw at reduced resolution ([`Placement::Reduced`](super::pass::Placement::Reduced)).
+    /// A dome layer the sky phase may draw at reduced resolution ([`Placement::Reduced`](crate::render::frame::pass::Placement::Reduced)).
     pub reduced: bool,
     /// The draw only adds to what lies behind it (target + something, clamped): it commutes with
     /// every other such draw, so the sky phase may reorder them (to join reduced runs).
@@ -204,7 +204,7 @@ pub struct DrawItem {
     /// (the lightning flash: one constant colour over the sky).
     pub joins_only: bool,
     /// The placements other than plain and reduced that the pass can draw this item at, this
-    /// frame (the frame plan chooses among them: [`super::plan`]).
+    /// frame (the frame plan chooses among them: [`crate::render::plan`]).
     pub caps: Caps,
 }
 
@@ -246,24 +246,24 @@ pub struct Caps {
 pub enum Placement {
     /// In its place in its phase, at full resolution, depth-tested against the scene.
     Plain,
-    /// Into a reduced-resolution buffer of a run of dome layers ([`super::reduced_layers`]:
+    /// Into a reduced-resolution buffer of a run of dome layers ([`crate::render::passes::reduced_layers`]:
     /// premultiplied colour and transmittance, blended with
-    /// [`super::reduced_layers::REDUCED_BLENDS`]).
+    /// [`crate::render::passes::reduced_layers::REDUCED_BLENDS`]).
     Reduced,
     /// After the composite of the run of reduced layers that follows it in the sky phase, as if
     /// drawn before that run: corrected by the run's colour and transmittance (the run's buffer
-    /// as group 2: [`super::reduced_layers::run_layout`]).
+    /// as group 2: [`crate::render::passes::reduced_layers::run_layout`]).
     UnderRun,
     /// Additive, onto the cleared frame before the background run is composited over it
-    /// ([`super::strategy::UnderBackground::Additive`]): without depth test, since the scene
+    /// ([`crate::render::plan::strategy::UnderBackground::Additive`]): without depth test, since the scene
     /// drawn afterwards covers what it hides. Adding onto black is writing.
     First,
     /// Reduced, as the first layer of a seeded buffer
-    /// ([`super::strategy::RunJoining::SeededFolded`]): over the lower run's colour (group 2),
+    /// ([`crate::render::plan::strategy::RunJoining::SeededFolded`]): over the lower run's colour (group 2),
     /// replacing the clear colour, unblended: what its blend would leave over the seed.
     OverSeed,
     /// Reduced, at once with the pass's item `upper` right after it in the run
-    /// ([`super::strategy::LayerPairs::AtOnce`]): one draw that leaves what the two would, one
+    /// ([`crate::render::plan::strategy::LayerPairs::AtOnce`]): one draw that leaves what the two would, one
     /// after the other; over the seed (group 2) when `over_seed`.
     Pair {
         /// The upper item's key.
@@ -373,16 +373,16 @@ pub fn boxed<P: Pass, F: Fn(&PassBuild<'_>) -> RenderResult<P>>(f: F, build: &Pa
 /// Every pass of the renderer, in recording order within its phase. The one list: pipelines,
 /// shader reloads, sky uploads, per-frame steps and GPU timings all follow it.
 pub const PASSES: &[(&str, PassConstructor)] = &[
-    ("sky_luts", |b| boxed(super::sky_luts::SkyLutsPass::new, b)),
-    ("sky_view", |b| boxed(super::sky_view::SkyViewPass::new, b)),
-    ("scene", |b| boxed(super::scene::ScenePass::new, b)),
-    ("sky_objects", |b| boxed(super::sky_objects::SkyObjectsPass::new, b)),
-    ("stars", |b| boxed(super::stars::StarsPass::new, b)),
-    ("particles", |b| boxed(super::particles::ParticlesPass::new, b)),
-    ("precipitation", |b| boxed(super::precipitation::PrecipitationPass::new, b)),
-    ("glare", |b| boxed(super::glare::GlarePass::new, b)),
-    ("tone_map", |b| boxed(super::tone_map::ToneMapPass::new, b)),
-    ("reduced_layers", |b| boxed(super::reduced_layers::ReducedLayersPass::new, b)),
+    ("sky_luts", |b| boxed(crate::render::passes::sky_luts::SkyLutsPass::new, b)),
+    ("sky_view", |b| boxed(crate::render::passes::sky_view::SkyViewPass::new, b)),
+    ("scene", |b| boxed(crate::render::passes::scene::ScenePass::new, b)),
+    ("sky_objects", |b| boxed(crate::render::sky_objects::SkyObjectsPass::new, b)),
+    ("stars", |b| boxed(crate::render::passes::stars::StarsPass::new, b)),
+    ("particles", |b| boxed(crate::render::passes::particles::ParticlesPass::new, b)),
+    ("precipitation", |b| boxed(crate::render::passes::precipitation::PrecipitationPass::new, b)),
+    ("glare", |b| boxed(crate::render::passes::glare::GlarePass::new, b)),
+    ("tone_map", |b| boxed(crate::render::passes::tone_map::ToneMapPass::new, b)),
+    ("reduced_layers", |b| boxed(crate::render::passes::reduced_layers::ReducedLayersPass::new, b)),
 ];
 
 /// A value in use and a replacement waiting for every other pass to succeed too.
@@ -438,7 +438,7 @@ impl<T> Pipelines<T> {
         Self::with_targets(b, layout, build, false)
     }
 
-    /// Builds render pipelines with `layout` for the display format and for [`super::HDR_FORMAT`].
+    /// Builds render pipelines with `layout` for the display format and for [`crate::render::HDR_FORMAT`].
     pub fn new_render(b: &PassBuild<'_>, layout: wgpu::PipelineLayout, build: PipelineBuilder<T>) -> RenderResult<Self> {
         Self::with_targets(b, layout, build, true)
     }
@@ -450,7 +450,7 @@ impl<T> Pipelines<T> {
 
     fn build_all(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, build: PipelineBuilder<T>, per_target: bool) -> RenderResult<(T, Option<T>)> {
         let display = build(b, layout)?;
-        let hdr = if per_target { Some(build(&PassBuild { color_format: super::HDR_FORMAT, target: Target::Hdr, ..*b }, layout)?) } else { None };
+        let hdr = if per_target { Some(build(&PassBuild { color_format: crate::render::HDR_FORMAT, target: Target::Hdr, ..*b }, layout)?) } else { None };
         Ok((display, hdr))
     }
 

@@ -5,10 +5,10 @@
 //! (`particle_sim.rs`, faster than the CPU from a few thousand particles: docs/performance.md);
 //! bursts come from the CPU.
 
-use super::error::RenderResult;
-use super::particle_sim::GpuParticleSim;
-use super::particles::{bind_layout, build_pipelines, draw_emitter, sampler, EmitterSet};
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
+use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
+use crate::render::gpu::error::RenderResult;
+use crate::render::passes::particle_sim::GpuParticleSim;
+use crate::render::passes::particles::{bind_layout, build_pipelines, draw_emitter, sampler, EmitterSet};
 
 /// The precipitation pass.
 pub struct PrecipitationPass {
@@ -32,9 +32,10 @@ impl PrecipitationPass {
             immediate_size: 0,
         });
         let pipeline = Pipelines::new_render(b, pipeline_layout, |b, l| build_pipelines(b, l, "precipitation", "Precipitation::pipeline"))?;
-        let sim_layout = super::particle_sim::layout(b.device);
-        let sim_pipeline =
-            Pipelines::new(b, super::particle_sim::pipeline_layout(b.device, b.globals_layout, &sim_layout), |b, l| super::particle_sim::pipeline(b.device, b.library, l))?;
+        let sim_layout = crate::render::passes::particle_sim::layout(b.device);
+        let sim_pipeline = Pipelines::new(b, crate::render::passes::particle_sim::pipeline_layout(b.device, b.globals_layout, &sim_layout), |b, l| {
+            crate::render::passes::particle_sim::pipeline(b.device, b.library, l)
+        })?;
         Ok(Self { sampler: sampler(b.device, "Precipitation::sampler"), bind_layout, pipeline, set: Staged::new(None), sim_layout, sim_pipeline, sims: Staged::new(Vec::new()) })
     }
 }

@@ -2,18 +2,18 @@
 //! shared textures; each pass owns its pipelines, its per-sky resources and its state. It knows
 //! nothing of egui or winit; the app and the CLI drive it.
 
-use super::camera::Camera;
-use super::error::RenderResult;
-use super::globals::{Globals, GlobalsBinding};
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Placement, SharedResources, SkyUpload, Target, PASSES};
-use super::plan::{self, FrameFacts, RunInput, Seeding, SkyPlan, SkyStep, Step};
-use super::reduced_layers::Divisor;
-use super::reduced_layers::{Joining, ReducedLayersPass};
-use super::shaders::{self, ShaderLibrary};
-use super::strategy::FillStrategy;
-use super::textures::TextureCache;
-use super::timing::GpuTimer;
-use super::GpuContext;
+use crate::render::frame::camera::Camera;
+use crate::render::frame::globals::{Globals, GlobalsBinding};
+use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Placement, SharedResources, SkyUpload, Target, PASSES};
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders::{self, ShaderLibrary};
+use crate::render::gpu::textures::TextureCache;
+use crate::render::gpu::timing::GpuTimer;
+use crate::render::passes::reduced_layers::Divisor;
+use crate::render::passes::reduced_layers::{Joining, ReducedLayersPass};
+use crate::render::plan::strategy::FillStrategy;
+use crate::render::plan::{self, FrameFacts, RunInput, Seeding, SkyPlan, SkyStep, Step};
+use crate::render::GpuContext;
 use crate::sky::{FrameSky, Sky};
 
 /// Depth range of the main scene: it always wins against the sky.
@@ -32,7 +32,7 @@ pub struct RenderOptions {
     /// Draw the sun glare (and run its occlusion queries).
     pub glare: bool,
     /// Draw a test occluder into the scene's depth.
-    pub occluder: Option<super::scene::Occluder>,
+    pub occluder: Option<crate::render::passes::scene::Occluder>,
     /// Work skipped because it would contribute nothing (all on by default; off to measure
     /// what each saves).
     pub skips: Skips,
@@ -123,34 +123,34 @@ pub struct FrameStats {
     pub objects_off_screen: u32,
     /// Texture stages sampled from level 0 alone (no pixel minifies them), over every draw.
     pub stages_level0: u32,
-    /// Sky objects drawn into a reduced-resolution buffer ([`dome_resolution`](super::strategy::FillStrategy::dome_resolution)).
+    /// Sky objects drawn into a reduced-resolution buffer ([`dome_resolution`](crate::render::plan::strategy::FillStrategy::dome_resolution)).
     pub objects_reduced: u32,
     /// Each run of reduced layers this frame, in draw order: its buffer's divisor (2: half the
     /// frame's width and height, 2.5: two fifths, 4: a quarter). One composite each.
     pub reduced_runs: Vec<Divisor>,
     /// Full-screen composites of those runs (the background included): one for all the runs
-    /// joined ([`Combined`](super::strategy::RunJoining::Combined)).
+    /// joined ([`Combined`](crate::render::plan::strategy::RunJoining::Combined)).
     pub composites: u32,
-    /// Additive draws put under the background ([`Additive`](super::strategy::UnderBackground::Additive)).
+    /// Additive draws put under the background ([`Additive`](crate::render::plan::strategy::UnderBackground::Additive)).
     pub drawn_first: u32,
     /// One of them (the skydome's fine stars) covered the frame and was drawn as the background
     /// itself, its run's colour plus its term: no separate composite of the background.
     pub background_fused: bool,
     /// The first two runs were joined by seeding the second's buffer with the first
-    /// ([`Seeded`](super::strategy::RunJoining::Seeded)): no combining pass.
+    /// ([`Seeded`](crate::render::plan::strategy::RunJoining::Seeded)): no combining pass.
     pub seeded: bool,
-    /// The seeded buffer's first layer was drawn over the lower run itself ([`SeededFolded`](super::strategy::RunJoining::SeededFolded)).
+    /// The seeded buffer's first layer was drawn over the lower run itself ([`SeededFolded`](crate::render::plan::strategy::RunJoining::SeededFolded)).
     pub seed_folded: bool,
-    /// Pairs of reduced layers drawn at once ([`AtOnce`](super::strategy::LayerPairs::AtOnce)).
+    /// Pairs of reduced layers drawn at once ([`AtOnce`](crate::render::plan::strategy::LayerPairs::AtOnce)).
     pub layers_paired: u32,
     /// Triangles of texel polygons drawn in place of a sparse stage's sample
-    /// ([`TexelPolygons`](super::strategy::SparseStages::TexelPolygons)).
+    /// ([`TexelPolygons`](crate::render::plan::strategy::SparseStages::TexelPolygons)).
     pub texel_triangles: u32,
     /// Scissor rectangles in which the background without its sparse stage went as one triangle
-    /// over the frame ([`TexelPolygonsOnBands`](super::strategy::SparseStages::TexelPolygonsOnBands)).
+    /// over the frame ([`TexelPolygonsOnBands`](crate::render::plan::strategy::SparseStages::TexelPolygonsOnBands)).
     pub background_rects: u32,
     /// Draws added to a run of reduced layers only because the run was there
-    /// ([`DrawItem::joins_only`]: the lightning flash, [`InRun`](super::strategy::FlashPlacement::InRun)).
+    /// ([`DrawItem::joins_only`]: the lightning flash, [`InRun`](crate::render::plan::strategy::FlashPlacement::InRun)).
     pub joined_runs_only: u32,
     /// Clears of the frame left out ([`Skips::covered_clears`]): the colour's, the depth's.
     pub clears_skipped: u32,
@@ -177,7 +177,7 @@ pub struct UploadStats {
 pub struct RenderTarget<'a> {
     /// Colour view, in the renderer's colour format.
     pub color: &'a wgpu::TextureView,
-    /// Depth view ([`super::DEPTH_FORMAT`]), written by the renderer alone: it does not clear a
+    /// Depth view ([`crate::render::DEPTH_FORMAT`]), written by the renderer alone: it does not clear a
     /// depth view again while it has drawn no main scene into it ([`Skips::covered_clears`]).
     pub depth: &'a wgpu::TextureView,
     /// Size, pixels.
@@ -224,7 +224,12 @@ impl SkyRenderer {
 
     /// Builds the passes of [`PASSES`] and then `extra` ones (tools and tests that add a pass
     /// without touching the product's list).
-    pub fn with_passes(ctx: &GpuContext, color_format: wgpu::TextureFormat, library: ShaderLibrary, extra: &[(&str, super::pass::PassConstructor)]) -> RenderResult<Self> {
+    pub fn with_passes(
+        ctx: &GpuContext,
+        color_format: wgpu::TextureFormat,
+        library: ShaderLibrary,
+        extra: &[(&str, crate::render::frame::pass::PassConstructor)],
+    ) -> RenderResult<Self> {
         let device = &ctx.device;
         let globals = GlobalsBinding::new(device);
         let shared = SharedResources::new(device);
@@ -319,18 +324,18 @@ impl SkyRenderer {
     }
 
     /// Glare visibility and intensity, if the sky has glare.
-    pub fn glare_state(&self) -> Option<&super::glare::GlareState> {
-        self.pass::<super::glare::GlarePass>()?.resources().map(|g| &g.state)
+    pub fn glare_state(&self) -> Option<&crate::render::passes::glare::GlareState> {
+        self.pass::<crate::render::passes::glare::GlarePass>()?.resources().map(|g| &g.state)
     }
 
     /// Phase of the glare's occlusion queries, if the sky has glare.
-    pub fn glare_query_phase(&self) -> Option<super::glare::QueryPhase> {
-        self.pass::<super::glare::GlarePass>()?.resources().map(|g| g.query_phase().clone())
+    pub fn glare_query_phase(&self) -> Option<crate::render::passes::glare::QueryPhase> {
+        self.pass::<crate::render::passes::glare::GlarePass>()?.resources().map(|g| g.query_phase().clone())
     }
 
     /// Mutable glare state (freeze toggle).
-    pub fn glare_state_mut(&mut self) -> Option<&mut super::glare::GlareState> {
-        self.pass_mut::<super::glare::GlarePass>()?.resources_mut().map(|g| &mut g.state)
+    pub fn glare_state_mut(&mut self) -> Option<&mut crate::render::passes::glare::GlareState> {
+        self.pass_mut::<crate::render::passes::glare::GlarePass>()?.resources_mut().map(|g| &mut g.state)
     }
 
     /// Time step for the frames of a still until it settles, if a pass needs history to show
@@ -643,7 +648,7 @@ impl SkyRenderer {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: super::HDR_FORMAT,
+            format: crate::render::HDR_FORMAT,
             // COPY_SRC: linear exports (`render --format exr`) read it back.
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],

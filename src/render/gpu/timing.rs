@@ -3,7 +3,7 @@
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::Arc;
 
-use super::pass::Phase;
+use crate::render::frame::pass::Phase;
 
 /// Timed spans, in frame order: the phases, and the sky's dome layers drawn into reduced
 /// buffers (before the scene). Each uses two timestamps (begin, end).

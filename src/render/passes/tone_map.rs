@@ -4,9 +4,9 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, Target};
-use super::shaders;
+use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, Target};
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders;
 use crate::sky::resolved::ToneMapper;
 
 /// Keep in sync with `ToneMapParams` in shaders/tone_map.wgsl.
@@ -44,7 +44,7 @@ impl ToneMapPass {
         let device = b.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("ToneMap::layout"),
-            entries: &[super::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), super::texture_entry(1)],
+            entries: &[crate::render::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), crate::render::texture_entry(1)],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("ToneMap::pipeline_layout"),

@@ -1,6 +1,6 @@
 //! The frame plan: how the sky phase's draws reach the frame, decided by a pure function with no
 //! GPU types ([`plan`]), so that unit tests reach every decision without a device. Recording
-//! ([`super::renderer::SkyRenderer::render`]) only carries the plan out.
+//! ([`crate::render::frame::renderer::SkyRenderer::render`]) only carries the plan out.
 //!
 //! The decisions, in order:
 //! 1. Draw order: items sorted by priority; full-resolution additive draws moved past the
@@ -9,17 +9,19 @@
 //! 2. Runs of consecutive reduced layers, each into a buffer as fine as its finest layer.
 //! 3. The background: the first run, when nothing precedes it, drawn first in the scene's pass;
 //!    the runs after it joined to it while every draw between two can go under a run
-//!    ([`RunJoining`](super::strategy::RunJoining)); two joined runs seeded rather than combined.
-//! 4. What goes under the background ([`UnderBackground`](super::strategy::UnderBackground)):
+//!    ([`RunJoining`](crate::render::plan::strategy::RunJoining)); two joined runs seeded rather than combined.
+//! 4. What goes under the background ([`UnderBackground`](crate::render::plan::strategy::UnderBackground)):
 //!    the additive draws after it, and one of them as the background itself.
 //! 5. Inside each run: the seeding of a seeded buffer, its first layer over the seed, pairs.
 //! 6. Which clears the frame can skip.
 
+pub mod strategy;
+
 use std::ops::Range;
 
-use super::pass::{DrawItem, Placement};
-use super::reduced_layers::Divisor;
-use super::strategy::FillStrategy;
+use crate::render::frame::pass::{DrawItem, Placement};
+use crate::render::passes::reduced_layers::Divisor;
+use crate::render::plan::strategy::FillStrategy;
 
 /// What the plan needs to know of the frame besides its draws.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -29,7 +31,7 @@ pub struct FrameFacts {
     /// The renderer has a pass that draws reduced buffers (without one, reduced items are drawn
     /// at full resolution).
     pub reduced_layers: bool,
-    /// Clears of what the frame overwrites may be skipped ([`super::Skips::covered_clears`]).
+    /// Clears of what the frame overwrites may be skipped ([`crate::render::Skips::covered_clears`]).
     pub covered_clears: bool,
     /// The depth view still holds the clear value (no scene drawn into it since it was cleared).
     pub depth_clean: bool,
@@ -343,7 +345,7 @@ fn sky_steps(items: &[(usize, DrawItem)], runs: &[(usize, usize)], chain: usize,
 
 /// The key of the item after item `k` of a run ending at `end` when the two can be drawn at once
 /// by their pass (`over_seed`: item `k` as a seeded buffer's first layer). A pass states pairs
-/// with its next item in its own priority order ([`super::pass::Caps::pair_next`]): two items of
+/// with its next item in its own priority order ([`crate::render::frame::pass::Caps::pair_next`]): two items of
 /// one pass next to each other here are next to each other there, since the sort is stable and
 /// [`join_additive_runs`] moves only additive draws past additive layers, never between the
 /// alpha-blended layers that pair.
@@ -395,7 +397,7 @@ fn combined_divisors(divisors: &[Divisor]) -> Vec<Divisor> {
 /// `split_first`: a lone run at the start of the list whose layers get finer part-way (the
 /// skydome's at a quarter of the resolution, the clouds' at half, when the billboards between
 /// them lie out of the frame) is two runs, the coarse layers in their own buffer seeding the
-/// finer one ([`Seeded`](super::strategy::RunJoining::Seeded)), rather than every layer at the
+/// finer one ([`Seeded`](crate::render::plan::strategy::RunJoining::Seeded)), rather than every layer at the
 /// finer resolution.
 fn reduced_runs(list: &[(usize, DrawItem)], split_first: bool) -> Vec<(usize, usize)> {
     let mut runs = Vec::new();
@@ -421,5 +423,4 @@ fn reduced_runs(list: &[(usize, DrawItem)], split_first: bool) -> Vec<(usize, us
 }
 
 #[cfg(test)]
-#[path = "plan_tests.rs"]
 mod tests;

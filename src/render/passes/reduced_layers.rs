@@ -8,9 +8,9 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::error::RenderResult;
-use super::pass::{FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, Target};
-use super::shaders;
+use crate::render::frame::pass::{FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, Target};
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders;
 
 /// Format of the reduced buffers for a target: premultiplied colour and transmittance. Display
 /// values fit in 8 bits like the display target itself (which clamps every blend the same way);
@@ -257,7 +257,7 @@ impl ReducedLayersPass {
             ..Default::default()
         });
         // Never written: wgpu clears it to zero.
-        let black = super::textures::unused_view(device, "ReducedLayers::black");
+        let black = crate::render::gpu::textures::unused_view(device, "ReducedLayers::black");
         Ok(Self {
             layout,
             pipelines,
@@ -411,7 +411,7 @@ impl ReducedLayersPass {
     }
 
     /// The lower run's bind group, which a seeded buffer's first layer reads as group 2 when it
-    /// is drawn over the seed itself ([`super::pass::Placement::OverSeed`]); None unless seeded.
+    /// is drawn over the seed itself ([`crate::render::frame::pass::Placement::OverSeed`]); None unless seeded.
     pub fn seed_source(&self) -> Option<&wgpu::BindGroup> {
         self.buffers.first().filter(|_| self.seeded).map(|b| &b.bind_group)
     }
@@ -541,7 +541,7 @@ impl Pass for ReducedLayersPass {
     }
 
     /// None of its own: the renderer places a composite where each run's first layer would draw.
-    fn items(&self, _cx: &FrameContext<'_>, _out: &mut Vec<super::pass::DrawItem>) {}
+    fn items(&self, _cx: &FrameContext<'_>, _out: &mut Vec<crate::render::frame::pass::DrawItem>) {}
 
     /// Composites run `key` (the renderer places it where the run's first layer would draw).
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, _placement: Placement, _run: Option<&wgpu::BindGroup>) -> u32 {
@@ -570,7 +570,7 @@ fn full_screen_pipeline(
             layout: Some(layout),
             vertex: wgpu::VertexState { module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
             primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: super::depth_state(false, compare),
+            depth_stencil: crate::render::depth_state(false, compare),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module,
@@ -586,11 +586,16 @@ fn full_screen_pipeline(
 
 /// The bind group layout of one run's buffer (composite uniform, buffer, sampler, and the buffer
 /// of the run below where it was seeded with it, else black): the composite
-/// reads it, and so do sky objects drawn under a run ([`super::sky_objects`]).
+/// reads it, and so do sky objects drawn under a run ([`crate::render::sky_objects`]).
 pub fn run_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some(label),
-        entries: &[super::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), super::texture_entry(1), super::sampler_entry(2), super::texture_entry(3)],
+        entries: &[
+            crate::render::uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
+            crate::render::texture_entry(1),
+            crate::render::sampler_entry(2),
+            crate::render::texture_entry(3),
+        ],
     })
 }
 

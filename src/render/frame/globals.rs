@@ -3,7 +3,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use super::camera::Camera;
+use crate::render::frame::camera::Camera;
 use crate::sky::FrameSky;
 
 /// Per-frame globals. Keep in sync with `Globals` in shaders/globals.wgsl.
@@ -31,8 +31,8 @@ pub struct Globals {
     /// Main-scene camera position, m.
     pub camera_position: [f32; 4],
     /// x: 1 when the drawing phases write exposed linear radiance into the HDR target, 0 when
-    /// they write display values (see [`super::pass::Target`]); y: the tone mapper
-    /// ([`super::tone_map::ToneMapUniform`]), which display-referred colours are inverted through.
+    /// they write display values (see [`crate::render::frame::pass::Target`]); y: the tone mapper
+    /// ([`crate::render::passes::tone_map::ToneMapUniform`]), which display-referred colours are inverted through.
     pub output: [f32; 4],
     /// Sun light on lit clouds (display values): the sky model's transmitted sun (E T / pi, as
     /// `sun_diffuse`) when a physical or analytic model shows, else the sky's `sun_diffuse`.
@@ -55,7 +55,7 @@ const _: () = assert!(std::mem::offset_of!(Globals, sun_ambient) - std::mem::off
 
 impl Globals {
     /// Globals for a frame seen by `camera` on a `width` x `height` target.
-    pub fn new(frame: &FrameSky, camera: &Camera, width: u32, height: u32, target: super::pass::Target) -> Self {
+    pub fn new(frame: &FrameSky, camera: &Camera, width: u32, height: u32, target: crate::render::frame::pass::Target) -> Self {
         let aspect = width as f32 / height.max(1) as f32;
         let (clip_from_world, clip_from_sky) = camera.matrices(aspect);
         let v = |c: [f32; 4]| c;
@@ -73,7 +73,12 @@ impl Globals {
             camera_position: camera.position().extend(1.0).to_array(),
             cloud_sun: v(frame.sun_diffuse),
             cloud_ambient: v(frame.sun_ambient),
-            output: [if target == super::pass::Target::Hdr { 1.0 } else { 0.0 }, super::tone_map::ToneMapUniform::from(frame.sky_model.tone_mapper).settings[0] as f32, 0.0, 0.0],
+            output: [
+                if target == crate::render::frame::pass::Target::Hdr { 1.0 } else { 0.0 },
+                crate::render::passes::tone_map::ToneMapUniform::from(frame.sky_model.tone_mapper).settings[0] as f32,
+                0.0,
+                0.0,
+            ],
         }
     }
 }
@@ -99,7 +104,7 @@ impl GlobalsBinding {
         });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("Globals::layout"),
-            entries: &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE)],
+            entries: &[crate::render::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE)],
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("Globals::bind_group"),

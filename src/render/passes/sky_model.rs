@@ -133,18 +133,18 @@ pub struct LutBuilder {
 
 impl LutBuilder {
     /// Builds the pipelines with `group0` as bind group 0 (the frame's globals, or an empty layout).
-    pub fn new(device: &wgpu::Device, library: &super::ShaderLibrary, group0: &wgpu::BindGroupLayout) -> super::RenderResult<Self> {
+    pub fn new(device: &wgpu::Device, library: &crate::render::ShaderLibrary, group0: &wgpu::BindGroupLayout) -> crate::render::RenderResult<Self> {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("SkyLuts::layout"),
-            entries: &[super::uniform_entry(0, wgpu::ShaderStages::COMPUTE), storage_entry(1, true), storage_entry(2, false), storage_entry(3, false)],
+            entries: &[crate::render::uniform_entry(0, wgpu::ShaderStages::COMPUTE), storage_entry(1, true), storage_entry(2, false), storage_entry(3, false)],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("SkyLuts::pipeline_layout"),
             bind_group_layouts: &[Some(group0), Some(&layout)],
             immediate_size: 0,
         });
-        let module = super::shaders::module(device, library, "sky_luts")?;
-        let pipeline = |entry: &str, label: &str| super::shaders::compute_pipeline(device, &pipeline_layout, &module, entry, label);
+        let module = crate::render::gpu::shaders::module(device, library, "sky_luts")?;
+        let pipeline = |entry: &str, label: &str| crate::render::gpu::shaders::compute_pipeline(device, &pipeline_layout, &module, entry, label);
         Ok(Self { transmittance: pipeline("cs_transmittance", "SkyLuts::transmittance")?, multiscattering: pipeline("cs_multiscattering", "SkyLuts::multiscattering")?, layout })
     }
 

@@ -4,12 +4,13 @@
 
 use wgpu::util::DeviceExt;
 
-use super::error::RenderResult;
-use super::sky_model::{storage_entry, AtmosphereUniform, LutBuilder, LutTables, LutUniform, SingleUniform};
-use super::{shaders, GpuContext, ShaderLibrary};
 use crate::atmosphere::analytic::{self, AnalyticModel};
 use crate::atmosphere::reference::Case;
 use crate::atmosphere::{Atmosphere, LutSettings, SingleSettings};
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders;
+use crate::render::passes::sky_model::{storage_entry, AtmosphereUniform, LutBuilder, LutTables, LutUniform, SingleUniform};
+use crate::render::{GpuContext, ShaderLibrary};
 
 /// The probe's pipelines, and the `lut` model's tables and builders.
 pub struct RadianceProbe {
@@ -180,7 +181,7 @@ impl RadianceProbe {
             pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
         }
         ctx.queue.submit([encoder.finish()]);
-        let bytes = super::headless::read_buffer(ctx, &output, size)?;
+        let bytes = crate::render::gpu::headless::read_buffer(ctx, &output, size)?;
         let out = bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes).iter().map(|v| [v[0], v[1], v[2]]).collect();
         Ok(out)
     }

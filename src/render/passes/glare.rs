@@ -10,12 +10,12 @@ use std::sync::Arc;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
-use super::camera::Camera;
-use super::error::RenderResult;
-use super::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
-use super::renderer::RenderOptions;
-use super::shaders;
-use super::textures::TextureCache;
+use crate::render::frame::camera::Camera;
+use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
+use crate::render::frame::renderer::RenderOptions;
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders;
+use crate::render::gpu::textures::TextureCache;
 use crate::sky::resolved::{Glare, MAX_FLARES};
 use crate::sky::Rgba;
 
@@ -205,7 +205,7 @@ impl GlarePass {
         let (device, globals) = (b.device, b.globals_layout);
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("Glare::layout"),
-            entries: &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX), super::texture_entry(1), super::sampler_entry(2)],
+            entries: &[crate::render::uniform_entry(0, wgpu::ShaderStages::VERTEX), crate::render::texture_entry(1), crate::render::sampler_entry(2)],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Glare::pipeline_layout"),
@@ -237,7 +237,7 @@ impl GlarePass {
                         compilation_options: options.clone(),
                     },
                     primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                    depth_stencil: super::depth_state(false, compare),
+                    depth_stencil: crate::render::depth_state(false, compare),
                     multisample: Default::default(),
                     fragment: Some(wgpu::FragmentState {
                         module: &module,
@@ -267,7 +267,7 @@ impl GlarePass {
                     compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
-                depth_stencil: super::depth_state(false, wgpu::CompareFunction::Always),
+                depth_stencil: crate::render::depth_state(false, wgpu::CompareFunction::Always),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,

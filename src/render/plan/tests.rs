@@ -1,8 +1,8 @@
 //! The frame plan's decisions, without a GPU.
 
 use super::*;
-use crate::render::pass::Caps;
-use crate::render::strategy::{LayerPairs, RunJoining, UnderBackground};
+use crate::render::frame::pass::Caps;
+use crate::render::plan::strategy::{LayerPairs, RunJoining, UnderBackground};
 
 fn item(key: usize, reduced: bool, additive: bool) -> (usize, DrawItem) {
     (0, DrawItem { reduced, additive, divisor: if reduced { Divisor::HALF } else { Divisor::FULL }, ..DrawItem::new(0, key) })
