@@ -14,7 +14,7 @@ pub use gpu::context::{AdapterChoice, GpuContext};
 pub use gpu::error::{RenderError, RenderResult};
 pub use gpu::headless::{self, Headless, Offscreen};
 pub use gpu::shaders::ShaderLibrary;
-pub use passes::reduced_layers::{Divisor, DomeResolution};
+pub use plan::resolution::{Divisor, DomeResolution};
 pub use plan::strategy::FillStrategy;
 
 /// Colour format of the HDR target that frames of a physical sky model draw into (exposed linear

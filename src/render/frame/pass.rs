@@ -14,7 +14,7 @@ use crate::render::frame::renderer::{FrameStats, RenderOptions};
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders::ShaderLibrary;
 use crate::render::gpu::textures::TextureCache;
-use crate::render::passes::reduced_layers::Divisor;
+use crate::render::plan::resolution::Divisor;
 use crate::sky::{FrameSky, Sky};
 
 /// The slots of a frame, in the order they run. Each is one wgpu pass.

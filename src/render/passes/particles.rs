@@ -9,7 +9,7 @@ use crate::render::frame::renderer::FrameStats;
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders;
 use crate::render::gpu::textures::TextureCache;
-use crate::render::passes::reduced_layers::Divisor;
+use crate::render::plan::resolution::Divisor;
 use crate::sky::particles::ParticleInstance;
 use crate::sky::resolved::{BlendMode, EmitterAttach};
 use crate::sky::Sky;

@@ -11,6 +11,7 @@ use bytemuck::{Pod, Zeroable};
 use crate::render::frame::pass::{FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, Target};
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders;
+use crate::render::plan::resolution::Divisor;
 
 /// Format of the reduced buffers for a target: premultiplied colour and transmittance. Display
 /// values fit in 8 bits like the display target itself (which clamps every blend the same way);
@@ -20,116 +21,6 @@ pub fn reduced_format(target: Target) -> wgpu::TextureFormat {
     match target {
         Target::Display => wgpu::TextureFormat::Rgba8Unorm,
         Target::Hdr => wgpu::TextureFormat::Rgba16Float,
-    }
-}
-
-/// Frame pixels per reduced-buffer pixel along each side, in steps of a quarter: a run's buffer
-/// can be just as coarse as its layers' textures allow (the built-in clouds resolve at 2.5,
-/// where a half-resolution buffer would draw 1.6 times their pixels).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct Divisor(u8);
-
-impl Divisor {
-    /// The frame's own resolution.
-    pub const FULL: Divisor = Divisor(4);
-    /// Half the width and height.
-    pub const HALF: Divisor = Divisor(8);
-    /// A quarter of the width and height.
-    pub const QUARTER: Divisor = Divisor(16);
-    /// An eighth of the width and height: the coarsest `Auto` goes.
-    pub const EIGHTH: Divisor = Divisor(32);
-    /// Quarter steps of one divisor.
-    const STEPS: f32 = 4.0;
-
-    /// `n` frame pixels per buffer pixel.
-    pub const fn whole(n: u8) -> Divisor {
-        Divisor(n * 4)
-    }
-
-    /// Frame pixels per buffer pixel.
-    pub fn get(self) -> f32 {
-        f32::from(self.0) / Self::STEPS
-    }
-
-    /// The coarsest step at most `factor`, within `[finest, coarsest]` (`finest` where `factor`
-    /// is not a number).
-    pub fn at_most(factor: f32, finest: Divisor, coarsest: Divisor) -> Divisor {
-        let steps = (factor * Self::STEPS).floor();
-        if steps.is_nan() {
-            return finest;
-        }
-        Divisor(steps.clamp(f32::from(finest.0), f32::from(coarsest.0)) as u8)
-    }
-
-    /// Buffer pixels covering `frame_px` frame pixels (rounded up: the buffer holds the whole frame).
-    pub fn buffer_len(self, frame_px: u32) -> u32 {
-        (frame_px * u32::from(Self::STEPS as u8)).div_ceil(u32::from(self.0.max(1))).max(1)
-    }
-}
-
-impl std::fmt::Display for Divisor {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}", self.get())
-    }
-}
-
-/// How finely dome layers are drawn.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum DomeResolution {
-    /// At the frame's resolution, straight into it.
-    Full,
-    /// Half the width and height (a quarter of the pixels), composited.
-    Half,
-    /// A quarter of the width and height, composited.
-    Quarter,
-    /// Each run of layers in the coarsest buffer, in quarter steps from half the width and
-    /// height to an eighth, that still resolves the textures of all its layers: the default.
-    /// Layers go to a buffer only when a half-resolution one resolves them, or, alpha-blended
-    /// ones whose terms cannot be split, one at 1.5 ([`DomeResolution::finest_whole`]).
-    #[default]
-    Auto,
-}
-
-impl DomeResolution {
-    /// Every choice, finest first.
-    pub const ALL: [DomeResolution; 4] = [DomeResolution::Full, DomeResolution::Half, DomeResolution::Quarter, DomeResolution::Auto];
-
-    /// Frame pixels per buffer pixel along each side: the finest buffer a layer may go to, and
-    /// the coarsest (1: layers stay on the frame).
-    pub fn divisors(self) -> (Divisor, Divisor) {
-        match self {
-            DomeResolution::Full => (Divisor::FULL, Divisor::FULL),
-            DomeResolution::Half => (Divisor::HALF, Divisor::HALF),
-            DomeResolution::Quarter => (Divisor::QUARTER, Divisor::QUARTER),
-            DomeResolution::Auto => (Divisor::HALF, Divisor::EIGHTH),
-        }
-    }
-
-    /// The finest buffer an alpha-blended layer goes to whole when some texture it samples is
-    /// too fine for the finest of [`Self::divisors`] (its terms cannot be split as an opaque
-    /// layer's are): with `Auto`, 1.5 (such a layer drawn on the frame costs lavapipe its full
-    /// resolution, blended and depth-tested; below 1.5 the buffer's composite costs more than its
-    /// pixels save); the finest of [`Self::divisors`] otherwise.
-    pub fn finest_whole(self) -> Divisor {
-        match self {
-            DomeResolution::Auto => Divisor(6),
-            other => other.divisors().0,
-        }
-    }
-
-    /// Name in the CLI, the app and reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            DomeResolution::Full => "full",
-            DomeResolution::Half => "half",
-            DomeResolution::Quarter => "quarter",
-            DomeResolution::Auto => "auto",
-        }
-    }
-
-    /// Parses [`DomeResolution::name`].
-    pub fn parse(s: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|r| r.name() == s)
     }
 }
 

@@ -15,12 +15,15 @@
 //! 5. Inside each run: the seeding of a seeded buffer, its first layer over the seed, pairs.
 //! 6. Which clears the frame can skip.
 
+pub mod mip_bounds;
+pub mod resolution;
 pub mod strategy;
+pub mod visibility;
 
 use std::ops::Range;
 
 use crate::render::frame::pass::{DrawItem, Placement};
-use crate::render::passes::reduced_layers::Divisor;
+use crate::render::plan::resolution::Divisor;
 use crate::render::plan::strategy::FillStrategy;
 
 /// What the plan needs to know of the frame besides its draws.

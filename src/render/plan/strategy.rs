@@ -7,7 +7,7 @@
 //! so the default strategy follows the adapter's device type ([`FillStrategy::for_device`]).
 //! The switches that depend on each other are one enum each: only valid combinations exist.
 
-pub use crate::render::passes::reduced_layers::DomeResolution;
+pub use crate::render::plan::resolution::DomeResolution;
 
 /// How the first runs of reduced dome layers reach the frame (with dome layers in reduced
 /// buffers; nothing to join otherwise).

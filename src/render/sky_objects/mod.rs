@@ -41,7 +41,10 @@ use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::mesh::{outline_mesh, shape_key, shape_mesh, GpuMesh, SkyVertex};
 use crate::render::gpu::shaders;
 use crate::render::gpu::textures::{self, TextureCache};
-use crate::render::passes::reduced_layers::Divisor;
+use crate::render::plan::mip_bounds::{self, DomeGrid, DrawMesh};
+use crate::render::plan::resolution::Divisor;
+use crate::render::plan::resolution::{resolution, LayerStages, Resolution, ResolutionFacts};
+use crate::render::plan::visibility::{visibility, CullFacts, Visibility};
 use crate::sky::eval::{FrameSky, VersionFrame};
 use crate::sky::resolved::{BlendMode, Lighting, Shape, Sky, StageOp, TextureImage, UvSource, Version, MAX_STAGES};
 
@@ -408,149 +411,54 @@ impl Pass for SkyObjectsPass {
         self.below_horizon = 0;
         self.off_screen = 0;
         // The frame's elevations, with a margin for the dome's chords (tests in mesh.rs).
-        let (lowest_deg, highest_deg) = cx.camera.elevation_range_deg(cx.size.0 as f32 / cx.size.1.max(1) as f32);
+        let aspect = cx.aspect();
+        let (lowest_deg, highest_deg) = cx.camera.elevation_range_deg(aspect);
         self.frame_elevations_deg = (lowest_deg, highest_deg);
         (self.frame_camera, self.frame_size) = (*cx.camera, cx.size);
-        let in_view = |shape: &Shape| match *shape {
-            Shape::Dome { bottom_deg } => bottom_deg.get() - 0.5 <= highest_deg,
-            Shape::DomeBand { bottom_deg, top_deg } => {
-                let (lo, hi) = (bottom_deg.get().min(top_deg.get()), bottom_deg.get().max(top_deg.get()));
-                lo - 0.5 <= highest_deg && hi + 0.5 >= lowest_deg
-            }
-            Shape::Billboard { .. } | Shape::Quad { .. } => true,
-        };
-        let cull = cx.options.skips.off_screen;
-        let behind_scene = |of: &crate::sky::ObjectFrame, versions: &[crate::sky::VersionFrame]| {
-            let Some((dir, _)) = of.placement.filter(|_| cx.options.scene && cx.options.skips.below_horizon) else { return false };
-            let elevation_deg = dir.y.clamp(-1.0, 1.0).asin().to_degrees();
-            versions.iter().all(|v| match draws.objects[of.index][v.version].shape {
-                // Half the diagonal of the square: its highest corner at any roll.
-                crate::sky::resolved::Shape::Billboard { size_deg } | crate::sky::resolved::Shape::Quad { size_deg } => {
-                    elevation_deg + size_deg.get() * std::f32::consts::FRAC_1_SQRT_2 < -crate::render::frame::renderer::SCENE_COVERS_BELOW_DEG
-                }
-                _ => false,
-            })
-        };
-        // Billboards and quads wholly outside the frame: a draw that shows nothing still costs
-        // its vertices and its state (a small saving: docs/architecture.md).
-        let aspect = cx.size.0 as f32 / cx.size.1.max(1) as f32;
-        let out_of_frame = |of: &crate::sky::ObjectFrame, versions: &[crate::sky::VersionFrame]| {
-            let Some((dir, _)) = of.placement.filter(|_| cull) else { return false };
-            versions.iter().all(|v| match draws.objects[of.index][v.version].shape {
-                // The square's half diagonal, flat at its distance, and half a degree of margin.
-                Shape::Billboard { size_deg } | Shape::Quad { size_deg } => {
-                    let half_diagonal_deg = ((size_deg.get() * 0.5).to_radians().tan() * std::f32::consts::SQRT_2).atan().to_degrees();
-                    size_deg.get() < 170.0 && !cx.camera.sees_cone(aspect, dir, half_diagonal_deg + 0.5)
-                }
-                _ => false,
-            })
-        };
-        let (finest, coarsest) = cx.options.strategy.dome_resolution.divisors();
-        let finest_whole = cx.options.strategy.dome_resolution.finest_whole();
-        let reduce_domes = finest > Divisor::FULL;
-        // The frame's pixels per degree of view at its centre.
-        let frame_px_per_deg = cx.size.1 as f32 / cx.camera.fov_y_deg.max(1.0);
-        let reduced_px_per_deg = frame_px_per_deg / finest.get();
+        let scene_covers_below = cx.options.scene && cx.options.skips.below_horizon;
+        let cull = CullFacts { camera: *cx.camera, aspect, elevations_deg: (lowest_deg, highest_deg), scene_covers_below, off_screen: cx.options.skips.off_screen };
+        let resolution_facts = ResolutionFacts::new(cx.options.strategy.dome_resolution, cx.size.1, cx.camera.fov_y_deg);
+        let mut shapes = Vec::new();
         for of in &cx.frame.objects {
-            match &of.versions {
-                Ok(versions) if behind_scene(of, versions) => {
-                    self.hidden += 1;
-                    self.below_horizon += 1;
-                }
-                Ok(versions) if cull && (versions.iter().all(|v| !in_view(&draws.objects[of.index][v.version].shape)) || out_of_frame(of, versions)) => {
-                    self.hidden += 1;
-                    self.off_screen += 1;
-                }
-                Ok(versions) => {
-                    for v in versions {
-                        let d = &draws.objects[of.index][v.version];
-                        let entry = Visible {
-                            index: of.index,
-                            priority: of.priority,
-                            version: v.version,
-                            reduced: false,
-                            divisor: Divisor::FULL,
-                            part: [true; 4],
-                            on_top: false,
-                            parts: (0, 0),
-                        };
-                        // Blended by its alpha with every term black and transparent this frame (a
-                        // night-only card by day), the draw's material is 0 and leaves every
-                        // buffer as it is: not drawn.
-                        let key = self.keys.get(&(of.index, v.version));
-                        let dark = key.filter(|_| cx.options.skips.dark_stages).is_some_and(|key| {
-                            let count = (key.count as usize).min(MAX_STAGES);
-                            d.blend != BlendMode::Opaque && !key.live[..count].iter().any(|&live| live)
-                        });
-                        if dark {
-                            self.draws_dark += 1;
-                            continue;
-                        }
-                        let dome = matches!(d.shape, Shape::Dome { .. } | Shape::DomeBand { .. });
-                        let Some(key) = key.filter(|_| reduce_domes && dome) else {
-                            self.visible.push(entry);
-                            continue;
-                        };
-                        // A term is fine when a texture it samples this frame has finer detail
-                        // than the reduced buffer's pixels (the skydome's stars at night).
-                        let count = (key.count as usize).min(MAX_STAGES);
-                        let terms = stage_terms(key.ops);
-                        let fine_stage = |k: usize| key.live[k] && d.texels_per_deg[k] > reduced_px_per_deg;
-                        let fine: [bool; 4] = std::array::from_fn(|k| k < count && (0..count).any(|j| terms[j] == terms[k] && fine_stage(j)));
-                        let coarse: [bool; 4] = std::array::from_fn(|k| k < count && !fine[k]);
-                        let any_fine = (0..count).any(|k| fine[k] && key.live[k]);
-                        let any_coarse = (0..count).any(|k| coarse[k] && key.live[k]);
-                        // The coarsest buffer allowed that resolves every coarse stage sampled (no
-                        // stage sampled: the coarsest). A physical sky model's stage stays at the
-                        // finest: its map has no texel size here, and the sun's aureole is sharp.
-                        // The most texels per degree among the stages sampled of `stages`.
-                        let densest = |stages: [bool; 4]| (0..count).filter(|&k| stages[k] && key.live[k]).map(|k| d.texels_per_deg[k]).fold(0.0, f32::max);
-                        let physical = (key.view_stage as usize) < MAX_STAGES;
-                        let divisor = if physical { finest } else { Divisor::at_most(frame_px_per_deg / densest(coarse), finest, coarsest) };
-                        let reduced = Visible { reduced: true, divisor, ..entry };
-                        match (any_fine, any_coarse, d.blend) {
-                            (false, _, _) => self.visible.push(reduced),
-                            // Terms add up: the coarse ones at reduced resolution, then the fine
-                            // ones added on top at full resolution (opaque layers only: under
-                            // alpha blending the terms' alphas do not add).
-                            (true, true, BlendMode::Opaque) => {
-                                self.visible.push(Visible { part: coarse, ..reduced });
-                                self.visible.push(Visible { part: fine, on_top: true, ..entry });
-                            }
-                            // Whole, in a buffer between `finest_whole` and the finest where one
-                            // resolves every texture it samples (a cloud layer with a fine texture).
-                            (true, _, BlendMode::Alpha) if !physical => {
-                                let factor = frame_px_per_deg / densest([true; 4]);
-                                if factor >= finest_whole.get() {
-                                    self.visible.push(Visible { reduced: true, divisor: Divisor::at_most(factor, finest_whole, finest), ..entry });
-                                } else {
-                                    self.visible.push(entry);
-                                }
-                            }
-                            _ => self.visible.push(entry),
-                        }
-                    }
-                }
+            let versions = match &of.versions {
+                Ok(versions) => versions,
                 Err(why) => {
                     self.hidden += 1;
                     self.ref_hidden += u32::from(matches!(why, crate::sky::Hidden::RefAlphaZero(_)));
+                    continue;
+                }
+            };
+            shapes.clear();
+            shapes.extend(versions.iter().map(|v| draws.objects[of.index][v.version].shape));
+            match visibility(of.placement.map(|(dir, _)| dir), &shapes, &cull) {
+                Visibility::BelowHorizon => {
+                    self.hidden += 1;
+                    self.below_horizon += 1;
+                    continue;
+                }
+                Visibility::OffScreen => {
+                    self.hidden += 1;
+                    self.off_screen += 1;
+                    continue;
+                }
+                Visibility::Drawn => {}
+            }
+            for v in versions {
+                let entry =
+                    Visible { index: of.index, priority: of.priority, version: v.version, reduced: false, divisor: Divisor::FULL, part: [true; 4], on_top: false, parts: (0, 0) };
+                let version = (&draws.objects[of.index][v.version], self.keys.get(&(of.index, v.version)));
+                if !push_version(&mut self.visible, entry, version, cx.options.skips.dark_stages, &resolution_facts) {
+                    self.draws_dark += 1;
                 }
             }
         }
-        // Stages whose level of detail stays at most 1/2 wherever they are drawn, at each draw's
-        // resolution: the mipmapped sampler (nearest level, linear within it, the same filter
-        // either side of 0) reads level 0 there too (Vulkan: level ceil(lod + 1/2) - 1), so a
-        // level-0 sampler gives the same pixels without the level-of-detail work.
-        // Domes decide per ring of triangles, since texture coordinates crowd towards the pole (a
-        // view of the zenith needs the tiled stars' levels round the zenith, not lower down); the
-        // rings the frame does not show are left out.
         self.level0_stages = 0;
         self.parts.clear();
         if cx.options.skips.unneeded_mips {
-            let view = FrameView::new(cx.camera, cx.aspect(), (lowest_deg, highest_deg), cx.frame.towards_sun, cx.frame.celestial_from_world);
+            let view = FrameView::new(cx.camera, aspect, (lowest_deg, highest_deg), cx.frame.towards_sun, cx.frame.celestial_from_world);
             // Drawn or not, the scene's pixels there are the scene's (reduced buffers keep their
             // clear colour there, too far below the scene's edge for the upsampling to reach).
-            let covered_below_deg = if cx.options.scene && cx.options.skips.below_horizon { -crate::render::frame::renderer::SCENE_COVERS_BELOW_DEG } else { f32::NEG_INFINITY };
+            let covered_below_deg = if scene_covers_below { -crate::render::frame::renderer::SCENE_COVERS_BELOW_DEG } else { f32::NEG_INFINITY };
             for e in &mut self.visible {
                 let d = &draws.objects[e.index][e.version];
                 // Frame pixels per degree at the frame's centre (the fewest: a perspective frame
@@ -561,58 +469,19 @@ impl Pass for SkyObjectsPass {
                         .filter(|&k| d.maps[k].as_ref().is_some_and(|m| m.peak(&d.shape, ring, &view) * LOD_MARGIN <= px_per_deg * std::f32::consts::SQRT_2))
                         .fold(0u8, |m, k| m | 1 << k)
                 };
-                let start = self.parts.len();
-                let mut used = 0u8;
-                match crate::render::gpu::mesh::dome_grid(&d.shape) {
-                    Some((top_deg, bottom_deg, rings, segments)) => {
-                        let per_ring = segments * 6;
-                        for r in 0..rings {
-                            let (a, b) = (top_deg + (bottom_deg - top_deg) * r as f32 / rings as f32, top_deg + (bottom_deg - top_deg) * (r + 1) as f32 / rings as f32);
-                            let (ring_lo, ring_hi) = (a.min(b), a.max(b));
-                            // With the margin of the chords' sag (tests in mesh.rs); rings the
-                            // scene covers whole are left out too.
-                            if ring_lo - 0.5 > highest_deg || ring_hi + 0.5 < lowest_deg.max(covered_below_deg) {
-                                continue;
-                            }
-                            let mask = level0(Some(r as usize));
-                            // The outline's one band spans every ring: a stage is sampled from
-                            // level 0 there where it can be in every ring in view.
-                            if d.outline {
-                                let part = self.parts.get_mut(start).map(|(_, m)| m);
-                                match part {
-                                    Some(m) => *m &= mask,
-                                    None => self.parts.push((0..per_ring, mask)),
-                                }
-                                continue;
-                            }
-                            used |= mask;
-                            let indices = r * per_ring..(r + 1) * per_ring;
-                            let ours = self.parts.len() > start;
-                            match self.parts.last_mut() {
-                                Some((range, m)) if ours && *m == mask && range.end == indices.start => range.end = indices.end,
-                                _ => self.parts.push((indices, mask)),
-                            }
-                        }
-                        if d.outline {
-                            used |= self.parts.get(start).map_or(0, |p| p.1);
-                        }
-                        // No ring in view: one empty part, drawn as nothing.
-                        if self.parts.len() == start {
-                            self.parts.push((0..0, 0));
-                        }
-                    }
-                    None => {
-                        used = level0(None);
-                        self.parts.push((0..d.mesh.index_count, used));
-                    }
-                }
-                e.parts = (start as u32, (self.parts.len() - start) as u32);
+                let mesh = match crate::render::gpu::mesh::dome_grid(&d.shape) {
+                    Some(grid) => DrawMesh::Dome { grid: DomeGrid::from_tuple(grid), outline: d.outline },
+                    None => DrawMesh::Whole { index_count: d.mesh.index_count },
+                };
+                let (parts, used) = mip_bounds::parts(mesh, (lowest_deg, highest_deg), covered_below_deg, level0);
+                e.parts = (self.parts.len() as u32, parts.len() as u32);
+                self.parts.extend(parts);
                 self.level0_stages += used.count_ones();
             }
         }
         // Draws on the frame may come between two runs that the renderer joins: their
         // corrected variants are built too.
-        self.build_variants(cx.device, cx.target, reduce_domes);
+        self.build_variants(cx.device, cx.target, resolution_facts.reduces());
     }
 
     fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
@@ -665,6 +534,44 @@ impl Pass for SkyObjectsPass {
         reduced.dedup();
         stats.objects_reduced = reduced.len() as u32;
     }
+}
+
+/// This frame's draws of one visible version `d` into `visible`: none when it is dark (returns
+/// false), one in its place, or (a dome layer, with reduced buffers allowed) reduced whole or
+/// split by [`resolution`].
+fn push_version(visible: &mut Vec<Visible>, entry: Visible, (d, key): (&VersionDraw, Option<&VariantKey>), skip_dark: bool, facts: &ResolutionFacts) -> bool {
+    // Blended by its alpha with every term black and transparent this frame (a night-only card
+    // by day), the draw's material is 0 and leaves every buffer as it is: not drawn.
+    let dark = key.filter(|_| skip_dark).is_some_and(|key| {
+        let count = (key.count as usize).min(MAX_STAGES);
+        d.blend != BlendMode::Opaque && !key.live[..count].iter().any(|&live| live)
+    });
+    if dark {
+        return false;
+    }
+    let dome = matches!(d.shape, Shape::Dome { .. } | Shape::DomeBand { .. });
+    let Some(key) = key.filter(|_| facts.reduces() && dome) else {
+        visible.push(entry);
+        return true;
+    };
+    let stages = LayerStages {
+        count: key.count as usize,
+        terms: stage_terms(key.ops),
+        live: key.live,
+        texels_per_deg: d.texels_per_deg,
+        physical: (key.view_stage as usize) < MAX_STAGES,
+        blend: d.blend,
+    };
+    let reduced = |divisor| Visible { reduced: true, divisor, ..entry };
+    match resolution(&stages, facts) {
+        Resolution::Full => visible.push(entry),
+        Resolution::Reduced(divisor) => visible.push(reduced(divisor)),
+        Resolution::Split { coarse, divisor, fine } => {
+            visible.push(Visible { part: coarse, ..reduced(divisor) });
+            visible.push(Visible { part: fine, on_top: true, ..entry });
+        }
+    }
+    true
 }
 
 #[cfg(test)]

@@ -1,0 +1,264 @@
+//! The choice of resolution: how finely each dome layer is drawn this frame, from the texel
+//! density of the stages it samples and the strategy's [`DomeResolution`]. Pure: the sky objects
+//! pass asks per drawn version; the plan then groups reduced draws into runs
+//! ([`crate::render::passes::reduced_layers`] draws them).
+
+use crate::sky::resolved::{BlendMode, MAX_STAGES};
+
+/// Frame pixels per reduced-buffer pixel along each side, in steps of a quarter: a run's buffer
+/// can be just as coarse as its layers' textures allow (the built-in clouds resolve at 2.5,
+/// where a half-resolution buffer would draw 1.6 times their pixels).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Divisor(u8);
+
+impl Divisor {
+    /// The frame's own resolution.
+    pub const FULL: Divisor = Divisor(4);
+    /// Half the width and height.
+    pub const HALF: Divisor = Divisor(8);
+    /// A quarter of the width and height.
+    pub const QUARTER: Divisor = Divisor(16);
+    /// An eighth of the width and height: the coarsest `Auto` goes.
+    pub const EIGHTH: Divisor = Divisor(32);
+    /// Quarter steps of one divisor.
+    const STEPS: f32 = 4.0;
+
+    /// `n` frame pixels per buffer pixel.
+    pub const fn whole(n: u8) -> Divisor {
+        Divisor(n * 4)
+    }
+
+    /// Frame pixels per buffer pixel.
+    pub fn get(self) -> f32 {
+        f32::from(self.0) / Self::STEPS
+    }
+
+    /// The coarsest step at most `factor`, within `[finest, coarsest]` (`finest` where `factor`
+    /// is not a number).
+    pub fn at_most(factor: f32, finest: Divisor, coarsest: Divisor) -> Divisor {
+        let steps = (factor * Self::STEPS).floor();
+        if steps.is_nan() {
+            return finest;
+        }
+        Divisor(steps.clamp(f32::from(finest.0), f32::from(coarsest.0)) as u8)
+    }
+
+    /// Buffer pixels covering `frame_px` frame pixels (rounded up: the buffer holds the whole frame).
+    pub fn buffer_len(self, frame_px: u32) -> u32 {
+        (frame_px * u32::from(Self::STEPS as u8)).div_ceil(u32::from(self.0.max(1))).max(1)
+    }
+}
+
+impl std::fmt::Display for Divisor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.get())
+    }
+}
+
+/// How finely dome layers are drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DomeResolution {
+    /// At the frame's resolution, straight into it.
+    Full,
+    /// Half the width and height (a quarter of the pixels), composited.
+    Half,
+    /// A quarter of the width and height, composited.
+    Quarter,
+    /// Each run of layers in the coarsest buffer, in quarter steps from half the width and
+    /// height to an eighth, that still resolves the textures of all its layers: the default.
+    /// Layers go to a buffer only when a half-resolution one resolves them, or, alpha-blended
+    /// ones whose terms cannot be split, one at 1.5 ([`DomeResolution::finest_whole`]).
+    #[default]
+    Auto,
+}
+
+impl DomeResolution {
+    /// Every choice, finest first.
+    pub const ALL: [DomeResolution; 4] = [DomeResolution::Full, DomeResolution::Half, DomeResolution::Quarter, DomeResolution::Auto];
+
+    /// Frame pixels per buffer pixel along each side: the finest buffer a layer may go to, and
+    /// the coarsest (1: layers stay on the frame).
+    pub fn divisors(self) -> (Divisor, Divisor) {
+        match self {
+            DomeResolution::Full => (Divisor::FULL, Divisor::FULL),
+            DomeResolution::Half => (Divisor::HALF, Divisor::HALF),
+            DomeResolution::Quarter => (Divisor::QUARTER, Divisor::QUARTER),
+            DomeResolution::Auto => (Divisor::HALF, Divisor::EIGHTH),
+        }
+    }
+
+    /// The finest buffer an alpha-blended layer goes to whole when some texture it samples is
+    /// too fine for the finest of [`Self::divisors`] (its terms cannot be split as an opaque
+    /// layer's are): with `Auto`, 1.5 (such a layer drawn on the frame costs lavapipe its full
+    /// resolution, blended and depth-tested; below 1.5 the buffer's composite costs more than its
+    /// pixels save); the finest of [`Self::divisors`] otherwise.
+    pub fn finest_whole(self) -> Divisor {
+        match self {
+            DomeResolution::Auto => Divisor(6),
+            other => other.divisors().0,
+        }
+    }
+
+    /// Name in the CLI, the app and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            DomeResolution::Full => "full",
+            DomeResolution::Half => "half",
+            DomeResolution::Quarter => "quarter",
+            DomeResolution::Auto => "auto",
+        }
+    }
+
+    /// Parses [`DomeResolution::name`].
+    pub fn parse(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|r| r.name() == s)
+    }
+}
+
+/// What the choice of resolution knows about the frame.
+#[derive(Debug, Clone, Copy)]
+pub struct ResolutionFacts {
+    /// Frame pixels per degree of view at the frame's centre.
+    pub frame_px_per_deg: f32,
+    /// The finest and the coarsest buffer a layer may go to ([`DomeResolution::divisors`]).
+    pub finest: Divisor,
+    pub coarsest: Divisor,
+    /// The finest buffer an alpha-blended layer goes to whole ([`DomeResolution::finest_whole`]).
+    pub finest_whole: Divisor,
+}
+
+impl ResolutionFacts {
+    /// The facts of a frame `height_px` pixels high with a vertical field of view of
+    /// `fov_y_deg`, at `resolution`.
+    pub fn new(resolution: DomeResolution, height_px: u32, fov_y_deg: f32) -> Self {
+        let (finest, coarsest) = resolution.divisors();
+        Self { frame_px_per_deg: height_px as f32 / fov_y_deg.max(1.0), finest, coarsest, finest_whole: resolution.finest_whole() }
+    }
+
+    /// Whether any layer may go to a reduced buffer.
+    pub fn reduces(&self) -> bool {
+        self.finest > Divisor::FULL
+    }
+}
+
+/// What the choice of resolution knows about one dome layer's material this frame.
+#[derive(Debug, Clone, Copy)]
+pub struct LayerStages {
+    /// Stages of the material (at most [`MAX_STAGES`]).
+    pub count: usize,
+    /// The term each stage belongs to: an `add` stage starts one, `modulate` stages join it.
+    pub terms: [usize; MAX_STAGES],
+    /// Whether each stage's term is sampled this frame (not black).
+    pub live: [bool; MAX_STAGES],
+    /// The most texels per degree of view each stage's texture shows anywhere on the shape.
+    pub texels_per_deg: [f32; MAX_STAGES],
+    /// A stage is fed by a physical sky model's map (which has no texel size here, and whose
+    /// sun aureole is sharp: such a layer stays at the finest buffer).
+    pub physical: bool,
+    pub blend: BlendMode,
+}
+
+/// How finely one dome layer is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Resolution {
+    /// On the frame, at its resolution.
+    Full,
+    /// Whole, into a buffer `divisor` times coarser.
+    Reduced(Divisor),
+    /// Its terms split (opaque layers only: under alpha blending the terms' alphas do not add):
+    /// the `coarse` stages into a buffer, the `fine` ones added on top at full resolution.
+    Split { coarse: [bool; MAX_STAGES], divisor: Divisor, fine: [bool; MAX_STAGES] },
+}
+
+/// The resolution of a dome layer with `stages` (only asked when [`ResolutionFacts::reduces`]).
+///
+/// A term is fine when a texture it samples this frame has finer detail than the finest
+/// buffer's pixels (the skydome's stars at night). A layer with no fine term goes whole to the
+/// coarsest buffer that resolves every stage sampled (no stage sampled: the coarsest); an opaque
+/// one with both kinds is split; an alpha-blended one with a fine texture goes whole into a
+/// buffer between `finest_whole` and the finest where one resolves it, or stays on the frame.
+pub fn resolution(stages: &LayerStages, facts: &ResolutionFacts) -> Resolution {
+    let count = stages.count.min(MAX_STAGES);
+    let (live, terms) = (stages.live, stages.terms);
+    let reduced_px_per_deg = facts.frame_px_per_deg / facts.finest.get();
+    let fine_stage = |k: usize| live[k] && stages.texels_per_deg[k] > reduced_px_per_deg;
+    let fine: [bool; MAX_STAGES] = std::array::from_fn(|k| k < count && (0..count).any(|j| terms[j] == terms[k] && fine_stage(j)));
+    let coarse: [bool; MAX_STAGES] = std::array::from_fn(|k| k < count && !fine[k]);
+    let any_fine = (0..count).any(|k| fine[k] && live[k]);
+    let any_coarse = (0..count).any(|k| coarse[k] && live[k]);
+    // The most texels per degree among the stages sampled of `of`.
+    let densest = |of: [bool; MAX_STAGES]| (0..count).filter(|&k| of[k] && live[k]).map(|k| stages.texels_per_deg[k]).fold(0.0, f32::max);
+    let divisor = if stages.physical { facts.finest } else { Divisor::at_most(facts.frame_px_per_deg / densest(coarse), facts.finest, facts.coarsest) };
+    match (any_fine, any_coarse, stages.blend) {
+        (false, _, _) => Resolution::Reduced(divisor),
+        (true, true, BlendMode::Opaque) => Resolution::Split { coarse, divisor, fine },
+        (true, _, BlendMode::Alpha) if !stages.physical => {
+            let factor = facts.frame_px_per_deg / densest([true; MAX_STAGES]);
+            if factor >= facts.finest_whole.get() {
+                Resolution::Reduced(Divisor::at_most(factor, facts.finest_whole, facts.finest))
+            } else {
+                Resolution::Full
+            }
+        }
+        _ => Resolution::Full,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 720 pixels over 60 degrees: 12 frame pixels per degree, 6 in a half-resolution buffer.
+    fn auto() -> ResolutionFacts {
+        ResolutionFacts::new(DomeResolution::Auto, 720, 60.0)
+    }
+
+    fn layer(texels_per_deg: &[f32], terms: &[usize], blend: BlendMode) -> LayerStages {
+        let mut s = LayerStages { count: texels_per_deg.len(), terms: [0; 4], live: [false; 4], texels_per_deg: [0.0; 4], physical: false, blend };
+        for (k, (&t, &term)) in texels_per_deg.iter().zip(terms).enumerate() {
+            (s.texels_per_deg[k], s.terms[k], s.live[k]) = (t, term, true);
+        }
+        s
+    }
+
+    #[test]
+    fn coarse_layers_go_to_the_coarsest_buffer_that_resolves_them() {
+        let f = auto();
+        assert_eq!(f.frame_px_per_deg, 12.0);
+        // 12 / 4.8 = 2.5 frame pixels per texel: a buffer 2.5 times coarser.
+        assert_eq!(resolution(&layer(&[4.8], &[0], BlendMode::Alpha), &f), Resolution::Reduced(Divisor::at_most(2.5, Divisor::HALF, Divisor::EIGHTH)));
+        assert_eq!(Divisor::at_most(2.5, Divisor::HALF, Divisor::EIGHTH).get(), 2.5);
+        // Smoother than an eighth's pixels: the coarsest; nothing sampled: the coarsest too.
+        assert_eq!(resolution(&layer(&[0.5], &[0], BlendMode::Opaque), &f), Resolution::Reduced(Divisor::EIGHTH));
+        let mut dark = layer(&[30.0], &[0], BlendMode::Opaque);
+        dark.live = [false; 4];
+        assert_eq!(resolution(&dark, &f), Resolution::Reduced(Divisor::EIGHTH));
+        // The densest stage decides; a physical map keeps the finest.
+        assert_eq!(resolution(&layer(&[0.5, 3.0], &[0, 1], BlendMode::Opaque), &f), Resolution::Reduced(Divisor::whole(4)));
+        let physical = LayerStages { physical: true, ..layer(&[0.5], &[0], BlendMode::Opaque) };
+        assert_eq!(resolution(&physical, &f), Resolution::Reduced(Divisor::HALF));
+        // Fixed resolutions keep their divisor.
+        let half = ResolutionFacts::new(DomeResolution::Half, 720, 60.0);
+        assert_eq!(resolution(&layer(&[0.5], &[0], BlendMode::Opaque), &half), Resolution::Reduced(Divisor::HALF));
+        assert!(!ResolutionFacts::new(DomeResolution::Full, 720, 60.0).reduces());
+    }
+
+    #[test]
+    fn fine_terms_split_opaque_layers_and_keep_blended_ones_whole() {
+        let f = auto();
+        // Gradient (coarse) + stars x mask (fine, one term) + halo (coarse).
+        let sky = layer(&[0.5, 20.0, 1.0, 0.8], &[0, 1, 1, 2], BlendMode::Opaque);
+        let Resolution::Split { coarse, divisor, fine } = resolution(&sky, &f) else { panic!("{:?}", resolution(&sky, &f)) };
+        // The mask shares the stars' term: fine with them.
+        assert_eq!((coarse, fine), ([true, false, false, true], [false, true, true, false]));
+        assert_eq!(divisor, Divisor::at_most(12.0 / 0.8, Divisor::HALF, Divisor::EIGHTH));
+        // Every stage fine: nothing to reduce.
+        assert_eq!(resolution(&layer(&[20.0], &[0], BlendMode::Opaque), &f), Resolution::Full);
+        // Alpha-blended with a fine texture: whole between 1.5 and the finest where it resolves,
+        // on the frame where even 1.5 is too coarse.
+        assert_eq!(resolution(&layer(&[7.0], &[0], BlendMode::Alpha), &f), Resolution::Reduced(Divisor::at_most(12.0 / 7.0, DomeResolution::Auto.finest_whole(), Divisor::HALF)));
+        assert_eq!(resolution(&layer(&[9.0], &[0], BlendMode::Alpha), &f), Resolution::Full);
+        // Additive layers with fine terms stay on the frame.
+        assert_eq!(resolution(&layer(&[20.0, 0.5], &[0, 1], BlendMode::Additive), &f), Resolution::Full);
+    }
+}
