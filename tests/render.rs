@@ -431,6 +431,26 @@ fn materials_draw_with_specialised_pipelines() {
 }
 
 #[test]
+fn pipelines_are_built_only_for_the_placements_the_plan_uses() {
+    // A frame builds one specialised pipeline per draw the plan records at most (two for the
+    // background with texel polygons: the draw without its stage too), not one per placement a
+    // draw could take; the software strategy offers several per dome layer.
+    let sky = default_sky();
+    let options = RenderOptions::default().with_strategy(skytune::render::FillStrategy::software());
+    for (hour, weather) in [(13.0, 0.0), (19.0, 0.3), (23.0, 0.0), (15.0, 1.0)] {
+        let mut h = common::headless(W, H);
+        h.set_sky(&sky).unwrap();
+        h.render(&sky, &FrameInput::new(hour, weather), &camera(), &options).unwrap();
+        let uses = h.renderer.plan.uses();
+        let backgrounds = uses.iter().filter(|u| matches!(u.2, skytune::render::frame::pass::Placement::Background { .. })).count();
+        let (built, failed) = h.renderer.pass::<skytune::render::sky_objects::SkyObjectsPass>().unwrap().variants_built();
+        assert_eq!(failed, 0);
+        assert!(built > 0 && built <= uses.len() + backgrounds, "{hour} h: {built} pipelines for {} planned draws: {uses:?}", uses.len());
+        assert!(!h.renderer.plan.runs.is_empty(), "{hour} h: the software strategy reduces the dome layers here");
+    }
+}
+
+#[test]
 fn the_galaxy_shows_no_seam_where_its_longitude_wraps() {
     // The galaxy's plate carree coordinates wrap from 1 to 0 on one meridian of the celestial
     // frame. Differenced across the wrap, the derivative picked the texture's smallest level: a

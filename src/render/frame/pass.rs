@@ -317,6 +317,15 @@ pub trait Pass: Any {
         0
     }
 
+    /// Builds the pipelines for this pass's draws that the frame's plan records, `uses` being
+    /// (item key, placement) of each ([`crate::render::plan::SkyPlan::uses`]): no pipeline is
+    /// built for a placement the plan did not choose. Returns true when one failed at a
+    /// placement the item's [`Caps`] offered; the renderer then plans again, and the failure,
+    /// remembered, is no longer offered.
+    fn build_planned(&mut self, _device: &wgpu::Device, _target: Target, _uses: &[(usize, Placement)]) -> bool {
+        false
+    }
+
     /// Records one item into the compute phase.
     fn dispatch(&self, _cpass: &mut wgpu::ComputePass<'_>, _key: usize) {}
 

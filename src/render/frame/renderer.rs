@@ -85,6 +85,11 @@ pub struct Skips {
     pub covered_clears: bool,
 }
 
+/// Plans of one frame at most after the first, each after a pipeline the previous one chose
+/// failed to build (each failure is remembered, so the plans converge; a draw whose pipeline
+/// still fails after them is not drawn, and was logged).
+const MAX_REPLANS: usize = 4;
+
 /// The main-scene stand-in covers every direction more than this far below the horizon, degrees
 /// (its terrain reaches 2.5 km at a viewer height of 2 m; its lowest dip is 40 m down).
 pub const SCENE_COVERS_BELOW_DEG: f32 = 2.0;
@@ -212,6 +217,8 @@ pub struct SkyRenderer {
     depth_untouched: Option<wgpu::TextureView>,
     /// Counters of the last recorded frame.
     pub stats: FrameStats,
+    /// The last frame's plan of its sky phase (diagnostics and tests read it).
+    pub plan: SkyPlan,
     /// What the last sky upload reused.
     pub upload_stats: UploadStats,
 }
@@ -248,6 +255,7 @@ impl SkyRenderer {
             timer: ctx.timestamps.then(|| GpuTimer::new(device, &ctx.queue)),
             depth_untouched: None,
             stats: FrameStats::default(),
+            plan: SkyPlan::default(),
             upload_stats: UploadStats::default(),
         })
     }
@@ -384,7 +392,16 @@ impl SkyRenderer {
             covered_clears: options.skips.covered_clears,
             depth_clean: self.depth_untouched.as_ref() == Some(target.depth),
         };
-        let plan = plan::plan(std::mem::take(&mut items[Phase::Sky.index()]), &options.strategy, facts);
+        let mut plan = plan::plan(std::mem::take(&mut items[Phase::Sky.index()]), &options.strategy, facts);
+        // Pipelines for what the plan uses and nothing else. A failed one withdraws the
+        // capability that offered it (the pass remembers it): plan again without it.
+        for _ in 0..MAX_REPLANS {
+            if !Self::build_planned(&mut self.passes, &ctx.device, kind, &plan) {
+                break;
+            }
+            items = self.collect_items(&cx);
+            plan = plan::plan(std::mem::take(&mut items[Phase::Sky.index()]), &options.strategy, facts);
+        }
         stats.reduced_runs = plan.divisors();
         stats.joined_runs_only = plan.items.iter().filter(|(_, it)| it.reduced && it.joins_only).count() as u32;
         stats.composites = plan.composites;
@@ -437,6 +454,23 @@ impl SkyRenderer {
             pass.stats_recorded(&mut stats);
         }
         self.stats = stats;
+        self.plan = plan;
+    }
+
+    /// Has every pass build the pipelines of its draws in `plan`; returns whether one failed at
+    /// a placement its item's capabilities offered.
+    fn build_planned(passes: &mut [Box<dyn Pass>], device: &wgpu::Device, kind: Target, plan: &SkyPlan) -> bool {
+        let uses = plan.uses();
+        let mut failed = false;
+        let mut mine = Vec::new();
+        for (i, pass) in passes.iter_mut().enumerate() {
+            mine.clear();
+            mine.extend(uses.iter().filter(|u| u.0 == i).map(|&(_, key, placement)| (key, placement)));
+            if !mine.is_empty() {
+                failed |= pass.build_planned(device, kind, &mine);
+            }
+        }
+        failed
     }
 
     /// Every pass's items this frame, per phase: (pass index, item), in list order.

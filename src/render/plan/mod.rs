@@ -160,6 +160,22 @@ impl SkyPlan {
     pub fn divisors(&self) -> Vec<Divisor> {
         self.runs.iter().map(|r| r.divisor).collect()
     }
+
+    /// Every draw the plan records, as (pass index, the pass's item key, placement), in
+    /// recording order: the passes build the pipelines for these and no others.
+    pub fn uses(&self) -> Vec<(usize, usize, Placement)> {
+        let first = match &self.background {
+            Some(Background::Composite { first }) => first.iter().map(|&item| Step { item, placement: Placement::First, input: RunInput::None }).collect(),
+            Some(Background::Fused { fused, others, .. }) => std::iter::once(*fused).chain(others.iter().copied()).collect(),
+            None => Vec::new(),
+        };
+        let runs = self.runs.iter().flat_map(|r| r.draws.iter().copied());
+        let sky = self.steps.iter().filter_map(|s| match s {
+            SkyStep::Draw(step) => Some(*step),
+            SkyStep::Composite(_) => None,
+        });
+        runs.chain(first).chain(sky).map(|step| (self.items[step.item].0, self.items[step.item].1.key, step.placement)).collect()
+    }
 }
 
 /// Plans the sky phase: `items` are its draws in list order, (pass index, item).

@@ -208,3 +208,29 @@ fn a_pair_needs_the_next_item_it_was_checked_with() {
     let p = plan(items, &FillStrategy::software(), FACTS);
     assert!(p.runs[1].draws.iter().all(|s| s.placement == Placement::Reduced), "{:?}", p.runs[1].draws);
 }
+
+#[test]
+fn the_plans_uses_are_every_draw_it_records_and_no_other() {
+    // What the passes build pipelines for: each draw once, at the placement it is recorded with.
+    let p = plan(night(true), &FillStrategy::software(), FACTS);
+    assert_eq!(
+        p.uses(),
+        [
+            (0, 0, Placement::Reduced),
+            (0, 3, Placement::Pair { upper: 4, over_seed: true }),
+            (0, 1, Placement::Background { joined: true }),
+            (1, 0, Placement::UnderRun),
+            (0, 5, Placement::Plain),
+        ]
+    );
+    // The pair's upper layer is in the pair's use, not one of its own.
+    let plain = plan(night(true), &FillStrategy::plain(), FACTS);
+    assert_eq!(
+        plain.uses().iter().map(|&(pass, key, placement)| (pass, key, placement == Placement::Plain)).collect::<Vec<_>>(),
+        [(0, 0, true), (0, 1, true), (1, 0, true), (0, 3, true), (0, 4, true), (0, 5, true)]
+    );
+    // Draws under a composited background are used as drawn first.
+    let composite = plan(night(true), &FillStrategy { under_background: UnderBackground::Additive, ..FillStrategy::software() }, FACTS);
+    assert!(matches!(composite.background, Some(Background::Composite { .. })), "{:?}", composite.background);
+    assert!(composite.uses().contains(&(0, 1, Placement::First)), "{:?}", composite.uses());
+}

@@ -73,6 +73,9 @@ pub struct SkyObjectsPass {
     /// The background without its sparse stage as one triangle over the frame
     /// ([`crate::render::plan::strategy::SparseStages::TexelPolygonsOnBands`]), by the signature without the stage.
     fullscreen_pipelines: HashMap<VariantKey, Option<wgpu::RenderPipeline>>,
+    /// Dome layers may go to reduced buffers this frame (placements other than their own are
+    /// offered only then).
+    reduces: bool,
     /// Sparse stages are drawn texel by texel this frame ([`crate::render::plan::strategy::SparseStages::TexelPolygons`]).
     texels_on: bool,
     /// The rest of such a draw goes as bands where the polygons stand for the stage
@@ -187,6 +190,7 @@ impl SkyObjectsPass {
             pair_layout,
             texel_pipelines: HashMap::new(),
             fullscreen_pipelines: HashMap::new(),
+            reduces: false,
             texels_on: false,
             bands_on: false,
             texel_triangles: std::cell::Cell::new(0),
@@ -479,9 +483,7 @@ impl Pass for SkyObjectsPass {
                 self.level0_stages += used.count_ones();
             }
         }
-        // Draws on the frame may come between two runs that the renderer joins: their
-        // corrected variants are built too.
-        self.build_variants(cx.device, cx.target, resolution_facts.reduces());
+        self.reduces = resolution_facts.reduces();
     }
 
     fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
@@ -512,6 +514,10 @@ impl Pass for SkyObjectsPass {
             Placement::Background { joined } => self.record(rpass, key, target, false, (Slot::background(joined), run)),
             Placement::Pair { upper, over_seed } => self.record_pair(rpass, (key, upper), target, run.filter(|_| over_seed)),
         }
+    }
+
+    fn build_planned(&mut self, device: &wgpu::Device, target: Target, uses: &[(usize, Placement)]) -> bool {
+        self.build_planned_variants(device, target, uses)
     }
 
     fn stats_recorded(&self, stats: &mut FrameStats) {

@@ -7,8 +7,9 @@ impl SkyObjectsPass {
     /// Whether reduced items `lower` and `upper` can be drawn at once ([`Placement::Pair`]).
     pub(super) fn can_pair(&self, lower: usize, upper: usize, target: Target, over_seed: bool) -> bool {
         let (Some(draws), Some(a), Some(b)) = (&self.draws.current, self.visible.get(lower), self.visible.get(upper)) else { return false };
-        let built = self.pair_key(a, b, target, over_seed).is_some_and(|k| self.pairs.get(&k).is_some_and(Option::is_some));
-        built && self.pair_parts(a, b, Self::pair_mesh(draws, a, b).mesh.index_count).is_some()
+        // Over the seed only as a whole dome; not where building its pipeline failed.
+        let buildable = (!over_seed || self.dome_of(a)) && self.pair_key(a, b, target, over_seed).is_some_and(|k| !matches!(self.pairs.get(&k), Some(None)));
+        buildable && self.pair_parts(a, b, Self::pair_mesh(draws, a, b).mesh.index_count).is_some()
     }
 
     /// Records reduced items `lower` and `upper` at once, over `seed` when given.

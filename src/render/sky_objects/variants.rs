@@ -293,130 +293,145 @@ impl SkyObjectsPass {
         Some(VariantKey { live, view_stage, blend, reduced: e.reduced, placement, modes, ..*k })
     }
 
-    /// Whether draw `key` has a pipeline for `placement` on the frame this frame.
+    /// Whether draw `key` can be drawn at `placement` on the frame this frame: the placement
+    /// suits it (placements other than its own only with reduced buffers this frame; first and
+    /// as the background only when additive, over a seed and as the background only as a whole
+    /// dome), it has a signature there, and building that pipeline has not failed.
     pub(super) fn can_place(&self, key: usize, target: Target, placement: Slot) -> bool {
-        self.visible.get(key).and_then(|e| self.entry_key(e, target, placement)).is_some_and(|k| k.placement == placement && self.variants.get(&k).is_some_and(Option::is_some))
+        let Some(e) = self.visible.get(key) else { return false };
+        let suits = match placement {
+            Slot::Plain => true,
+            Slot::UnderRun => self.reduces,
+            Slot::First => self.reduces && self.additive(e),
+            Slot::Background | Slot::JoinedBackground => self.reduces && self.additive(e) && self.dome_of(e),
+            Slot::OverSeed => self.reduces && self.dome_of(e),
+        };
+        suits && self.entry_key(e, target, placement).is_some_and(|k| k.placement == placement && !matches!(self.variants.get(&k), Some(None)))
     }
 
-    /// Builds the specialised pipelines this frame's draws need and do not have yet.
-    pub(super) fn build_variants(&mut self, device: &wgpu::Device, target: Target, runs: bool) {
-        for e in &self.visible {
-            // Drawn as it is, and (on the frame, with runs) possibly after the run above it, or
-            // first under the background when additive.
-            let placed = |p: Slot, wanted: bool| self.entry_key(e, target, p).filter(|k| wanted && k.placement == p);
-            // As the background only when it may cover the frame (an additive dome layer).
-            let background = runs && self.additive(e) && self.dome_of(e);
-            // As the background with its sparse stage left to the texel polygons.
-            let texel_stage = self.draws.current.as_ref().and_then(|d| d.objects[e.index][e.version].texels.as_ref()).map(|t| t.0);
-            let without = |p: Slot| placed(p, background).zip(texel_stage).and_then(|(k, stage)| Self::without_texel_stage(&k, stage));
-            let wanted = [
-                self.entry_key(e, target, Slot::Plain),
-                placed(Slot::UnderRun, runs),
-                placed(Slot::First, runs && self.additive(e)),
-                placed(Slot::Background, background),
-                placed(Slot::JoinedBackground, background),
-                // The first layer of a seeded buffer: any whole dome layer reduced.
-                placed(Slot::OverSeed, runs && self.dome_of(e)),
-                without(Slot::Background),
-                without(Slot::JoinedBackground),
-            ];
-            for key in wanted.into_iter().flatten() {
-                if self.variants.contains_key(&key) {
+    /// Builds the pipelines of the plan's draws of this pass (see [`Pass::build_planned`]).
+    pub(super) fn build_planned_variants(&mut self, device: &wgpu::Device, target: Target, uses: &[(usize, Placement)]) -> bool {
+        let mut failed = false;
+        for &(key, placement) in uses {
+            let Some(e) = self.visible.get(key).copied() else { continue };
+            let slot = match placement {
+                // Reduced draws' signatures say so (`entry_key`); a failure leaves the generic
+                // pipeline drawing whole draws in their place, and nothing to plan differently.
+                Placement::Plain | Placement::Reduced => {
+                    if let Some(k) = self.entry_key(&e, target, Slot::Plain) {
+                        self.build_variant(device, k);
+                    }
                     continue;
                 }
-                let constants = key.constants();
-                let format = match (key.reduced, key.target) {
-                    (true, target) => crate::render::passes::reduced_layers::reduced_format(target),
-                    (false, Target::Hdr) => crate::render::HDR_FORMAT,
-                    (false, Target::Display) => self.display_format,
-                };
-                let blend = match (key.reduced, key.placement) {
-                    (true, Slot::OverSeed) => None,
-                    (true, _) => Some(crate::render::passes::reduced_layers::REDUCED_BLENDS[key.blend]),
-                    (false, Slot::UnderRun) => UNDER_RUN_BLENDS[key.blend],
-                    (false, Slot::Plain | Slot::First) => BLENDS[key.blend],
-                    // Not made (`entry_key`): reduced only.
-                    (false, Slot::Background | Slot::JoinedBackground | Slot::OverSeed) => None,
-                };
-                // Reduced buffers have no depth: the composite is depth-tested instead. Draws
-                // under the background come before the scene, which covers what they hide.
-                let depth = match (key.reduced, key.placement) {
-                    (true, _) => None,
-                    (false, Slot::First | Slot::Background | Slot::JoinedBackground) => Some(wgpu::CompareFunction::Always),
-                    (false, _) => Some(wgpu::CompareFunction::Less),
-                };
-                let label = format!("SkyObjects::pipeline {key:?}");
-                let built = create_pipeline(device, (&self.pipeline_layout, &self.pipelines.get().module, MAIN), &label, (blend, format, depth), &constants);
-                if let Err(e) = &built {
-                    log::error!("{label}: {e}; the generic pipeline draws this material whole on the frame, reduced or split parts are not drawn");
+                Placement::Pair { upper, over_seed } => {
+                    let pair = self.visible.get(upper).and_then(|u| self.pair_key(&e, u, target, over_seed));
+                    failed |= pair.is_some_and(|k| !self.build_pair(device, k));
+                    continue;
                 }
-                self.variants.insert(key, built.ok());
+                Placement::UnderRun => Slot::UnderRun,
+                Placement::First => Slot::First,
+                Placement::OverSeed => Slot::OverSeed,
+                Placement::Background { joined } => Slot::background(joined),
+            };
+            let Some(k) = self.entry_key(&e, target, slot).filter(|k| k.placement == slot) else { continue };
+            failed |= !self.build_variant(device, k);
+            // As the background, its sparse stage texel by texel: the draw without the stage,
+            // the polygons and the triangle over the frame (each failure logged and drawn
+            // otherwise: `texel_draw`).
+            let texel_stage = self.draws.current.as_ref().and_then(|d| d.objects[e.index][e.version].texels.as_ref()).map(|t| t.0);
+            if let Some((without, stage)) = texel_stage.and_then(|stage| Self::without_texel_stage(&k, stage).map(|w| (w, stage))) {
+                self.build_variant(device, without);
+                self.build_texels(device, (k, without), stage);
             }
         }
-        // The polygons' pipelines of sparse stages of background draws (the draws without the
-        // stage are variants, above).
-        let mut texel_keys = Vec::new();
-        for e in self.visible.iter().filter(|e| runs && self.additive(e) && self.dome_of(e)) {
-            let Some(stage) = self.draws.current.as_ref().and_then(|d| d.objects[e.index][e.version].texels.as_ref()).map(|t| t.0) else { continue };
-            for placement in [Slot::Background, Slot::JoinedBackground] {
-                if let Some(key) = self.entry_key(e, target, placement).filter(|k| Self::without_texel_stage(k, stage).is_some()) {
-                    texel_keys.push((key, stage));
-                }
-            }
+        failed
+    }
+
+    /// Builds the specialised pipeline `key` unless it was; returns whether it exists.
+    fn build_variant(&mut self, device: &wgpu::Device, key: VariantKey) -> bool {
+        if let Some(built) = self.variants.get(&key) {
+            return built.is_some();
         }
-        for (key, stage) in texel_keys {
-            if let Some(without) = Self::without_texel_stage(&key, stage).filter(|k| !self.fullscreen_pipelines.contains_key(k)) {
-                let label = format!("SkyObjects::fullscreen {without:?}");
-                let built = create_pipeline(
-                    device,
-                    (&self.pipeline_layout, &self.pipelines.get().module, FULLSCREEN),
-                    &label,
-                    (None, self.display_format, Some(wgpu::CompareFunction::Always)),
-                    &without.constants(),
-                );
-                if let Err(e) = &built {
-                    log::error!("{label}: {e}; drawn on the dome");
-                }
-                self.fullscreen_pipelines.insert(without, built.ok());
-            }
-            if !self.texel_pipelines.contains_key(&key) {
-                let label = format!("SkyObjects::texels {key:?}");
-                let mut constants = key.constants();
-                constants.push(("TEXEL_STAGE", stage as f64));
-                let built = create_pipeline(
-                    device,
-                    (&self.pipeline_layout, &self.pipelines.get().module, TEXELS),
-                    &label,
-                    (BLENDS[BLEND_ADD], self.display_format, Some(wgpu::CompareFunction::Always)),
-                    &constants,
-                );
-                if let Err(e) = &built {
-                    log::error!("{label}: {e}; the stage is sampled");
-                }
-                self.texel_pipelines.insert(key, built.ok());
-            }
+        let constants = key.constants();
+        let format = match (key.reduced, key.target) {
+            (true, target) => crate::render::passes::reduced_layers::reduced_format(target),
+            (false, Target::Hdr) => crate::render::HDR_FORMAT,
+            (false, Target::Display) => self.display_format,
+        };
+        let blend = match (key.reduced, key.placement) {
+            (true, Slot::OverSeed) => None,
+            (true, _) => Some(crate::render::passes::reduced_layers::REDUCED_BLENDS[key.blend]),
+            (false, Slot::UnderRun) => UNDER_RUN_BLENDS[key.blend],
+            (false, Slot::Plain | Slot::First) => BLENDS[key.blend],
+            // Not made (`entry_key`): reduced only.
+            (false, Slot::Background | Slot::JoinedBackground | Slot::OverSeed) => None,
+        };
+        // Reduced buffers have no depth: the composite is depth-tested instead. Draws under the
+        // background come before the scene, which covers what they hide.
+        let depth = match (key.reduced, key.placement) {
+            (true, _) => None,
+            (false, Slot::First | Slot::Background | Slot::JoinedBackground) => Some(wgpu::CompareFunction::Always),
+            (false, _) => Some(wgpu::CompareFunction::Less),
+        };
+        let label = format!("SkyObjects::pipeline {key:?}");
+        let built = create_pipeline(device, (&self.pipeline_layout, &self.pipelines.get().module, MAIN), &label, (blend, format, depth), &constants);
+        if let Err(e) = &built {
+            log::error!("{label}: {e}; the generic pipeline draws this material whole on the frame, reduced or split parts are not drawn");
         }
-        // Pairs: each reduced alpha layer with the next one in the renderer's order (priority,
-        // then this list's), over the seed too where the lower is a whole dome.
-        let mut alpha: Vec<usize> = (0..self.visible.len()).filter(|&k| self.pair_candidate(&self.visible[k])).collect();
-        alpha.sort_by_key(|&k| self.visible[k].priority);
-        let mut wanted = Vec::new();
-        for w in alpha.windows(2) {
-            let (lower, upper) = (&self.visible[w[0]], &self.visible[w[1]]);
-            wanted.extend([false, true].into_iter().filter(|&o| !o || self.dome_of(lower)).filter_map(|o| self.pair_key(lower, upper, target, o)));
-        }
-        for key in wanted {
-            if self.pairs.contains_key(&key) {
-                continue;
-            }
-            let label = format!("SkyObjects::pair {key:?}");
-            let blend = if key.lower.placement == Slot::OverSeed { None } else { Some(PAIR_BLEND) };
-            let format = crate::render::passes::reduced_layers::reduced_format(target);
-            let built = create_pipeline(device, (&self.pair_layout, &self.pipelines.get().module, PAIR), &label, (blend, format, None), &key.constants());
+        let ok = built.is_ok();
+        self.variants.insert(key, built.ok());
+        ok
+    }
+
+    /// Builds the pipelines of background `key`'s sparse stage `stage` drawn texel by texel: the
+    /// polygons, and the draw `without` the stage as one triangle over the frame.
+    fn build_texels(&mut self, device: &wgpu::Device, (key, without): (VariantKey, VariantKey), stage: usize) {
+        if !self.fullscreen_pipelines.contains_key(&without) {
+            let label = format!("SkyObjects::fullscreen {without:?}");
+            let built = create_pipeline(
+                device,
+                (&self.pipeline_layout, &self.pipelines.get().module, FULLSCREEN),
+                &label,
+                (None, self.display_format, Some(wgpu::CompareFunction::Always)),
+                &without.constants(),
+            );
             if let Err(e) = &built {
-                log::error!("{label}: {e}; the two layers are drawn one after the other");
+                log::error!("{label}: {e}; drawn on the dome");
             }
-            self.pairs.insert(key, built.ok());
+            self.fullscreen_pipelines.insert(without, built.ok());
         }
+        if !self.texel_pipelines.contains_key(&key) {
+            let label = format!("SkyObjects::texels {key:?}");
+            let mut constants = key.constants();
+            constants.push(("TEXEL_STAGE", stage as f64));
+            let built = create_pipeline(
+                device,
+                (&self.pipeline_layout, &self.pipelines.get().module, TEXELS),
+                &label,
+                (BLENDS[BLEND_ADD], self.display_format, Some(wgpu::CompareFunction::Always)),
+                &constants,
+            );
+            if let Err(e) = &built {
+                log::error!("{label}: {e}; the stage is sampled");
+            }
+            self.texel_pipelines.insert(key, built.ok());
+        }
+    }
+
+    /// Builds the pair pipeline `key` unless it was; returns whether it exists.
+    fn build_pair(&mut self, device: &wgpu::Device, key: PairKey) -> bool {
+        if let Some(built) = self.pairs.get(&key) {
+            return built.is_some();
+        }
+        let label = format!("SkyObjects::pair {key:?}");
+        let blend = if key.lower.placement == Slot::OverSeed { None } else { Some(PAIR_BLEND) };
+        let format = crate::render::passes::reduced_layers::reduced_format(key.lower.target);
+        let built = create_pipeline(device, (&self.pair_layout, &self.pipelines.get().module, PAIR), &label, (blend, format, None), &key.constants());
+        if let Err(e) = &built {
+            log::error!("{label}: {e}; the two layers are drawn one after the other");
+        }
+        let ok = built.is_ok();
+        self.pairs.insert(key, built.ok());
+        ok
     }
 }
