@@ -6,7 +6,7 @@ use wgpu::util::DeviceExt;
 use crate::sky::eval::direction;
 use crate::sky::resolved::Shape;
 
-/// Vertex of sky shapes. Keep in sync with `vs_main` inputs in shaders/sky_objects.wgsl.
+/// Vertex of sky shapes. Keep in sync with `vs_main` inputs in shaders/sky_objects.wgsl (`sky_vertex` in shaders/sky_objects/draw.wgsl).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct SkyVertex {

@@ -51,7 +51,7 @@ impl FrameView {
         let t = half_fov_y.tan();
         let half_diagonal = (t * t * (1.0 + aspect * aspect)).sqrt().atan();
         let to_sun = camera.forward().dot(towards_sun.normalize_or_zero()).clamp(-1.0, 1.0).acos();
-        // The mapping's latitude is that of the celestial frame's y axis (shaders/sky_objects.wgsl,
+        // The mapping's latitude is that of the celestial frame's y axis (shaders/sky_objects/material.wgsl,
         // `celestial_uv`). The largest cone round each pole that the frame does not show, by
         // bisection: `sees_cone` only errs towards showing.
         let north = celestial_from_world.inverse() * Vec3::Y;
@@ -196,7 +196,7 @@ impl StageMap {
     }
 }
 
-/// The Quake sky's mapping (`stage_uv` in shaders/sky_objects.wgsl: the direction's y scaled by
+/// The Quake sky's mapping (`stage_uv` in shaders/sky_objects/material.wgsl: the direction's y scaled by
 /// `z_scale` and moved by `z_offset`, then uv = t_scale x xz / length) at its steepest over the
 /// elevations `bottom_deg..top_deg`: texture-coordinate units per radian of view direction. At
 /// elevation e the ring of directions lands on a circle of radius t cos(e) / L(e), with

@@ -4,7 +4,7 @@
 #[allow(unused_imports)]
 use super::*;
 
-/// One texture stage. Keep in sync with `Stage` in shaders/sky_objects.wgsl.
+/// One texture stage. Keep in sync with `Stage` in shaders/sky_objects/draw.wgsl.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
 pub struct StageUniform {
@@ -17,7 +17,7 @@ pub struct StageUniform {
     pub cfg: [u32; 4],
 }
 
-/// One draw. Keep in sync with `Draw` in shaders/sky_objects.wgsl.
+/// One draw. Keep in sync with `Draw` in shaders/sky_objects/draw.wgsl.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
 pub struct DrawUniform {
@@ -40,11 +40,11 @@ const _: () = assert!(std::mem::size_of::<DrawUniform>() == 64 + 16 + 64 + 4 * 4
 pub(super) const NO_STAGE: u32 = 4;
 
 /// UV mode of a stage folded into the one before it ([`crate::render::sky_objects::stage_fold`]): reads as white,
-/// not sampled. Keep in sync with `UV_WHITE` in shaders/sky_objects.wgsl.
+/// not sampled. Keep in sync with `UV_WHITE` in shaders/sky_objects/draw.wgsl.
 pub(super) const UV_WHITE: u32 = 4;
 
 /// UV mode of the mesh's texture coordinates. Keep in sync with `UV_MESH` in
-/// shaders/sky_objects.wgsl.
+/// shaders/sky_objects/draw.wgsl.
 pub(super) const UV_MESH: u32 = 0;
 
 /// UV mode of the celestial mapping.
@@ -53,7 +53,7 @@ pub(super) const UV_CELESTIAL: u32 = 2;
 /// UV mode of a celestial stage that no pixel of its draw minifies this frame: sampled from
 /// level 0 without the derivatives the celestial mapping otherwise computes per pixel (a variant
 /// of the mapping, never in a uniform). Keep in sync with `UV_CELESTIAL_LEVEL0` in
-/// shaders/sky_objects.wgsl.
+/// shaders/sky_objects/draw.wgsl.
 pub(super) const UV_CELESTIAL_LEVEL0: u32 = 5;
 
 /// UV mode numbers shared with the shader.

@@ -2,7 +2,7 @@
 //! one, both under the mesh mapping of a dome and neither panned nor offset, is one texture over
 //! the dome's texture coordinates (the built-in skydome's tiled stars times their mask). The
 //! draw then samples one texture where it sampled two, and the second stage reads as white
-//! without sampling (`UV_WHITE` in shaders/sky_objects.wgsl). On a software rasteriser each
+//! without sampling (`UV_WHITE` in shaders/sky_objects/draw.wgsl). On a software rasteriser each
 //! full-screen sample costs about as much as the fill-rate floor's one (docs/architecture.md).
 //!
 //! The folded texture holds both stages' texels: per axis, as many texels across the dome as the

@@ -25,7 +25,7 @@ pub const MAX_TEXELS: usize = 40_000;
 /// (docs/architecture.md), so above about twice that the polygons would cost more.
 pub const MAX_LIT_SHARE: f32 = 0.015;
 
-/// Vertex of a texel's polygon. Keep in sync with `vs_texels` in shaders/sky_objects.wgsl.
+/// Vertex of a texel's polygon. Keep in sync with `vs_texels` in shaders/sky_objects/texels.wgsl.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct TexelVertex {

@@ -94,7 +94,7 @@ impl VariantKey {
         }
     }
 
-    /// The override constants that specialise `shaders/sky_objects.wgsl` for this signature.
+    /// The override constants that specialise `shaders/sky_objects/signature.wgsl` for this signature.
     pub(super) fn constants(&self) -> Vec<(&'static str, f64)> {
         const MODES: [&str; 4] = ["UV_MODE_0", "UV_MODE_1", "UV_MODE_2", "UV_MODE_3"];
         const OPS: [&str; 4] = ["OP_0", "OP_1", "OP_2", "OP_3"];
@@ -130,7 +130,7 @@ impl VariantKey {
 }
 
 /// What a pipeline drawing two alpha-blended dome layers at once into a reduced buffer is built
-/// for (`vs_pair`, `fs_pair` in shaders/sky_objects.wgsl): the lower layer's signature (its
+/// for (`vs_pair`, `fs_pair` in shaders/sky_objects/pairs.wgsl): the lower layer's signature (its
 /// placement: plain or over the seed) and the upper one's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub(super) struct PairKey {
@@ -198,7 +198,7 @@ pub(super) const BLENDS: [Option<wgpu::BlendState>; 4] = [
     }),
 ];
 
-/// Blends of draws under a run (`UNDER_RUN` in shaders/sky_objects.wgsl, which premultiplies what
+/// Blends of draws under a run (`UNDER_RUN` in shaders/sky_objects/placement.wgsl, which premultiplies what
 /// it writes), by blend index of [`BLENDS`]: a draw that would have gone before the run goes
 /// after it, so that run and the one below composite at once. With the run's colour C and
 /// transmittance T at the pixel, the frame must end as C + T x (the draw over what was there):

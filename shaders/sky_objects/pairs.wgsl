@@ -1,0 +1,43 @@
+//! requires: sky_objects/material, sky_objects/placement
+// A pair of alpha-blended dome layers on the same mesh drawn at once into a reduced buffer
+// (src/render/sky_objects/pairs.rs, `Placement::Pair`): each one's mesh coordinates.
+struct PairOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(1) world_dir: vec3<f32>,
+    @location(2) mesh_uv01: vec4<f32>,
+    @location(3) mesh_uv23: vec4<f32>,
+    @location(4) upper_uv01: vec4<f32>,
+    @location(5) upper_uv23: vec4<f32>,
+};
+
+@vertex
+fn vs_pair(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> PairOut {
+    let own = sky_vertex(position, uv);
+    var out: PairOut;
+    out.clip = own.clip;
+    out.world_dir = own.world_dir;
+    out.mesh_uv01 = own.mesh_uv01;
+    out.mesh_uv23 = own.mesh_uv23;
+    out.upper_uv01 = vec4<f32>(scaled(upper, 0u, uv), scaled(upper, 1u, uv));
+    out.upper_uv23 = vec4<f32>(scaled(upper, 2u, uv), scaled(upper, 3u, uv));
+    return out;
+}
+
+// The upper layer over the draw's own, as the two alpha blends one after the other would leave
+// them: premultiplied colour, and in alpha what the pair covers (the buffer's transmittance is
+// multiplied by what it lets through: `PAIR_BLEND` in src/render/sky_objects/variants.rs). Over the seed
+// (`OVER_SEED`), written as it is, with the transmittance left.
+@fragment
+fn fs_pair(in: PairOut) -> @location(0) vec4<f32> {
+    let own = material(LAYER_OWN, draw, tex0, tex1, tex2, tex3, samp0, samp1, samp2, samp3, sky_view, sky_view_sampler, Place(in.world_dir, in.mesh_uv01, in.mesh_uv23));
+    let up = material(
+        LAYER_UPPER, upper, upper_tex0, upper_tex1, upper_tex2, upper_tex3, upper_samp0, upper_samp1, upper_samp2, upper_samp3, upper_sky_view, upper_sky_view_sampler,
+        Place(in.world_dir, in.upper_uv01, in.upper_uv23),
+    );
+    let rgb = up.a * up.rgb + (1.0 - up.a) * own.a * own.rgb;
+    let through = (1.0 - own.a) * (1.0 - up.a);
+    if OVER_SEED {
+        return vec4<f32>(rgb + through * run_at_seeded(in.clip.xy).rgb, through);
+    }
+    return vec4<f32>(rgb, 1.0 - through);
+}
