@@ -257,10 +257,8 @@ pub fn spec_for(path: Option<&Path>, season: Option<&str>) -> anyhow::Result<Sky
 /// resolution where given.
 fn strategy_from_args(f: &FrameArgs, ctx: &GpuContext) -> anyhow::Result<skytune::render::FillStrategy> {
     use skytune::render::FillStrategy;
-    let mut strategy = match &f.strategy {
-        Some(name) => FillStrategy::preset_arg(name).map_err(|e| anyhow!(e))?,
-        None => FillStrategy::for_device(ctx.adapter.get_info().device_type),
-    };
+    let asked = f.strategy.as_deref().map(FillStrategy::preset_arg).transpose().map_err(|e| anyhow!(e))?;
+    let mut strategy = FillStrategy::resolve(asked, ctx.adapter.get_info().device_type);
     if let Some(r) = f.dome_resolution {
         strategy.dome_resolution = r;
     }

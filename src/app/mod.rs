@@ -118,10 +118,7 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
     if let Some(v) = &config.view {
         controls.camera = crate::render::Camera::preset_arg(v).map_err(|e| anyhow!(e))?;
     }
-    let strategy = match &config.strategy {
-        Some(name) => Some(FillStrategy::preset_arg(name).map_err(|e| anyhow!(e))?),
-        None => None,
-    };
+    let strategy = config.strategy.as_deref().map(FillStrategy::preset_arg).transpose().map_err(|e| anyhow!(e))?;
     if let Some(t) = config.tier {
         controls.tier = Tier::new(t).ok_or_else(|| anyhow!("--tier: expected 4, 2 or 1, found {t}"))?;
     }
@@ -244,9 +241,10 @@ impl App {
         let (gpu, shader_error) = WindowGpu::new(event_loop, &self.title, self.settings.window_size, adapter, library, self.live.sky())?;
         self.shader_error = shader_error;
         // The adapter's strategy unless one was asked for.
-        self.adapter_strategy = FillStrategy::for_device(gpu.ctx.adapter.get_info().device_type);
+        let device_type = gpu.ctx.adapter.get_info().device_type;
+        self.adapter_strategy = FillStrategy::resolve(None, device_type);
         if let Some(asked) = self.strategy.take() {
-            self.controls.options.strategy = asked.unwrap_or(self.adapter_strategy);
+            self.controls.options.strategy = FillStrategy::resolve(asked, device_type);
         }
         self.gpu = Some(gpu);
         self.refresh_snapshots();

@@ -114,7 +114,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
         }
         None => PRESETS.to_vec(),
     };
-    let adapter_strategy = FillStrategy::for_device(ctx.adapter.get_info().device_type).name();
+    let adapter_strategy = FillStrategy::resolve(None, ctx.adapter.get_info().device_type).name();
     let summarised = strategies.iter().find(|(n, _)| *n == adapter_strategy).unwrap_or(&strategies[0]).0;
     // The timed frames come from renderers that record no timestamps (they cost lavapipe about
     // 3% of a sky frame, and the floor records none); `timing` renders the same frames for the

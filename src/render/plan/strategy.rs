@@ -149,6 +149,13 @@ impl FillStrategy {
         }
     }
 
+    /// The strategy a frame uses: the one asked for (`--strategy`, the diagnostics panel), else
+    /// the adapter's ([`Self::for_device`]). The one place the two meet: the window, the CLI's
+    /// renders and `bench frame` all resolve through it.
+    pub fn resolve(asked: Option<Self>, device_type: wgpu::DeviceType) -> Self {
+        asked.unwrap_or_else(|| Self::for_device(device_type))
+    }
+
     /// The preset of this name (`software`, `plain`).
     pub fn preset(name: &str) -> Option<Self> {
         PRESETS.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
