@@ -52,173 +52,24 @@ impl SkyObjectDraws {
         sky: &Sky,
         previous: Option<&SkyObjectDraws>,
     ) -> Self {
-        let old_meshes = previous.map(|p| &p.meshes);
-        let mut meshes: HashMap<String, Arc<GpuMesh>> = HashMap::new();
-        let old_texels = previous.map(|p| &p.texel_meshes);
-        // Folded textures baked in this load, by key: the texture and its texel polygons share one.
-        let mut baked: HashMap<String, Arc<TextureImage>> = HashMap::new();
-        let mut texel_meshes: HashMap<(String, u64, String), Option<Arc<GpuTexelMesh>>> = HashMap::new();
-        let mut oversampling: HashMap<String, f32> = HashMap::new();
-        let objects = sky
-            .objects
-            .iter()
-            .map(|o| {
-                std::iter::once(&o.standard)
-                    .chain(&o.fallback)
-                    .enumerate()
-                    .map(|(vi, v)| {
-                        let label = format!("SkyObjects::{}[{vi}]", o.name);
-                        // Where no stage takes its coordinates from the mesh, a dome's triangles
-                        // only bound it: its outline does that with one band of them.
-                        let outline = v.stages.iter().all(|s| !matches!(s.uv, UvSource::Mesh)).then(|| outline_mesh(&v.shape)).flatten();
-                        let key = if outline.is_some() { format!("outline of {}", shape_key(&v.shape)) } else { shape_key(&v.shape) };
-                        let is_outline = outline.is_some();
-                        let mesh = meshes
-                            .entry(key.clone())
-                            .or_insert_with(|| match old_meshes.and_then(|m| m.get(&key)) {
-                                Some(m) => m.clone(),
-                                None => Arc::new(GpuMesh::new(device, &format!("SkyObjects::mesh {key}"), &outline.unwrap_or_else(|| shape_mesh(&v.shape)))),
-                            })
-                            .clone();
-                        let gradient = v.gradients.as_ref().map(|g| {
-                            let h = g.bitmaps[0].height;
-                            (textures::upload(device, queue, &format!("{label}::gradient"), 1, h, &vec![255; (h * 4) as usize]), h)
-                        });
-                        let gradient_view = gradient.as_ref().map(|(t, _)| t.create_view(&Default::default()));
-                        // Static products of two stages sample one folded texture.
-                        let folds = stage_fold::folds(v);
-                        let fold_at = |k: usize| folds.iter().find(|f| f.stage == k);
-                        let folded_away = |k: usize| k > 0 && fold_at(k - 1).is_some();
-                        let mut views = Vec::new();
-                        let mut samplers = Vec::new();
-                        let mut level0_samplers = Vec::new();
-                        for k in 0..MAX_STAGES {
-                            let stage = v.stages.get(k);
-                            let view = match (fold_at(k), stage.and_then(|s| s.texture.as_ref()), &gradient_view) {
-                                _ if folded_away(k) => cache.white.clone(),
-                                (Some(f), _, _) => {
-                                    let (key, content) = stage_fold::identity(v, f);
-                                    cache.derived(device, queue, &key, content, || {
-                                        baked.entry(key.clone()).or_insert_with(|| Arc::new(stage_fold::bake(v, f, &key))).as_ref().clone()
-                                    })
-                                }
-                                (None, Some(img), _) => cache.get(device, queue, img),
-                                (None, None, Some(gv)) if v.gradients.as_ref().is_some_and(|g| g.stage == k) => gv.clone(),
-                                _ => cache.white.clone(),
-                            };
-                            views.push(view);
-                            let clamp = fold_at(k).map_or(stage.is_some_and(|s| s.clamp), |f| f.clamp);
-                            samplers.push(if clamp { cache.clamp.clone() } else { cache.repeat.clone() });
-                            level0_samplers.push(if clamp { cache.clamp_level0.clone() } else { cache.repeat_level0.clone() });
-                        }
-                        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-                            label: Some(&format!("{label}::uniform")),
-                            size: std::mem::size_of::<DrawUniform>() as u64,
-                            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                            mapped_at_creation: false,
-                        });
-                        let maps: [Option<StageMap>; MAX_STAGES] = std::array::from_fn(|k| match fold_at(k) {
-                            _ if folded_away(k) => None,
-                            Some(f) => Some(StageMap::with_texels(UvSource::Mesh, (f.size.0 as f32, f.size.1 as f32), &v.shape)),
-                            None => v.stages.get(k).and_then(|s| StageMap::of(s, &v.shape)),
-                        });
-                        let level0_able = (0..MAX_STAGES).filter(|&k| maps[k].is_some()).fold(0u8, |m, k| m | 1 << k);
-                        // One bind group per subset of those stages, indexed by the subset's mask (a
-                        // mask that is no subset is never indexed, and gets its subset's), so that
-                        // a frame only picks one.
-                        let bind_groups = (0..=level0_able)
-                            .map(|mask| {
-                                let mask = mask & level0_able;
-                                let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }];
-                                for (k, view) in views.iter().enumerate() {
-                                    entries.push(wgpu::BindGroupEntry { binding: 1 + k as u32, resource: wgpu::BindingResource::TextureView(view) });
-                                }
-                                for k in 0..MAX_STAGES {
-                                    let s = if mask & (1 << k) != 0 { &level0_samplers[k] } else { &samplers[k] };
-                                    entries.push(wgpu::BindGroupEntry { binding: 5 + k as u32, resource: wgpu::BindingResource::Sampler(s) });
-                                }
-                                entries.push(wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(&sky_view.0) });
-                                entries.push(wgpu::BindGroupEntry { binding: 10, resource: wgpu::BindingResource::Sampler(&sky_view.1) });
-                                device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&format!("{label}::bind_group[{mask:04b}]")), layout, entries: &entries })
-                            })
-                            .collect();
-                        let gradient_stage = v.gradients.as_ref().map(|g| g.stage);
-                        let mut texels_per_deg = [0.0; 4];
-                        for (k, s) in v.stages.iter().enumerate() {
-                            let oversampling = s.texture.as_ref().map_or(1.0, |t| *oversampling.entry(t.key.clone()).or_insert_with(|| texture_oversampling(t)));
-                            texels_per_deg[k] = stage_texels_per_deg(s, &v.shape) / oversampling;
-                        }
-                        let signature = MaterialSignature::of(v, &folds.iter().map(|f| f.stage).collect::<Vec<_>>());
-                        let mut base = DrawUniform::from(v).with_signature(&signature);
-                        for f in &folds {
-                            let (first, second) = (f.stage, f.stage + 1);
-                            // A folded texture carries the finer detail of its two stages.
-                            texels_per_deg[first] = texels_per_deg[first].max(texels_per_deg[second]);
-                            texels_per_deg[second] = 0.0;
-                            base.stages[first].scale_offset = [1.0, 1.0, 0.0, 0.0];
-                        }
-                        // A sparse stage under the dome's mesh mapping, static: the folded one, or
-                        // one of its own that repeats.
-                        let texels = match (crate::render::gpu::mesh::dome_grid(&v.shape), is_outline) {
-                            (Some((_, _, rings, _)), false) => (0..v.stages.len()).find_map(|k| {
-                                let s = &v.stages[k];
-                                let fixed = matches!(s.uv, UvSource::Mesh) && s.panner == [0.0, 0.0] && s.uv_offset.is_none() && !folded_away(k) && gradient_stage != Some(k);
-                                if !fixed {
-                                    return None;
-                                }
-                                let (key, content, scale): (String, u64, [f32; 2]) = match (fold_at(k), s.texture.as_deref()) {
-                                    (Some(f), _) if !f.clamp => {
-                                        let (key, content) = stage_fold::identity(v, f);
-                                        (key, content, [1.0, 1.0])
-                                    }
-                                    (None, Some(t)) if !s.clamp => (t.key.clone(), textures::content_hash(t), s.uv_scale),
-                                    _ => return None,
-                                };
-                                let id = (key, content, format!("{} x {scale:?}", shape_key(&v.shape)));
-                                let mesh = texel_meshes
-                                    .entry(id.clone())
-                                    .or_insert_with(|| match old_texels.and_then(|m| m.get(&id)) {
-                                        Some(m) => m.clone(),
-                                        None => {
-                                            let image = match (fold_at(k), &s.texture) {
-                                                (Some(f), _) => baked.entry(id.0.clone()).or_insert_with(|| Arc::new(stage_fold::bake(v, f, &id.0))).clone(),
-                                                (None, Some(t)) => t.clone(),
-                                                (None, None) => return None,
-                                            };
-                                            let source = TexelSource { size: (image.width, image.height), rgba8: &image.rgba8, scale };
-                                            source
-                                                .sparse()
-                                                .then(|| GpuTexelMesh::new(device, &label, &texel_quads::build(&shape_mesh(&v.shape), rings, &source)))
-                                                .flatten()
-                                                .map(Arc::new)
-                                        }
-                                    })
-                                    .clone();
-                                mesh.map(|m| (k, m))
-                            }),
-                            _ => None,
-                        };
-                        VersionDraw {
-                            uniform,
-                            bind_groups,
-                            level0_able,
-                            maps,
-                            mesh,
-                            outline: is_outline,
-                            gradient,
-                            gradient_stage,
-                            blend: v.blend,
-                            shape: v.shape,
-                            base,
-                            signature,
-                            texels_per_deg,
-                            texels,
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
-        Self { objects, meshes, texel_meshes }
+        let mut up = Uploader {
+            device,
+            queue,
+            layout,
+            sky_view,
+            cache,
+            previous,
+            meshes: HashMap::new(),
+            baked: HashMap::new(),
+            texel_meshes: HashMap::new(),
+            oversampling: HashMap::new(),
+        };
+        let mut objects = Vec::with_capacity(sky.objects.len());
+        for o in &sky.objects {
+            let versions = std::iter::once(&o.standard).chain(&o.fallback).enumerate();
+            objects.push(versions.map(|(vi, v)| up.version(&format!("SkyObjects::{}[{vi}]", o.name), v)).collect());
+        }
+        Self { objects, meshes: up.meshes, texel_meshes: up.texel_meshes }
     }
 
     /// Writes this frame's uniforms and gradients and records each drawn version's pipeline
@@ -264,5 +115,189 @@ impl SkyObjectDraws {
             }
         }
         skipped
+    }
+}
+
+/// One sky's upload: what its versions share (meshes, baked folds, texel polygons, texture
+/// oversampling), each taken over from the previous sky's resources where unchanged.
+struct Uploader<'a> {
+    device: &'a wgpu::Device,
+    queue: &'a wgpu::Queue,
+    layout: &'a wgpu::BindGroupLayout,
+    sky_view: &'a (wgpu::TextureView, wgpu::Sampler),
+    cache: &'a mut TextureCache,
+    previous: Option<&'a SkyObjectDraws>,
+    meshes: HashMap<String, Arc<GpuMesh>>,
+    /// Folded textures baked in this load, by key: the texture and its texel polygons share one.
+    baked: HashMap<String, Arc<TextureImage>>,
+    texel_meshes: HashMap<(String, u64, String), Option<Arc<GpuTexelMesh>>>,
+    oversampling: HashMap<String, f32>,
+}
+
+impl Uploader<'_> {
+    /// The resources of version `v`, labelled `label`.
+    fn version(&mut self, label: &str, v: &Version) -> VersionDraw {
+        // Where no stage takes its coordinates from the mesh, a dome's triangles
+        // only bound it: its outline does that with one band of them.
+        let outline = v.stages.iter().all(|s| !matches!(s.uv, UvSource::Mesh)).then(|| outline_mesh(&v.shape)).flatten();
+        let key = if outline.is_some() { format!("outline of {}", shape_key(&v.shape)) } else { shape_key(&v.shape) };
+        let is_outline = outline.is_some();
+        let mesh = self
+            .meshes
+            .entry(key.clone())
+            .or_insert_with(|| match self.previous.and_then(|p| p.meshes.get(&key)) {
+                Some(m) => m.clone(),
+                None => Arc::new(GpuMesh::new(self.device, &format!("SkyObjects::mesh {key}"), &outline.unwrap_or_else(|| shape_mesh(&v.shape)))),
+            })
+            .clone();
+        let gradient = v.gradients.as_ref().map(|g| {
+            let h = g.bitmaps[0].height;
+            (textures::upload(self.device, self.queue, &format!("{label}::gradient"), 1, h, &vec![255; (h * 4) as usize]), h)
+        });
+        let gradient_view = gradient.as_ref().map(|(t, _)| t.create_view(&Default::default()));
+        // Static products of two stages sample one folded texture.
+        let folds = stage_fold::folds(v);
+        let fold_at = |k: usize| folds.iter().find(|f| f.stage == k);
+        let folded_away = |k: usize| k > 0 && fold_at(k - 1).is_some();
+        let mut views = Vec::new();
+        let mut samplers = Vec::new();
+        let mut level0_samplers = Vec::new();
+        for k in 0..MAX_STAGES {
+            let stage = v.stages.get(k);
+            let view = match (fold_at(k), stage.and_then(|s| s.texture.as_ref()), &gradient_view) {
+                _ if folded_away(k) => self.cache.white.clone(),
+                (Some(f), _, _) => {
+                    let (key, content) = stage_fold::identity(v, f);
+                    self.cache.derived(self.device, self.queue, &key, content, || {
+                        self.baked.entry(key.clone()).or_insert_with(|| Arc::new(stage_fold::bake(v, f, &key))).as_ref().clone()
+                    })
+                }
+                (None, Some(img), _) => self.cache.get(self.device, self.queue, img),
+                (None, None, Some(gv)) if v.gradients.as_ref().is_some_and(|g| g.stage == k) => gv.clone(),
+                _ => self.cache.white.clone(),
+            };
+            views.push(view);
+            let clamp = fold_at(k).map_or(stage.is_some_and(|s| s.clamp), |f| f.clamp);
+            samplers.push(if clamp { self.cache.clamp.clone() } else { self.cache.repeat.clone() });
+            level0_samplers.push(if clamp { self.cache.clamp_level0.clone() } else { self.cache.repeat_level0.clone() });
+        }
+        let uniform = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(&format!("{label}::uniform")),
+            size: std::mem::size_of::<DrawUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let maps: [Option<StageMap>; MAX_STAGES] = std::array::from_fn(|k| match fold_at(k) {
+            _ if folded_away(k) => None,
+            Some(f) => Some(StageMap::with_texels(UvSource::Mesh, (f.size.0 as f32, f.size.1 as f32), &v.shape)),
+            None => v.stages.get(k).and_then(|s| StageMap::of(s, &v.shape)),
+        });
+        let level0_able = (0..MAX_STAGES).filter(|&k| maps[k].is_some()).fold(0u8, |m, k| m | 1 << k);
+        // One bind group per subset of those stages, indexed by the subset's mask (a
+        // mask that is no subset is never indexed, and gets its subset's), so that
+        // a frame only picks one.
+        let bind_groups = self.bind_groups(label, &uniform, (&views, &samplers, &level0_samplers), level0_able);
+        let gradient_stage = v.gradients.as_ref().map(|g| g.stage);
+        let mut texels_per_deg = [0.0; 4];
+        for (k, s) in v.stages.iter().enumerate() {
+            let oversampling = s.texture.as_ref().map_or(1.0, |t| *self.oversampling.entry(t.key.clone()).or_insert_with(|| texture_oversampling(t)));
+            texels_per_deg[k] = stage_texels_per_deg(s, &v.shape) / oversampling;
+        }
+        let signature = MaterialSignature::of(v, &folds.iter().map(|f| f.stage).collect::<Vec<_>>());
+        let mut base = DrawUniform::from(v).with_signature(&signature);
+        for f in &folds {
+            let (first, second) = (f.stage, f.stage + 1);
+            // A folded texture carries the finer detail of its two stages.
+            texels_per_deg[first] = texels_per_deg[first].max(texels_per_deg[second]);
+            texels_per_deg[second] = 0.0;
+            base.stages[first].scale_offset = [1.0, 1.0, 0.0, 0.0];
+        }
+        let texels = self.sparse_stage(label, v, (&folds, gradient_stage), is_outline);
+        VersionDraw {
+            uniform,
+            bind_groups,
+            level0_able,
+            maps,
+            mesh,
+            outline: is_outline,
+            gradient,
+            gradient_stage,
+            blend: v.blend,
+            shape: v.shape,
+            base,
+            signature,
+            texels_per_deg,
+            texels,
+        }
+    }
+
+    /// The bind groups of a version with `level0_able` stages: one per subset of those stages,
+    /// by the subset's mask, with the stages' views and samplers (level-0 or mipmapped).
+    fn bind_groups(
+        &self,
+        label: &str,
+        uniform: &wgpu::Buffer,
+        (views, samplers, level0_samplers): (&[wgpu::TextureView], &[wgpu::Sampler], &[wgpu::Sampler]),
+        level0_able: u8,
+    ) -> Vec<wgpu::BindGroup> {
+        (0..=level0_able)
+            .map(|mask| {
+                let mask = mask & level0_able;
+                let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }];
+                for (k, view) in views.iter().enumerate() {
+                    entries.push(wgpu::BindGroupEntry { binding: 1 + k as u32, resource: wgpu::BindingResource::TextureView(view) });
+                }
+                for k in 0..MAX_STAGES {
+                    let s = if mask & (1 << k) != 0 { &level0_samplers[k] } else { &samplers[k] };
+                    entries.push(wgpu::BindGroupEntry { binding: 5 + k as u32, resource: wgpu::BindingResource::Sampler(s) });
+                }
+                entries.push(wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(&self.sky_view.0) });
+                entries.push(wgpu::BindGroupEntry { binding: 10, resource: wgpu::BindingResource::Sampler(&self.sky_view.1) });
+                self.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(&format!("{label}::bind_group[{mask:04b}]")), layout: self.layout, entries: &entries })
+            })
+            .collect()
+    }
+
+    /// A sparse stage under the dome's mesh mapping, static: the folded one, or
+    // one of its own that repeats.
+    fn sparse_stage(&mut self, label: &str, v: &Version, (folds, gradient_stage): (&[stage_fold::Fold], Option<usize>), is_outline: bool) -> Option<(usize, Arc<GpuTexelMesh>)> {
+        let fold_at = |k: usize| folds.iter().find(|f| f.stage == k);
+        let folded_away = |k: usize| k > 0 && fold_at(k - 1).is_some();
+        match (crate::render::gpu::mesh::dome_grid(&v.shape), is_outline) {
+            (Some((_, _, rings, _)), false) => (0..v.stages.len()).find_map(|k| {
+                let s = &v.stages[k];
+                let fixed = matches!(s.uv, UvSource::Mesh) && s.panner == [0.0, 0.0] && s.uv_offset.is_none() && !folded_away(k) && gradient_stage != Some(k);
+                if !fixed {
+                    return None;
+                }
+                let (key, content, scale): (String, u64, [f32; 2]) = match (fold_at(k), s.texture.as_deref()) {
+                    (Some(f), _) if !f.clamp => {
+                        let (key, content) = stage_fold::identity(v, f);
+                        (key, content, [1.0, 1.0])
+                    }
+                    (None, Some(t)) if !s.clamp => (t.key.clone(), textures::content_hash(t), s.uv_scale),
+                    _ => return None,
+                };
+                let id = (key, content, format!("{} x {scale:?}", shape_key(&v.shape)));
+                let mesh = self
+                    .texel_meshes
+                    .entry(id.clone())
+                    .or_insert_with(|| match self.previous.and_then(|p| p.texel_meshes.get(&id)) {
+                        Some(m) => m.clone(),
+                        None => {
+                            let image = match (fold_at(k), &s.texture) {
+                                (Some(f), _) => self.baked.entry(id.0.clone()).or_insert_with(|| Arc::new(stage_fold::bake(v, f, &id.0))).clone(),
+                                (None, Some(t)) => t.clone(),
+                                (None, None) => return None,
+                            };
+                            let source = TexelSource { size: (image.width, image.height), rgba8: &image.rgba8, scale };
+                            source.sparse().then(|| GpuTexelMesh::new(self.device, label, &texel_quads::build(&shape_mesh(&v.shape), rings, &source))).flatten().map(Arc::new)
+                        }
+                    })
+                    .clone();
+                mesh.map(|m| (k, m))
+            }),
+            _ => None,
+        }
     }
 }
