@@ -432,9 +432,10 @@ fn materials_draw_with_specialised_pipelines() {
 
 #[test]
 fn pipelines_are_built_only_for_the_placements_the_plan_uses() {
-    // A frame builds one specialised pipeline per draw the plan records at most (two for the
-    // background with texel polygons: the draw without its stage too), not one per placement a
-    // draw could take; the software strategy offers several per dome layer.
+    // A frame builds the pipelines of the draws the plan records (each in its planned placement
+    // and in its own place, the background with texel polygons also without its stage), not one
+    // per placement a draw could take (the software strategy offers several per dome layer), and
+    // every draw it records has its pipeline.
     let sky = default_sky();
     let options = RenderOptions::default().with_strategy(skytune::render::FillStrategy::software());
     for (hour, weather) in [(13.0, 0.0), (19.0, 0.3), (23.0, 0.0), (15.0, 1.0)] {
@@ -443,9 +444,13 @@ fn pipelines_are_built_only_for_the_placements_the_plan_uses() {
         h.render(&sky, &FrameInput::new(hour, weather), &camera(), &options).unwrap();
         let uses = h.renderer.plan.uses();
         let backgrounds = uses.iter().filter(|u| matches!(u.2, skytune::render::frame::pass::Placement::Background { .. })).count();
-        let (built, failed) = h.renderer.pass::<skytune::render::sky_objects::SkyObjectsPass>().unwrap().variants_built();
+        let pass = h.renderer.pass::<skytune::render::sky_objects::SkyObjectsPass>().unwrap();
+        let (built, failed) = pass.variants_built();
         assert_eq!(failed, 0);
-        assert!(built > 0 && built <= uses.len() + backgrounds, "{hour} h: {built} pipelines for {} planned draws: {uses:?}", uses.len());
+        // Each draw's own-place pipeline (the recorder's fallback) and its planned one, the
+        // background's without its texel stage.
+        assert!(built > 0 && built <= 2 * uses.len() + backgrounds, "{hour} h: {built} pipelines for {} planned draws: {uses:?}", uses.len());
+        assert_eq!(pass.draws_without_pipeline(), 0, "{hour} h: every recorded draw had its pipeline");
         assert!(!h.renderer.plan.runs.is_empty(), "{hour} h: the software strategy reduces the dome layers here");
     }
 }

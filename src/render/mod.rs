@@ -1,5 +1,7 @@
-//! wgpu renderer of sky scenes, organised as an ordered list of phases (see [`pass`]). One pass =
-//! one module here + one `.wgsl` file in `shaders/` of the same name.
+//! wgpu renderer of sky scenes, organised as an ordered list of phases (see [`frame::pass`]).
+//! One pass = one module in [`passes`] (or the [`sky_objects`] folder) + one `.wgsl` file in
+//! `shaders/` of the same name. [`plan`] decides how a frame is drawn without GPU types,
+//! [`frame`] carries it out, [`gpu`] holds what every pass builds on.
 
 pub mod frame;
 pub mod gpu;

@@ -395,8 +395,8 @@ impl SkyRenderer {
         let mut plan = plan::plan(std::mem::take(&mut items[Phase::Sky.index()]), &options.strategy, facts);
         // Pipelines for what the plan uses and nothing else. A failed one withdraws the
         // capability that offered it (the pass remembers it): plan again without it.
-        for _ in 0..MAX_REPLANS {
-            if !Self::build_planned(&mut self.passes, &ctx.device, kind, &plan) {
+        for attempt in 0..=MAX_REPLANS {
+            if !Self::build_planned(&mut self.passes, &ctx.device, kind, &plan) || attempt == MAX_REPLANS {
                 break;
             }
             items = self.collect_items(&cx);

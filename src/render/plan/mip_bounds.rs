@@ -14,9 +14,13 @@ use std::ops::Range;
 /// per cell, `segments` cells per ring, rings from `top_deg` down to `bottom_deg`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DomeGrid {
+    /// Elevation of the first ring's upper edge, degrees.
     pub top_deg: f32,
+    /// Elevation of the last ring's lower edge, degrees.
     pub bottom_deg: f32,
+    /// Rings of cells from top to bottom.
     pub rings: u32,
+    /// Cells per ring.
     pub segments: u32,
 }
 

@@ -3,7 +3,8 @@
 //! - [`material`]: the draw's uniform, built from a version, changed per frame;
 //! - [`variants`]: the generic and the specialised pipelines, by material signature and placement;
 //! - [`upload`]: a sky's per-object GPU resources;
-//! - [`detail`]: texel density and mip bounds (pure functions of stage, shape and view);
+//! - [`detail`]: texel density by stage, shape and view (pure; the mip bounds built on it are
+//!   [`crate::render::plan::mip_bounds`]);
 //! - [`pairs`]: two cloud layers drawn at once;
 //! - [`texels`] and [`texel_quads`]: the background's sparse stars texel by texel;
 //! - [`stage_fold`]: stages folded into fewer where their product is constant.
@@ -49,7 +50,8 @@ use crate::sky::eval::{FrameSky, VersionFrame};
 use crate::sky::resolved::{BlendMode, Lighting, Shape, Sky, StageOp, TextureImage, UvSource, Version, MAX_STAGES};
 
 /// The sky objects pass: pipelines (one per blend mode, built once and rebuilt on shader edits,
-/// plus one per material signature, built on first use) and the current sky's per-object resources.
+/// plus one per material signature and placement, built when the frame plan uses it) and the
+/// current sky's per-object resources.
 pub struct SkyObjectsPass {
     bind_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
@@ -81,6 +83,9 @@ pub struct SkyObjectsPass {
     /// The rest of such a draw goes as bands where the polygons stand for the stage
     /// ([`crate::render::plan::strategy::SparseStages::TexelPolygonsOnBands`]).
     bands_on: bool,
+    /// Draws recorded this frame without a pipeline (left out): none while every pipeline the
+    /// plan uses was built.
+    missing_pipelines: std::cell::Cell<u32>,
     /// Triangles of texel polygons recorded this frame (counted as they are recorded).
     texel_triangles: std::cell::Cell<u32>,
     /// Scissor rectangles of the background drawn as one triangle this frame.
@@ -193,6 +198,7 @@ impl SkyObjectsPass {
             reduces: false,
             texels_on: false,
             bands_on: false,
+            missing_pipelines: std::cell::Cell::new(0),
             texel_triangles: std::cell::Cell::new(0),
             background_rects: std::cell::Cell::new(0),
             draws: Staged::new(None),
@@ -211,6 +217,11 @@ impl SkyObjectsPass {
             frame_camera: Camera::default(),
             frame_size: (1, 1),
         })
+    }
+
+    /// Draws of the last frame left out for want of a pipeline (0 unless one failed to build).
+    pub fn draws_without_pipeline(&self) -> u32 {
+        self.missing_pipelines.get()
     }
 
     /// Whether draw `e` adds to the frame (its blend, or the fine terms of a split layer).
@@ -274,8 +285,11 @@ impl SkyObjectsPass {
             Some(p) => p,
             // The generic pipeline draws every term: only right for whole draws in their place.
             None if !reduced && placement == Slot::Plain && e.part == [true; 4] && !e.on_top => &self.pipelines.for_target(target).generic[blend_index(d.blend)],
-            // Building it failed and was logged.
-            None => return 0,
+            // Building it failed and was logged, or the plan did not use this placement.
+            None => {
+                self.missing_pipelines.set(self.missing_pipelines.get() + 1);
+                return 0;
+            }
         };
         rpass.set_pipeline(pipeline);
         rpass.set_bind_group(2, under_run.unwrap_or(&self.no_run), &[]);
@@ -406,6 +420,7 @@ impl Pass for SkyObjectsPass {
         self.texels_on = cx.options.strategy.texel_polygons() && cx.target == Target::Display;
         self.bands_on = cx.options.strategy.grid_bands();
         self.texel_triangles.set(0);
+        self.missing_pipelines.set(0);
         self.background_rects.set(0);
         let Some(draws) = &self.draws.current else { return };
         let neutral = crate::render::passes::tone_map::ToneMapUniform::from(cx.frame.sky_model.tone_mapper).settings[0] != 0;

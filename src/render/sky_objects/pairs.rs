@@ -15,7 +15,10 @@ impl SkyObjectsPass {
     /// Records reduced items `lower` and `upper` at once, over `seed` when given.
     pub(super) fn record_pair(&self, rpass: &mut wgpu::RenderPass<'_>, (lower, upper): (usize, usize), target: Target, seed: Option<&wgpu::BindGroup>) -> u32 {
         let (Some(draws), Some(a), Some(b)) = (&self.draws.current, self.visible.get(lower), self.visible.get(upper)) else { return 0 };
-        let Some(pipeline) = self.pair_key(a, b, target, seed.is_some()).and_then(|k| self.pairs.get(&k)).and_then(Option::as_ref) else { return 0 };
+        let Some(pipeline) = self.pair_key(a, b, target, seed.is_some()).and_then(|k| self.pairs.get(&k)).and_then(Option::as_ref) else {
+            self.missing_pipelines.set(self.missing_pipelines.get() + 1);
+            return 0;
+        };
         let (da, db) = (&draws.objects[a.index][a.version], &draws.objects[b.index][b.version]);
         let mesh = &Self::pair_mesh(draws, a, b).mesh;
         let Some(parts) = self.pair_parts(a, b, mesh.index_count) else { return 0 };

@@ -258,8 +258,8 @@ impl Uploader<'_> {
             .collect()
     }
 
-    /// A sparse stage under the dome's mesh mapping, static: the folded one, or
-    // one of its own that repeats.
+    /// A sparse stage under the dome's mesh mapping, static (the folded one, or one of its own
+    /// that repeats), and its texel polygons.
     fn sparse_stage(&mut self, label: &str, v: &Version, (folds, gradient_stage): (&[stage_fold::Fold], Option<usize>), is_outline: bool) -> Option<(usize, Arc<GpuTexelMesh>)> {
         let fold_at = |k: usize| folds.iter().find(|f| f.stage == k);
         let folded_away = |k: usize| k > 0 && fold_at(k - 1).is_some();

@@ -1,5 +1,6 @@
 //! Pipelines of the sky objects: the generic ones (every material, read from the uniform) and
-//! the specialised variants, one per material signature and placement, built on first use.
+//! the specialised variants, one per material signature and placement, built when the frame
+//! plan first uses them.
 
 #[allow(unused_imports)]
 use super::*;
@@ -314,17 +315,21 @@ impl SkyObjectsPass {
         let mut failed = false;
         for &(key, placement) in uses {
             let Some(e) = self.visible.get(key).copied() else { continue };
+            // Every draw used also gets its pipeline in its own place: what the recorder falls
+            // back to where a run buffer is missing (`SkyRenderer::record_step`).
+            if let Some(k) = self.entry_key(&e, target, Slot::Plain) {
+                self.build_variant(device, k);
+            }
             let slot = match placement {
                 // Reduced draws' signatures say so (`entry_key`); a failure leaves the generic
                 // pipeline drawing whole draws in their place, and nothing to plan differently.
-                Placement::Plain | Placement::Reduced => {
-                    if let Some(k) = self.entry_key(&e, target, Slot::Plain) {
+                Placement::Plain | Placement::Reduced => continue,
+                Placement::Pair { upper, over_seed } => {
+                    let upper = self.visible.get(upper).copied();
+                    if let Some(k) = upper.and_then(|u| self.entry_key(&u, target, Slot::Plain)) {
                         self.build_variant(device, k);
                     }
-                    continue;
-                }
-                Placement::Pair { upper, over_seed } => {
-                    let pair = self.visible.get(upper).and_then(|u| self.pair_key(&e, u, target, over_seed));
+                    let pair = upper.and_then(|u| self.pair_key(&e, &u, target, over_seed));
                     failed |= pair.is_some_and(|k| !self.build_pair(device, k));
                     continue;
                 }
