@@ -538,7 +538,7 @@ pub fn summary(sky: &Sky) -> String {
             o.name,
             o.standard.shape,
             stages,
-            if fb.is_empty() { String::new() } else { format!(", fallback passes with {} stage(s)", fb.join(" + ")) }
+            if fb.is_empty() { String::new() } else { format!(", fallback versions with {} stage(s)", fb.join(" + ")) }
         );
     }
     for e in &sky.emitters {

@@ -28,7 +28,7 @@ fn check_prints_a_summary_or_located_errors() {
     let o = skytune().arg("check").arg(&sky).output().unwrap();
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success());
-    assert!(stdout.contains("10 objects") && stdout.contains("skydome") && stdout.contains("fallback passes with 1 + 2 stage(s)"), "{stdout}");
+    assert!(stdout.contains("10 objects") && stdout.contains("skydome") && stdout.contains("fallback versions with 1 + 2 stage(s)"), "{stdout}");
 
     let text = std::fs::read_to_string(&sky).unwrap().replacen("size_deg = 6", "size_deg = -6", 1);
     std::fs::write(&sky, &text).unwrap();

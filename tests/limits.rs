@@ -56,7 +56,7 @@ fn objects_fallbacks_paths_and_keys_load_at_their_limits_and_not_past_them() {
 
     let r = with_extra(&sky, &object("many_fallbacks", MAX_FALLBACKS, None));
     assert!(r.is_ok(), "{:?}", r.err().map(|e| e.to_string()));
-    expect_error(with_extra(&sky, &object("too_many_fallbacks", MAX_FALLBACKS + 1, None)), "fallback", "at most 2 fallback passes");
+    expect_error(with_extra(&sky, &object("too_many_fallbacks", MAX_FALLBACKS + 1, None)), "fallback", "at most 2 fallback versions");
 
     let base_paths = load_sky_file(&sky.with_file_name("sky.base")).unwrap().paths.len();
     let paths = |n: usize| (0..n).map(|i| format!("[[path]]\nname = \"p{i}\"\nfollow = \"sun\"\n")).collect::<String>();

@@ -98,7 +98,7 @@ fn tier_two_draws_fallback_passes_close_to_tier_four() {
     let of = frame.objects.iter().find(|o| o.index == dome).unwrap();
     assert!(of.fallback);
     let versions: Vec<usize> = of.versions.as_ref().unwrap().iter().map(|p| p.version).collect();
-    assert_eq!(versions, vec![1, 2], "both fallback passes are drawn");
+    assert_eq!(versions, vec![1, 2], "both fallback versions are drawn");
     let tier2 = h.render(&sky, &input, &camera(), &opts).unwrap();
     let (d, diff) = common::diff(&tier2, &tier4, 12);
     if d.differing > 0.02 || d.mean > 2.0 {
@@ -107,7 +107,7 @@ fn tier_two_draws_fallback_passes_close_to_tier_four() {
         panic!("tier 2 strays from tier 4: {d:?}");
     }
 
-    // Without the skydome the sky is black: the fallback passes really drew it.
+    // Without the skydome the sky is black: the fallback versions really drew it.
     input.disabled = vec!["skydome".into()];
     let no_dome = h.render(&sky, &input, &camera(), &opts).unwrap();
     let (d, _) = common::diff(&no_dome, &tier2, 6);

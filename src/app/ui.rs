@@ -752,7 +752,7 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         });
         ui.label(RichText::new(status).color(color).small());
         for (pass, dropped) in &of.dropped {
-            ui.label(RichText::new(format!("fallback pass {pass} dropped: needs {dropped} stages")).small().weak());
+            ui.label(RichText::new(format!("fallback version {pass} dropped: needs {dropped} stages")).small().weak());
         }
         if let Ok(versions) = &of.versions {
             for p in versions {

@@ -183,7 +183,7 @@ impl std::fmt::Display for Hidden {
 /// passes (NeL's term, kept in the sky format).
 #[derive(Debug, Clone, PartialEq)]
 pub struct VersionFrame {
-    /// 0 = standard, 1.. = fallback pass number.
+    /// 0 = standard, 1.. = fallback version number.
     pub version: usize,
     /// Diffuse colour.
     pub diffuse: Rgba,
@@ -202,9 +202,9 @@ pub struct ObjectFrame {
     pub index: usize,
     /// Transparency priority (0..63): the draw order of the sky phase.
     pub priority: u8,
-    /// Versions to draw (the standard one, or the fallback passes that fit), or why none are.
+    /// Versions to draw (the standard one, or the fallback versions that fit), or why none are.
     pub versions: Result<Vec<VersionFrame>, Hidden>,
-    /// Whether the fallback passes were chosen.
+    /// Whether the fallback versions were chosen.
     pub fallback: bool,
     /// Fallback passes skipped because they need more stages than the tier has: (pass, stages needed).
     pub dropped: Vec<(usize, usize)>,
@@ -462,7 +462,7 @@ impl Sky {
         let weather = input.weather.clamp(0.0, 1.0);
         let color = |c: &Color| self.color_at(c, hour, weather);
         // The version the evaluation would draw: the standard one if the tier has its stages,
-        // else the first fallback pass that fits.
+        // else the first fallback version that fits.
         let tier = input.tier.stages();
         let v = if o.standard.stages.len() <= tier { &o.standard } else { o.fallback.iter().find(|v| v.stages.len() <= tier).unwrap_or(&o.standard) };
         ref_alpha(v.ref_color, color(&v.diffuse), |k| v.constants.get(k).map_or([1.0; 4], color))

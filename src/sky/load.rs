@@ -115,7 +115,7 @@ pub const MAX_STARS: u32 = 200_000;
 pub const MAX_SKY_FILE_BYTES: usize = 1 << 20;
 /// Most objects in a sky.
 pub const MAX_OBJECTS: usize = 256;
-/// Most fallback passes of one object (for GPUs with fewer texture stages).
+/// Most fallback versions of one object (for GPUs with fewer texture stages).
 pub const MAX_FALLBACKS: usize = 2;
 /// Most paths in a sky.
 pub const MAX_PATHS: usize = 64;
@@ -622,7 +622,7 @@ impl Validator<'_> {
                 &format!("\"{}\"", o.name),
                 "[[object.fallback]]",
                 &format!("{field}.fallback"),
-                format!("at most {MAX_FALLBACKS} fallback passes, found {}", o.fallback.len()),
+                format!("at most {MAX_FALLBACKS} fallback versions, found {}", o.fallback.len()),
             );
         }
         let fallback: Vec<Option<Version>> = o.fallback.iter().enumerate().map(|(k, v)| self.version(v, &format!("{field}.fallback[{k}]"), &o.name, path.is_some())).collect();

@@ -593,7 +593,7 @@ pub struct PathKey {
     pub roll_deg: Finite,
 }
 
-/// A sky object: a standard version plus optional fallback passes for weaker GPUs.
+/// A sky object: a standard version plus optional fallback versions for weaker GPUs.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectDef {
@@ -625,7 +625,7 @@ fn yes() -> bool {
     true
 }
 
-/// One version (or fallback pass) of a sky object: shape, material stages and colours.
+/// One version (or fallback version) of a sky object: shape, material stages and colours.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct VersionDef {

@@ -203,7 +203,7 @@ pub struct SkyObject {
     pub fallback: Vec<Version>,
 }
 
-/// A version or fallback pass.
+/// A version or fallback version.
 #[derive(Debug, Clone)]
 pub struct Version {
     /// Geometry.

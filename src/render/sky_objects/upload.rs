@@ -4,7 +4,7 @@
 #[allow(unused_imports)]
 use super::*;
 
-/// GPU resources of one version (standard or fallback pass) of an object.
+/// GPU resources of one version (standard or fallback version) of an object.
 pub(super) struct VersionDraw {
     pub(super) uniform: wgpu::Buffer,
     /// By the stages sampled from level 0 alone (bit k: stage k, within `level0_able`).
