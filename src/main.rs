@@ -122,9 +122,12 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     let started = std::time::Instant::now();
     let units =
         "sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); default atmosphere (Hillaire 2020); sun disc and ground surface excluded";
+    // The reference's standard errors, written beside its radiance.
+    let mut std_err = None;
     let (out, units, comment) = match args.model {
         cli::RadianceModel::Reference => {
-            let (out, comment) = reference_radiance(args, atm, &list);
+            let (out, errors, comment) = reference_radiance(args, atm, &list);
+            std_err = Some(errors);
             (out, units, comment)
         }
         cli::RadianceModel::Single => {
@@ -210,38 +213,47 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
         }
     };
     let name = clap::ValueEnum::to_possible_value(&args.model).map_or_else(String::new, |v| v.get_name().to_string());
-    cases::write_radiance(&args.out, &format!("skytune radiance --model {name}: {units}\n{comment}"), &list, &out)?;
+    let comment = format!("skytune radiance --model {name}: {units}\n{comment}");
+    match &std_err {
+        Some(errors) => cases::write_radiance_with_errors(&args.out, &comment, &list, &out, errors)?,
+        None => cases::write_radiance(&args.out, &comment, &list, &out)?,
+    }
     println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());
     Ok(())
 }
 
-/// The reference's radiance for every case, on every core; with a line saying how it was computed.
-fn reference_radiance(args: &cli::RadianceArgs, atm: skytune::atmosphere::Atmosphere, list: &[skytune::atmosphere::reference::Case]) -> (Vec<[f64; 3]>, String) {
+/// The reference's radiance for every case and its standard error, on every core; with a line
+/// saying how it was computed.
+fn reference_radiance(args: &cli::RadianceArgs, atm: skytune::atmosphere::Atmosphere, list: &[skytune::atmosphere::reference::Case]) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, String) {
     use skytune::atmosphere::reference::{Estimate, Reference, ReferenceSettings};
     let settings = ReferenceSettings { max_order: args.max_order, paths: args.paths, seed: args.seed, ..Default::default() };
     let model = Reference::new(atm, settings);
     let bar = skytune::support::progress::Reporter::new(list.len() as u64, "radiance");
     let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).min(list.len().max(1));
-    let chunk = list.len().div_ceil(workers).max(1);
-    let mut estimates = vec![Estimate { single: [0.0; 3], all: [0.0; 3], std_err: [0.0; 3] }; list.len()];
+    // Cases taken one at a time from a shared counter: their costs differ by an order of
+    // magnitude (twilight, long horizontal rays), so fixed chunks would leave cores idle.
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let results = std::sync::Mutex::new(vec![Estimate { single: [0.0; 3], all: [0.0; 3], std_err: [0.0; 3] }; list.len()]);
     std::thread::scope(|scope| {
-        for (cases, out) in list.chunks(chunk).zip(estimates.chunks_mut(chunk)) {
-            let (model, bar) = (&model, &bar);
-            scope.spawn(move || {
-                for (c, o) in cases.iter().zip(out.iter_mut()) {
-                    *o = model.estimate(c);
-                    bar.inc(1);
-                }
+        for _ in 0..workers {
+            let (model, bar, next, results) = (&model, &bar, &next, &results);
+            scope.spawn(move || loop {
+                let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(c) = list.get(k) else { break };
+                let e = model.estimate(c);
+                results.lock().unwrap_or_else(std::sync::PoisonError::into_inner)[k] = e;
+                bar.inc(1);
             });
         }
     });
+    let estimates = results.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
     bar.finish();
     let worst = estimates.iter().flat_map(|e| (0..3).map(move |c| e.std_err[c] / e.all[c].max(1e-30))).fold(0.0, f64::max);
     let comment = format!(
         "model reference: max order {}, {} paths per case, seed {}; largest relative standard error of a value {:.2e}",
         settings.max_order, settings.paths, settings.seed, worst
     );
-    (estimates.iter().map(|e| e.all).collect(), comment)
+    (estimates.iter().map(|e| e.all).collect(), estimates.iter().map(|e| e.std_err).collect(), comment)
 }
 
 /// The sky a command names (or the built-in one).

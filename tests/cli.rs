@@ -151,7 +151,9 @@ fn radiance_answers_every_case_and_locates_bad_rows() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(&out).unwrap();
     let rows: Vec<Vec<f64>> = text.lines().filter(|l| !l.starts_with('#')).skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
-    assert!(text.lines().any(|l| l == "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg,r,g,b"), "{text}");
+    // The reference reports its standard errors beside its radiance: none for single scattering.
+    assert!(text.lines().any(|l| l == "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg,r,g,b,se_r,se_g,se_b"), "{text}");
+    assert!(rows.iter().all(|r| r.len() == 11 && r[8..] == [0.0; 3]), "{rows:?}");
     assert!(text.starts_with("# ") && text.contains("sr^-1"), "the units are stated: {text}");
     assert_eq!(rows.len(), 3);
     // The input columns are repeated; a day sky is blue, the night sky is black.
@@ -197,6 +199,13 @@ fn radiance_progress_in_a_log_is_whole_lines() {
     let lines: Vec<&str> = stderr.lines().collect();
     assert!(lines.len() < count, "{} lines for {count} cases: {stderr}", lines.len());
     assert!(lines.iter().any(|l| l.starts_with("radiance: done, 48 in ")), "a summary line: {stderr}");
+    // Every order: each daylit case's standard error is positive and below its radiance.
+    let text = std::fs::read_to_string(dir.path().join("out.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = text.lines().filter(|l| !l.starts_with('#')).skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+    assert_eq!(rows.len(), count);
+    for r in rows.iter().filter(|r| r[2] > 0.0) {
+        assert!((0..3).all(|c| r[8 + c] > 0.0 && r[8 + c] < r[5 + c]), "{r:?}");
+    }
 }
 
 #[test]

@@ -33,6 +33,23 @@ struct RadianceRow {
     b: f64,
 }
 
+/// One row of a reference's radiance file: a radiance row and its standard errors (the Monte
+/// Carlo noise of orders >= 2), sr^-1.
+#[derive(serde::Serialize)]
+struct RadianceErrorRow {
+    camera_km: f64,
+    albedo: f64,
+    sun_elev_deg: f64,
+    view_elev_deg: f64,
+    rel_azimuth_deg: f64,
+    r: f64,
+    g: f64,
+    b: f64,
+    se_r: f64,
+    se_g: f64,
+    se_b: f64,
+}
+
 /// A bad cases file: where and why.
 #[derive(Debug, thiserror::Error)]
 pub enum CasesError {
@@ -106,8 +123,17 @@ fn csv_error(file: &str, e: csv::Error) -> CasesError {
     }
 }
 
-/// Writes cases and their radiance, with `comment` lines (`# ...`) first.
+/// Writes radiance per case as CSV (the cases' columns, then r, g, b), `comment` as `#` lines first.
 pub fn write_radiance(path: &Path, comment: &str, cases: &[Case], radiance: &[Rgb]) -> Result<(), CasesError> {
+    write_radiance_rows(path, comment, cases, radiance, None)
+}
+
+/// As [`write_radiance`], with the standard error of each value in `se_r, se_g, se_b` columns.
+pub fn write_radiance_with_errors(path: &Path, comment: &str, cases: &[Case], radiance: &[Rgb], std_err: &[Rgb]) -> Result<(), CasesError> {
+    write_radiance_rows(path, comment, cases, radiance, Some(std_err))
+}
+
+fn write_radiance_rows(path: &Path, comment: &str, cases: &[Case], radiance: &[Rgb], std_err: Option<&[Rgb]>) -> Result<(), CasesError> {
     let file = path.display().to_string();
     let io = |source| CasesError::Io { file: file.clone(), source };
     let mut text = String::new();
@@ -115,18 +141,33 @@ pub fn write_radiance(path: &Path, comment: &str, cases: &[Case], radiance: &[Rg
         text.push_str(&format!("# {line}\n"));
     }
     let mut writer = csv::Writer::from_writer(Vec::new());
-    for (c, l) in cases.iter().zip(radiance) {
-        let row = RadianceRow {
-            camera_km: c.camera_km,
-            albedo: c.albedo,
-            sun_elev_deg: c.sun_elev_deg,
-            view_elev_deg: c.view_elev_deg,
-            rel_azimuth_deg: c.rel_azimuth_deg,
-            r: l[0],
-            g: l[1],
-            b: l[2],
+    for (k, (c, l)) in cases.iter().zip(radiance).enumerate() {
+        let written = match std_err.and_then(|e| e.get(k)) {
+            Some(e) => writer.serialize(RadianceErrorRow {
+                camera_km: c.camera_km,
+                albedo: c.albedo,
+                sun_elev_deg: c.sun_elev_deg,
+                view_elev_deg: c.view_elev_deg,
+                rel_azimuth_deg: c.rel_azimuth_deg,
+                r: l[0],
+                g: l[1],
+                b: l[2],
+                se_r: e[0],
+                se_g: e[1],
+                se_b: e[2],
+            }),
+            None => writer.serialize(RadianceRow {
+                camera_km: c.camera_km,
+                albedo: c.albedo,
+                sun_elev_deg: c.sun_elev_deg,
+                view_elev_deg: c.view_elev_deg,
+                rel_azimuth_deg: c.rel_azimuth_deg,
+                r: l[0],
+                g: l[1],
+                b: l[2],
+            }),
         };
-        writer.serialize(row).map_err(|e| io(std::io::Error::other(e.to_string())))?;
+        written.map_err(|e| io(std::io::Error::other(e.to_string())))?;
     }
     let body = writer.into_inner().map_err(|e| io(std::io::Error::other(e.to_string())))?;
     text.push_str(&String::from_utf8_lossy(&body));

@@ -7,9 +7,14 @@
 //!   longer than `max_panel_km`), Simpson's rule on each panel, the sun's transmittance at every
 //!   node by the same adaptive quadrature.
 //! - Orders 2 and up are estimated by Monte Carlo path tracing with next-event estimation
-//!   towards the sun: distances sampled by free flight in the least-extinguished channel (so
-//!   per-channel weights stay <= 1), directions from a mixture of Henyey-Greenstein(g) and
-//!   uniform, a Lambertian ground of albedo `a`. A fixed seed makes results repeatable, and
+//!   towards the sun: distances sampled by free flight (one channel chosen at random, weighed
+//!   by the three channels' average density), directions from a mixture of
+//!   Henyey-Greenstein(g) and uniform, a Lambertian ground of albedo `a`. Where the planet's
+//!   shadow covers part of a path's segment (twilight: the sun below the camera's horizon, the
+//!   sunlit air high above), free flight rarely stops in the sunlit part and next-event
+//!   estimation mostly finds the shadow; each such segment also gets a second estimate of its
+//!   sunlight, from a distance sampled in its sunlit part only, the two combined by multiple
+//!   importance sampling (balance heuristic, Veach 1997) so the sum stays unbiased. A fixed seed makes results repeatable, and
 //!   truncating at `max_order` only drops terms, so radiance never decreases with more orders.
 //!
 //! The sun is a point source of irradiance 1 per channel (its disc is not part of the result)
@@ -113,6 +118,64 @@ impl Segment {
         } else {
             a
         }
+    }
+}
+
+/// Distances along a segment sampled in its sunlit intervals only: one channel chosen at random,
+/// then its free-flight density restricted to those intervals (the pdf is the three channels'
+/// average, as for free flight).
+struct SunlitSampler {
+    intervals: Vec<(f64, f64)>,
+    /// Probability, per channel, that free flight would stop in each interval.
+    mass: Vec<Rgb>,
+    /// Their sum, per channel.
+    total: Rgb,
+}
+
+impl SunlitSampler {
+    /// A sampler for `seg`'s sunlit `intervals`; None where they cover the whole segment or
+    /// nothing (free flight alone serves both).
+    fn new(seg: &Segment, intervals: Vec<(f64, f64)>) -> Option<Self> {
+        let length = seg.length();
+        let whole = intervals.len() == 1 && intervals[0].0 <= 1e-9 && intervals[0].1 >= length - 1e-9;
+        if intervals.is_empty() || whole {
+            return None;
+        }
+        let mass: Vec<Rgb> = intervals
+            .iter()
+            .map(|&(a, b)| {
+                let (ta, tb) = (seg.at(a).0, seg.at(b).0);
+                std::array::from_fn(|c| ((-ta[c]).exp() - (-tb[c]).exp()).max(0.0))
+            })
+            .collect();
+        let total = mass.iter().fold([0.0; 3], |acc, m| add(acc, *m));
+        total.iter().any(|m| *m > 0.0).then_some(Self { intervals, mass, total })
+    }
+
+    /// A distance, or None (the channel chosen has no mass there).
+    fn sample(&self, seg: &Segment, rng: &mut fastrand::Rng) -> Option<f64> {
+        let j = rng.usize(0..3);
+        if self.total[j] <= 0.0 {
+            return None;
+        }
+        let mut r = rng.f64() * self.total[j];
+        for (&(a, b), m) in self.intervals.iter().zip(&self.mass) {
+            if r < m[j] || (a, b) == *self.intervals.last().expect("non-empty") {
+                let t_a = (-seg.at(a).0[j]).exp();
+                let tau = -(t_a - r.min(m[j])).max(1e-300).ln();
+                return Some(seg.invert(j, tau).clamp(a, b));
+            }
+            r -= m[j];
+        }
+        None
+    }
+
+    /// The density of [`Self::sample`] at `t`, given the optical depth and extinction there.
+    fn pdf(&self, t: f64, (tau, slope): (Rgb, Rgb)) -> f64 {
+        if !self.intervals.iter().any(|&(a, b)| t >= a && t <= b) {
+            return 0.0;
+        }
+        (0..3).filter(|&c| self.total[c] > 0.0).map(|c| slope[c] * (-tau[c]).exp() / self.total[c]).sum::<f64>() / 3.0
     }
 }
 
@@ -256,11 +319,7 @@ impl Reference {
     /// [`super::SUN_SET_FADE_RAD`], lit along the horizon (the GPU models do the same, so that no
     /// model's sky jumps as the sun sets).
     pub fn sunlight(&self, p: DVec3, towards_sun: DVec3) -> Rgb {
-        let up = p.normalize();
-        let mu_s = up.dot(towards_sun).clamp(-1.0, 1.0);
-        let sin_horizon = (self.atm.ground_radius_km / p.length().max(self.atm.ground_radius_km)).min(1.0);
-        let mu_h = -(1.0 - sin_horizon * sin_horizon).max(0.0).sqrt();
-        let above = mu_s.asin() - mu_h.asin();
+        let (up, mu_s, mu_h, above) = self.sun_geometry(p, towards_sun);
         let fraction = super::sun_set_fade(above);
         if fraction <= 0.0 {
             return [0.0; 3];
@@ -274,6 +333,57 @@ impl Reference {
             up * mu + side * (1.0 - mu * mu).max(0.0).sqrt()
         };
         self.transmittance_to_space(p, dir).map(|t| t * fraction)
+    }
+
+    /// At `p`: the local up, the cosines of the sun's zenith angle and of the horizon's, and the
+    /// sun's angle above that horizon, radians.
+    fn sun_geometry(&self, p: DVec3, towards_sun: DVec3) -> (DVec3, f64, f64, f64) {
+        let up = p.normalize();
+        let mu_s = up.dot(towards_sun).clamp(-1.0, 1.0);
+        let sin_horizon = (self.atm.ground_radius_km / p.length().max(self.atm.ground_radius_km)).min(1.0);
+        let mu_h = -(1.0 - sin_horizon * sin_horizon).max(0.0).sqrt();
+        (up, mu_s, mu_h, mu_s.asin() - mu_h.asin())
+    }
+
+    /// Whether any sunlight reaches `p` (the sun has not faded out below its horizon).
+    fn lit(&self, p: DVec3, towards_sun: DVec3) -> bool {
+        super::sun_set_fade(self.sun_geometry(p, towards_sun).3) > 0.0
+    }
+
+    /// The parts of `seg` the sun lights, as intervals of t: the lit state at every node (panels
+    /// are at most `max_panel_km` long), each change refined by bisection. Only a sampling
+    /// density is made of them, so a shadow narrower than a panel, missed, costs variance, not
+    /// bias.
+    fn sunlit(&self, seg: &Segment, towards_sun: DVec3) -> Vec<(f64, f64)> {
+        let lit = |t: f64| self.lit(seg.origin + seg.dir * t, towards_sun);
+        let mut out = Vec::new();
+        let mut from = lit(0.0).then_some(0.0);
+        let (mut last_t, mut last_lit) = (0.0, from.is_some());
+        for &t in &seg.nodes[1..] {
+            let now = lit(t);
+            if now != last_lit {
+                let (mut a, mut b) = (last_t, t);
+                for _ in 0..32 {
+                    let m = 0.5 * (a + b);
+                    if lit(m) == last_lit {
+                        a = m;
+                    } else {
+                        b = m;
+                    }
+                }
+                let edge = 0.5 * (a + b);
+                match from.take() {
+                    Some(start) => out.push((start, edge)),
+                    None => from = Some(edge),
+                }
+            }
+            (last_t, last_lit) = (t, now);
+        }
+        if let Some(start) = from {
+            out.push((start, seg.length()));
+        }
+        out.retain(|(a, b)| b > a);
+        out
     }
 
     /// Sunlight scattered once towards `-d` at `y`, per unit length: S(y, d·s) T_sun(y).
@@ -388,22 +498,35 @@ impl Reference {
                 }
                 let next = self.segment(pos, dir);
                 let total = next.total();
+                // Part of it in the planet's shadow: its sunlight also from a distance sampled
+                // where the sun lights it, weighed against free flight's (balance heuristic).
+                let sunlit = SunlitSampler::new(&next, self.sunlit(&next, towards_sun));
+                let free_pdf = |(tau, slope): (Rgb, Rgb)| (0..3).map(|c| slope[c] * (-tau[c]).exp()).sum::<f64>() / 3.0;
+                if let Some(t2) = sunlit.as_ref().and_then(|s| s.sample(&next, rng)) {
+                    let at = next.at(t2);
+                    let pdf = free_pdf(at) + sunlit.as_ref().map_or(0.0, |s| s.pdf(t2, at));
+                    if pdf > 0.0 {
+                        let lit = self.sun_scattered(pos + dir * t2, dir, towards_sun);
+                        path_sum = add(path_sum, std::array::from_fn(|c| thr[c] * (-at.0[c]).exp() * lit[c] / pdf));
+                    }
+                }
                 let j = rng.usize(0..3);
                 let target = -(1.0 - rng.f64()).ln();
                 if target < total[j] {
                     let t = next.invert(j, target);
-                    let (tau, slope) = next.at(t);
-                    let pdf = (0..3).map(|c| slope[c] * (-tau[c]).exp()).sum::<f64>() / 3.0;
+                    let at = next.at(t);
+                    let pdf = free_pdf(at);
                     if pdf <= 0.0 {
                         break;
                     }
-                    thr = std::array::from_fn(|c| thr[c] * (-tau[c]).exp() / pdf);
+                    let weight = sunlit.as_ref().map_or(1.0, |s| pdf / (pdf + s.pdf(t, at)));
+                    thr = std::array::from_fn(|c| thr[c] * (-at.0[c]).exp() / pdf);
                     pos += dir * t;
                     d_in = dir;
                     on_ground = false;
                     k += 1;
                     let lit = self.sun_scattered(pos, d_in, towards_sun);
-                    path_sum = add(path_sum, std::array::from_fn(|c| thr[c] * lit[c]));
+                    path_sum = add(path_sum, std::array::from_fn(|c| weight * thr[c] * lit[c]));
                 } else if next.ground {
                     // Reached by the channels whose sampled flight passed the whole segment.
                     let pass = (0..3).map(|c| (-total[c]).exp()).sum::<f64>() / 3.0;
