@@ -35,7 +35,7 @@ struct RadianceRow {
 
 /// One row of a reference's radiance file: a radiance row and its standard errors (the Monte
 /// Carlo noise of orders >= 2), sr^-1.
-#[derive(serde::Serialize)]
+#[derive(Serialize)]
 struct RadianceErrorRow {
     camera_km: f64,
     albedo: f64,
@@ -48,6 +48,28 @@ struct RadianceErrorRow {
     se_r: f64,
     se_g: f64,
     se_b: f64,
+}
+
+impl RadianceRow {
+    /// Case `c`'s row with radiance `l`.
+    fn new(c: &Case, l: Rgb) -> Self {
+        Self {
+            camera_km: c.camera_km,
+            albedo: c.albedo,
+            sun_elev_deg: c.sun_elev_deg,
+            view_elev_deg: c.view_elev_deg,
+            rel_azimuth_deg: c.rel_azimuth_deg,
+            r: l[0],
+            g: l[1],
+            b: l[2],
+        }
+    }
+
+    /// The same row with the standard errors `se` of its radiance.
+    fn with_errors(self, se: Rgb) -> RadianceErrorRow {
+        let Self { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b } = self;
+        RadianceErrorRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b, se_r: se[0], se_g: se[1], se_b: se[2] }
+    }
 }
 
 /// A bad cases file: where and why.
@@ -142,30 +164,10 @@ fn write_radiance_rows(path: &Path, comment: &str, cases: &[Case], radiance: &[R
     }
     let mut writer = csv::Writer::from_writer(Vec::new());
     for (k, (c, l)) in cases.iter().zip(radiance).enumerate() {
+        let row = RadianceRow::new(c, *l);
         let written = match std_err.and_then(|e| e.get(k)) {
-            Some(e) => writer.serialize(RadianceErrorRow {
-                camera_km: c.camera_km,
-                albedo: c.albedo,
-                sun_elev_deg: c.sun_elev_deg,
-                view_elev_deg: c.view_elev_deg,
-                rel_azimuth_deg: c.rel_azimuth_deg,
-                r: l[0],
-                g: l[1],
-                b: l[2],
-                se_r: e[0],
-                se_g: e[1],
-                se_b: e[2],
-            }),
-            None => writer.serialize(RadianceRow {
-                camera_km: c.camera_km,
-                albedo: c.albedo,
-                sun_elev_deg: c.sun_elev_deg,
-                view_elev_deg: c.view_elev_deg,
-                rel_azimuth_deg: c.rel_azimuth_deg,
-                r: l[0],
-                g: l[1],
-                b: l[2],
-            }),
+            Some(e) => writer.serialize(row.with_errors(*e)),
+            None => writer.serialize(row),
         };
         written.map_err(|e| io(std::io::Error::other(e.to_string())))?;
     }

@@ -355,6 +355,13 @@ impl Reference {
     /// density is made of them, so a shadow narrower than a panel, missed, costs variance, not
     /// bias.
     fn sunlit(&self, seg: &Segment, towards_sun: DVec3) -> Vec<(f64, f64)> {
+        // On the sun's side of the plane through the planet's centre facing it, the sun is above
+        // every point's horizon (mu_s >= 0 > mu_h): a segment with both ends there is lit
+        // throughout, and needs no scan (every segment by day, nearly).
+        let end = seg.origin + seg.dir * seg.length();
+        if seg.origin.dot(towards_sun) >= 0.0 && end.dot(towards_sun) >= 0.0 {
+            return vec![(0.0, seg.length())];
+        }
         let lit = |t: f64| self.lit(seg.origin + seg.dir * t, towards_sun);
         let mut out = Vec::new();
         let mut from = lit(0.0).then_some(0.0);
