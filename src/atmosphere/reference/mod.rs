@@ -6,16 +6,18 @@
 //!   ray (refined until the optical depth of each panel is accurate to `tau_tolerance`, and no
 //!   longer than `max_panel_km`), Simpson's rule on each panel, the sun's transmittance at every
 //!   node by the same adaptive quadrature.
-//! - Orders 2 and up are estimated by Monte Carlo path tracing with next-event estimation
-//!   towards the sun: distances sampled by free flight (one channel chosen at random, weighed
-//!   by the three channels' average density), directions from a mixture of
-//!   Henyey-Greenstein(g) and uniform, a Lambertian ground of albedo `a`. Where the planet's
-//!   shadow covers part of a path's segment (twilight: the sun below the camera's horizon, the
-//!   sunlit air high above), free flight rarely stops in the sunlit part and next-event
-//!   estimation mostly finds the shadow; each such segment also gets a second estimate of its
-//!   sunlight, from a distance sampled in its sunlit part only, the two combined by multiple
-//!   importance sampling (balance heuristic, Veach 1997) so the sum stays unbiased. A fixed seed makes results repeatable, and
-//!   truncating at `max_order` only drops terms, so radiance never decreases with more orders.
+//! - Orders 2 and up are estimated by Monte Carlo path tracing. Each path's first vertex is
+//!   forced into the view ray; directions follow the medium's phase function (3/4) mixed with
+//!   a lobe around the sun (1/4); distances follow free flight in one channel per path, every
+//!   channel weighed by the whole path's pdf averaged over the three (spectral MIS per path, so
+//!   no channel's weight grows with the bounces); a Lambertian ground of albedo `a`. Along each
+//!   segment a path leaves a vertex by, the sunlight scattered towards the vertex is estimated
+//!   by stratified sampling of the segment's sunlit part ([`sunlit::SunlitStrata`]): one sample
+//!   where the segment is lit throughout, eight strata where the planet's shadow covers part of
+//!   it (twilight: the sunlit air high and far, the sun's transmittance climbing steeply from
+//!   the shadow's edge). The sunlit ground at a segment's end is added through the segment's
+//!   transmittance. A fixed seed makes results repeatable, and truncating at `max_order` only
+//!   drops terms, so radiance never decreases with more orders.
 //!
 //! The sun is a point source of irradiance 1 per channel (its disc is not part of the result)
 //! whose light fades out smoothly while it sinks 0.1 degrees below a point's horizon
@@ -26,6 +28,12 @@
 use std::f64::consts::PI;
 
 use glam::DVec3;
+
+mod segment;
+mod sunlit;
+
+use segment::Segment;
+use sunlit::SunlitStrata;
 
 use super::{cornette_shanks_phase, henyey_greenstein_phase, rayleigh_phase, Atmosphere, Rgb};
 
@@ -76,106 +84,82 @@ pub struct Estimate {
     pub std_err: Rgb,
 }
 
-/// A ray segment inside the atmosphere, cut into panels with their optical depths.
-struct Segment {
-    origin: DVec3,
-    dir: DVec3,
-    /// Panel boundaries, t in km: nodes[0] = 0, last = length.
-    nodes: Vec<f64>,
-    /// Optical depth from the origin to each node, per channel.
-    tau: Vec<Rgb>,
-    /// Whether the segment ends on the ground (else at the top of the atmosphere).
-    ground: bool,
+/// Henyey-Greenstein asymmetry of the direction-sampling lobe around the sun.
+const SUN_LOBE_G: f64 = 0.6;
+
+/// A path's throughput per channel under spectral MIS: the product of each channel's
+/// transmittances and scattering (over the directions' pdfs), over the average of the three
+/// channels' products of distance pdfs. Both are rescaled as they go so that the average stays 1
+/// (no underflow on long paths).
+struct PathWeight {
+    /// Each channel's transmittances, scattering and albedo, over the average distance pdf.
+    num: Rgb,
+    /// Each channel's product of distance pdfs, over their average.
+    den: Rgb,
 }
 
-impl Segment {
-    fn length(&self) -> f64 {
-        *self.nodes.last().unwrap_or(&0.0)
+impl Default for PathWeight {
+    fn default() -> Self {
+        Self { num: [1.0; 3], den: [1.0; 3] }
     }
+}
 
-    fn total(&self) -> Rgb {
-        *self.tau.last().unwrap_or(&[0.0; 3])
-    }
-
-    /// Optical depth per channel at t (linear within a panel) and the panel's extinction per channel.
-    fn at(&self, t: f64) -> (Rgb, Rgb) {
-        let i = self.nodes.partition_point(|&n| n <= t).clamp(1, self.nodes.len() - 1);
-        let (a, b) = (self.nodes[i - 1], self.nodes[i]);
-        let w = b - a;
-        let f = if w > 0.0 { ((t - a) / w).clamp(0.0, 1.0) } else { 0.0 };
-        let tau = std::array::from_fn(|c| self.tau[i - 1][c] + f * (self.tau[i][c] - self.tau[i - 1][c]));
-        let slope = std::array::from_fn(|c| if w > 0.0 { (self.tau[i][c] - self.tau[i - 1][c]) / w } else { 0.0 });
-        (tau, slope)
-    }
-
-    /// The t where channel `c`'s optical depth reaches `target` (< its total).
-    fn invert(&self, c: usize, target: f64) -> f64 {
-        let i = self.tau.partition_point(|x| x[c] <= target).clamp(1, self.tau.len() - 1);
-        let (ta, tb) = (self.tau[i - 1][c], self.tau[i][c]);
-        let (a, b) = (self.nodes[i - 1], self.nodes[i]);
-        if tb > ta {
-            (a + (target - ta) / (tb - ta) * (b - a)).clamp(a, b)
+impl PathWeight {
+    /// A flight with transmittance `tr` per channel, which channel c's free flight samples with
+    /// density `pdf[c]` (hero channel chosen uniformly: the path's pdf is their average).
+    fn distance(&mut self, tr: Rgb, pdf: Rgb) {
+        let den: Rgb = std::array::from_fn(|c| self.den[c] * pdf[c]);
+        let avg = den.iter().sum::<f64>() / 3.0;
+        if avg > 0.0 && avg.is_finite() {
+            self.num = std::array::from_fn(|c| self.num[c] * tr[c] / avg);
+            self.den = den.map(|x| x / avg);
         } else {
-            a
+            self.num = [0.0; 3];
         }
+    }
+
+    /// A factor that takes no sampling decision (scattering over a direction's pdf, albedo).
+    fn scale(&mut self, k: Rgb) {
+        self.num = std::array::from_fn(|c| self.num[c] * k[c]);
+    }
+
+    /// The weight per channel of the path so far.
+    fn throughput(&self) -> Rgb {
+        self.num
     }
 }
 
-/// Distances along a segment sampled in its sunlit intervals only: one channel chosen at random,
-/// then its free-flight density restricted to those intervals (the pdf is the three channels'
-/// average, as for free flight).
-struct SunlitSampler {
-    intervals: Vec<(f64, f64)>,
-    /// Probability, per channel, that free flight would stop in each interval.
-    mass: Vec<Rgb>,
-    /// Their sum, per channel.
-    total: Rgb,
+/// A direction at angle `acos(cos)` from `axis`, uniform in azimuth.
+fn around(axis: DVec3, cos: f64, rng: &mut fastrand::Rng) -> DVec3 {
+    let phi = 2.0 * PI * rng.f64();
+    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+    let (t, b) = axis.any_orthonormal_pair();
+    (axis * cos + t * (sin * phi.cos()) + b * (sin * phi.sin())).normalize()
 }
 
-impl SunlitSampler {
-    /// A sampler for `seg`'s sunlit `intervals`; None where they cover the whole segment or
-    /// nothing (free flight alone serves both).
-    fn new(seg: &Segment, intervals: Vec<(f64, f64)>) -> Option<Self> {
-        let length = seg.length();
-        let whole = intervals.len() == 1 && intervals[0].0 <= 1e-9 && intervals[0].1 >= length - 1e-9;
-        if intervals.is_empty() || whole {
-            return None;
-        }
-        let mass: Vec<Rgb> = intervals
-            .iter()
-            .map(|&(a, b)| {
-                let (ta, tb) = (seg.at(a).0, seg.at(b).0);
-                std::array::from_fn(|c| ((-ta[c]).exp() - (-tb[c]).exp()).max(0.0))
-            })
-            .collect();
-        let total = mass.iter().fold([0.0; 3], |acc, m| add(acc, *m));
-        total.iter().any(|m| *m > 0.0).then_some(Self { intervals, mass, total })
-    }
+/// The cosine of a sample of the Rayleigh phase function, (3/8)(1 + cos^2) in cos: the root of
+/// the cubic its distribution function gives (Cardano).
+fn sample_rayleigh_cos(rng: &mut fastrand::Rng) -> f64 {
+    let q = 4.0 * rng.f64() - 2.0;
+    let r = (q * q + 1.0).sqrt();
+    ((q + r).cbrt() + (q - r).cbrt()).clamp(-1.0, 1.0)
+}
 
-    /// A distance, or None (the channel chosen has no mass there).
-    fn sample(&self, seg: &Segment, rng: &mut fastrand::Rng) -> Option<f64> {
-        let j = rng.usize(0..3);
-        if self.total[j] <= 0.0 {
-            return None;
-        }
-        let mut r = rng.f64() * self.total[j];
-        for (&(a, b), m) in self.intervals.iter().zip(&self.mass) {
-            if r < m[j] || (a, b) == *self.intervals.last().expect("non-empty") {
-                let t_a = (-seg.at(a).0[j]).exp();
-                let tau = -(t_a - r.min(m[j])).max(1e-300).ln();
-                return Some(seg.invert(j, tau).clamp(a, b));
-            }
-            r -= m[j];
-        }
-        None
+/// The cosine of a Henyey-Greenstein(g) sample (uniform where g is 0).
+fn sample_hg_cos(g: f64, rng: &mut fastrand::Rng) -> f64 {
+    if g.abs() < 1e-6 {
+        return 2.0 * rng.f64() - 1.0;
     }
+    let k = (1.0 - g * g) / (1.0 - g + 2.0 * g * rng.f64());
+    ((1.0 + g * g - k * k) / (2.0 * g)).clamp(-1.0, 1.0)
+}
 
-    /// The density of [`Self::sample`] at `t`, given the optical depth and extinction there.
-    fn pdf(&self, t: f64, (tau, slope): (Rgb, Rgb)) -> f64 {
-        if !self.intervals.iter().any(|&(a, b)| t >= a && t <= b) {
-            return 0.0;
-        }
-        (0..3).filter(|&c| self.total[c] > 0.0).map(|c| slope[c] * (-tau[c]).exp() / self.total[c]).sum::<f64>() / 3.0
+/// Henyey-Greenstein(g)'s density at a cosine, sr^-1.
+fn hg_pdf(cos: f64, g: f64) -> f64 {
+    if g.abs() < 1e-6 {
+        1.0 / (4.0 * PI)
+    } else {
+        henyey_greenstein_phase(cos, g)
     }
 }
 
@@ -435,27 +419,38 @@ impl Reference {
         sum
     }
 
-    /// A direction around `d` from the mixture 1/2 Henyey-Greenstein(g) + 1/2 uniform, and its pdf.
-    fn sample_direction(&self, d: DVec3, rng: &mut fastrand::Rng) -> (DVec3, f64) {
+    /// A direction leaving `pos` that arrived along `d_in`, and its pdf: 3/4 from the medium's
+    /// own phase function there (Rayleigh or Henyey-Greenstein(g) for the aerosols, chosen in
+    /// proportion to their scattering averaged over the channels), 1/4 from
+    /// Henyey-Greenstein([`SUN_LOBE_G`]) around `towards_sun`, where the sunlit sky is brightest
+    /// (above all at twilight). Following the phase function keeps the path's weight nearly
+    /// constant from bounce to bounce, which the high orders need.
+    fn sample_direction(&self, pos: DVec3, d_in: DVec3, towards_sun: DVec3, rng: &mut fastrand::Rng) -> (DVec3, f64) {
         let g = self.atm.mie_g;
-        let cos = if rng.bool() || g.abs() < 1e-6 {
-            2.0 * rng.f64() - 1.0
+        let m = self.atm.medium(self.altitude(pos));
+        let rayleigh = m.rayleigh.iter().sum::<f64>() / 3.0;
+        let p_rayleigh = if rayleigh + m.mie > 0.0 { rayleigh / (rayleigh + m.mie) } else { 1.0 };
+        let u = rng.f64();
+        let out = if u < 0.25 {
+            around(towards_sun, sample_hg_cos(SUN_LOBE_G, rng), rng)
+        } else if u < 0.25 + 0.75 * p_rayleigh {
+            around(d_in, sample_rayleigh_cos(rng), rng)
         } else {
-            let k = (1.0 - g * g) / (1.0 - g + 2.0 * g * rng.f64());
-            ((1.0 + g * g - k * k) / (2.0 * g)).clamp(-1.0, 1.0)
+            around(d_in, sample_hg_cos(g, rng), rng)
         };
-        let phi = 2.0 * PI * rng.f64();
-        let sin = (1.0 - cos * cos).max(0.0).sqrt();
-        let (t, b) = d.any_orthonormal_pair();
-        let out = (d * cos + t * (sin * phi.cos()) + b * (sin * phi.sin())).normalize();
-        let pdf = 0.5 / (4.0 * PI) + 0.5 * if g.abs() < 1e-6 { 1.0 / (4.0 * PI) } else { henyey_greenstein_phase(cos, g) };
+        let cos = d_in.dot(out);
+        let pdf = 0.25 * hg_pdf(towards_sun.dot(out), SUN_LOBE_G) + 0.75 * (p_rayleigh * rayleigh_phase(cos) + (1.0 - p_rayleigh) * hg_pdf(cos, g));
         (out, pdf)
     }
 
-    /// Orders 2..=max_order by path tracing; `seg` is the view ray. Distances are sampled in one
-    /// channel chosen at random and weighted by the average pdf of the three (spectral MIS), which
-    /// keeps every channel's weight bounded.
-    /// Returns the estimate and its standard error per channel.
+    /// Orders 2..=max_order by path tracing; `seg` is the view ray. Returns the estimate and its
+    /// standard error per channel.
+    ///
+    /// Distances are sampled by free flight in one channel per path (chosen at random) and
+    /// every channel is weighed by the average over the three of the whole path's distance pdf
+    /// (spectral MIS per path): each channel's weight stays below 3 however long the path, where
+    /// averaging per segment lets a channel's weight grow with every bounce (heavy tails in the
+    /// high orders at twilight, where paths are long).
     fn multiple(&self, seg: &Segment, towards_sun: DVec3, albedo: f64) -> (Rgb, Rgb) {
         let max_order = self.settings.max_order;
         let total = seg.total();
@@ -469,18 +464,15 @@ impl Reference {
             let mut path_sum = [0.0; 3];
             // One stream per path: truncating at an order changes no other path.
             let rng = &mut fastrand::Rng::with_seed(self.settings.seed.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(path as u64));
+            let hero = rng.usize(0..3);
+            if p_in[hero] <= 0.0 {
+                continue;
+            }
             // Vertex 1: forced into the view segment (its own sunlight is order 1, done exactly).
-            let j = rng.usize(0..3);
-            if p_in[j] <= 0.0 {
-                continue;
-            }
-            let t = seg.invert(j, -(1.0 - rng.f64() * p_in[j]).ln());
+            let t = seg.invert(hero, -(1.0 - rng.f64() * p_in[hero]).ln());
             let (tau, slope) = seg.at(t);
-            let pdf = (0..3).filter(|c| p_in[*c] > 0.0).map(|c| slope[c] * (-tau[c]).exp() / p_in[c]).sum::<f64>() / 3.0;
-            if pdf <= 0.0 {
-                continue;
-            }
-            let mut thr: Rgb = std::array::from_fn(|c| (-tau[c]).exp() / pdf);
+            let mut weight = PathWeight::default();
+            weight.distance(std::array::from_fn(|c| (-tau[c]).exp()), std::array::from_fn(|c| if p_in[c] > 0.0 { slope[c] * (-tau[c]).exp() / p_in[c] } else { 0.0 }));
             let mut pos = seg.origin + seg.dir * t;
             let mut d_in = seg.dir;
             let mut k = 1;
@@ -492,61 +484,37 @@ impl Reference {
                     let (u, v) = (rng.f64(), 2.0 * PI * rng.f64());
                     let (t1, t2) = n.any_orthonormal_pair();
                     let r = u.sqrt();
-                    thr = scale(thr, albedo);
+                    weight.scale([albedo; 3]);
                     (n * (1.0 - u).sqrt() + t1 * (r * v.cos()) + t2 * (r * v.sin())).normalize()
                 } else {
-                    let (dir, pdf) = self.sample_direction(d_in, rng);
+                    let (dir, pdf) = self.sample_direction(pos, d_in, towards_sun, rng);
                     let s = self.scattering(pos, d_in.dot(dir));
-                    thr = std::array::from_fn(|c| thr[c] * s[c] / pdf);
+                    weight.scale(s.map(|x| x / pdf));
                     dir
                 };
-                if thr.iter().all(|x| *x <= 0.0) {
+                if weight.throughput().iter().all(|x| *x <= 0.0) {
                     break;
                 }
-                let next = self.segment(pos, dir);
+                let (lit, next) = self.gathered(pos, dir, weight.throughput(), towards_sun, albedo, rng);
+                path_sum = add(path_sum, lit);
                 let total = next.total();
-                // Part of it in the planet's shadow: its sunlight also from a distance sampled
-                // where the sun lights it, weighed against free flight's (balance heuristic).
-                let sunlit = SunlitSampler::new(&next, self.sunlit(&next, towards_sun));
-                let free_pdf = |(tau, slope): (Rgb, Rgb)| (0..3).map(|c| slope[c] * (-tau[c]).exp()).sum::<f64>() / 3.0;
-                if let Some(t2) = sunlit.as_ref().and_then(|s| s.sample(&next, rng)) {
-                    let at = next.at(t2);
-                    let pdf = free_pdf(at) + sunlit.as_ref().map_or(0.0, |s| s.pdf(t2, at));
-                    if pdf > 0.0 {
-                        let lit = self.sun_scattered(pos + dir * t2, dir, towards_sun);
-                        path_sum = add(path_sum, std::array::from_fn(|c| thr[c] * (-at.0[c]).exp() * lit[c] / pdf));
-                    }
-                }
-                let j = rng.usize(0..3);
                 let target = -(1.0 - rng.f64()).ln();
-                if target < total[j] {
-                    let t = next.invert(j, target);
-                    let at = next.at(t);
-                    let pdf = free_pdf(at);
-                    if pdf <= 0.0 {
-                        break;
-                    }
-                    let weight = sunlit.as_ref().map_or(1.0, |s| pdf / (pdf + s.pdf(t, at)));
-                    thr = std::array::from_fn(|c| thr[c] * (-at.0[c]).exp() / pdf);
+                if target < total[hero] {
+                    let t = next.invert(hero, target);
+                    let (tau, slope) = next.at(t);
+                    let tr = tau.map(|x| (-x).exp());
+                    weight.distance(tr, std::array::from_fn(|c| slope[c] * tr[c]));
                     pos += dir * t;
                     d_in = dir;
                     on_ground = false;
                     k += 1;
-                    let lit = self.sun_scattered(pos, d_in, towards_sun);
-                    path_sum = add(path_sum, std::array::from_fn(|c| weight * thr[c] * lit[c]));
                 } else if next.ground {
-                    // Reached by the channels whose sampled flight passed the whole segment.
-                    let pass = (0..3).map(|c| (-total[c]).exp()).sum::<f64>() / 3.0;
-                    thr = std::array::from_fn(|c| thr[c] * (-total[c]).exp() / pass);
-                    let n = (pos + dir * next.length()).normalize();
-                    pos = n * self.atm.ground_radius_km;
+                    // Every channel's flight passes the whole segment with its transmittance.
+                    let tr = total.map(|x| (-x).exp());
+                    weight.distance(tr, tr);
+                    pos = (pos + dir * next.length()).normalize() * self.atm.ground_radius_km;
                     on_ground = true;
                     k += 1;
-                    let cos_sun = n.dot(towards_sun);
-                    if cos_sun > 0.0 && albedo > 0.0 {
-                        let t_sun = self.sunlight(pos, towards_sun);
-                        path_sum = add(path_sum, std::array::from_fn(|c| thr[c] * albedo / PI * cos_sun * t_sun[c]));
-                    }
                 } else {
                     break;
                 }
@@ -558,6 +526,30 @@ impl Reference {
         let mean = scale(sum, 1.0 / n);
         let std_err = std::array::from_fn(|c| ((sum_sq[c] / n - mean[c] * mean[c]).max(0.0) / n).sqrt());
         (mean, std_err)
+    }
+
+    /// The light a path gathers leaving `pos` along `dir` with throughput `thr` (one order more
+    /// than the vertex's), and the segment: the sunlight scattered towards `pos` along it, by
+    /// stratified sampling of its sunlit part (so the next collision only carries the path on),
+    /// and the sunlit ground at its end seen through all of it.
+    fn gathered(&self, pos: DVec3, dir: DVec3, thr: Rgb, towards_sun: DVec3, albedo: f64, rng: &mut fastrand::Rng) -> (Rgb, Segment) {
+        let next = self.segment(pos, dir);
+        let mut sum = [0.0; 3];
+        let strata = SunlitStrata::new(&next, &self.sunlit(&next, towards_sun));
+        if !strata.is_empty() {
+            let lit = strata.estimate(&next, rng, |t| self.sun_scattered(pos + dir * t, dir, towards_sun));
+            sum = add(sum, std::array::from_fn(|c| thr[c] * lit[c]));
+        }
+        if next.ground && albedo > 0.0 {
+            let n = (pos + dir * next.length()).normalize();
+            let cos_sun = n.dot(towards_sun);
+            if cos_sun > 0.0 {
+                let t_sun = self.sunlight(n * self.atm.ground_radius_km, towards_sun);
+                let total = next.total();
+                sum = add(sum, std::array::from_fn(|c| thr[c] * (-total[c]).exp() * albedo / PI * cos_sun * t_sun[c]));
+            }
+        }
+        (sum, next)
     }
 
     /// Sky radiance for a case, sr^-1 per unit of solar irradiance: (single scattering, all orders
