@@ -40,6 +40,8 @@ echo "smoke: $count sky files rendered at 4 (hour, weather) pairs each, plus the
 
 echo "models: the quick speed-against-accuracy benchmark and a stability sweep (docs/models.md, docs/stability.md)"
 ./target/debug/skytune bench models --quick --frames 3 --out "$out/models" >/dev/null
+grep -q "model GPU ms, sun moving / still" "$out/models/models.md" && grep -q "^## Accuracy by regime" "$out/models/models.md" \
+    || { echo "models: models.md lacks the model-only cost columns or the per-regime table" >&2; exit 1; }
 ./target/debug/skytune sweep --count 2000 --out "$out/stability.md" >/dev/null
 
 echo "soak: 1000 frames of random changes, sky reloads (good and broken) and shader rebuilds"

@@ -14,6 +14,7 @@ use skytune::files::hot_reload::{LiveSky, ReloadEvent, SkySpec};
 use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions};
 use skytune::sky::resolved::SkyModelKind;
 use skytune::sky::{procedural, FrameInput, Sky, Tier};
+use skytune::support::shard::{self, Shard};
 
 fn main() {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("info,wgpu_core=warn,wgpu_hal=warn,naga=warn")).init();
@@ -53,12 +54,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Frame(args)), .. })) => bench_frame::run(&args),
         Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Models(args)), .. })) => bench_models::run(&args),
+        Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Reference(args)), .. })) => cli::bench_reference::run(&args),
         Some(Command::Bench(cmd)) => bench_passes::run(&cmd.args),
         Some(Command::Radiance(args)) => radiance(&args),
         Some(Command::Compare(args)) => compare(&args),
         Some(Command::Soak(args)) => soak(&args),
         Some(Command::Sweep(args)) => stability_report::run(&args),
         Some(Command::Bake(args)) => bake(&args),
+        Some(Command::Merge(args)) => merge(&args),
     }
 }
 
@@ -83,32 +86,56 @@ fn new_sky_folder(dir: &Path, palette: &procedural::Palette, seed: u64, force: b
     result.map(|_| dir.join("sky.toml"))
 }
 
-/// `skytune bake`: bakes a physical model into NeL bitmaps and writes a sky folder.
+/// `skytune bake`: bakes a physical model into NeL bitmaps and writes a sky folder per sky.
 fn bake(args: &cli::BakeArgs) -> anyhow::Result<()> {
     use skytune::measure::model_points::Method;
-    let sky = spec_for(args.sky.as_deref(), None)?.load().map_err(|e| anyhow!("{e}"))?;
-    let m = &sky.model;
-    let method = match args.model {
-        cli::BakeModel::Single => Method::Single(m.single),
-        cli::BakeModel::Lut => Method::Lut(m.lut),
-        cli::BakeModel::Cells => Method::Cells(m.cell_iterations as usize),
-        cli::BakeModel::Preetham => Method::Preetham,
-        cli::BakeModel::Hosek => Method::Hosek,
-    };
+    let shard = args.shard.unwrap_or(Shard::WHOLE);
+    // (sky, its output folder): one sky bakes into --out, several into --out/NAME.
+    let mut jobs: Vec<(Option<&Path>, std::path::PathBuf)> = Vec::new();
+    if args.skies.len() <= 1 {
+        jobs.push((args.skies.first().map(|p| p.as_path()), args.out.clone()));
+    } else {
+        for p in &args.skies {
+            let folder = if p.is_dir() { p.as_path() } else { p.parent().unwrap_or(Path::new(".")) };
+            let name = folder.file_name().map_or_else(|| "sky".into(), |n| n.to_string_lossy().into_owned());
+            let out = args.out.join(&name);
+            if let Some((other, _)) = jobs.iter().find(|(_, o)| *o == out) {
+                bail!(
+                    "{} and {} would both bake into {}: give skies in folders of different names",
+                    other.map_or("?".into(), |o| o.display().to_string()),
+                    p.display(),
+                    out.display()
+                );
+            }
+            jobs.push((Some(p.as_path()), out));
+        }
+    }
+    let jobs = shard.take(&jobs);
     let ctx = GpuContext::headless(adapter(args.cpu))?;
     let ev = skytune::measure::model_points::Evaluator::new(&ctx)?;
-    let started = std::time::Instant::now();
-    let baked = skytune::measure::bake::bake(&ev, &sky, method, args.rows, args.weathers)?;
-    skytune::measure::bake::write_folder(&args.out, &sky, &baked, method.model_name()).with_context(|| format!("writing {}", args.out.display()))?;
-    println!(
-        "baked {} into {} ({} rows x 24 hours x {} weather steps) in {:.1} s; open it with `skytune {}`",
-        method.model_name(),
-        args.out.display(),
-        args.rows,
-        args.weathers,
-        started.elapsed().as_secs_f64(),
-        args.out.join("sky.toml").display()
-    );
+    for (path, out) in jobs {
+        let sky = spec_for(path, None)?.load().map_err(|e| anyhow!("{e}"))?;
+        let m = &sky.model;
+        let method = match args.model {
+            cli::BakeModel::Single => Method::Single(m.single),
+            cli::BakeModel::Lut => Method::Lut(m.lut),
+            cli::BakeModel::Cells => Method::Cells(m.cell_iterations as usize),
+            cli::BakeModel::Preetham => Method::Preetham,
+            cli::BakeModel::Hosek => Method::Hosek,
+        };
+        let started = std::time::Instant::now();
+        let baked = skytune::measure::bake::bake(&ev, &sky, method, args.rows, args.weathers)?;
+        skytune::measure::bake::write_folder(&out, &sky, &baked, method.model_name()).with_context(|| format!("writing {}", out.display()))?;
+        println!(
+            "baked {} into {} ({} rows x 24 hours x {} weather steps) in {:.1} s; open it with `skytune {}`",
+            method.model_name(),
+            out.display(),
+            args.rows,
+            args.weathers,
+            started.elapsed().as_secs_f64(),
+            out.join("sky.toml").display()
+        );
+    }
     Ok(())
 }
 
@@ -118,16 +145,29 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     anyhow::ensure!(args.max_order >= 1, "--max-order: expected at least 1, found {}", args.max_order);
     anyhow::ensure!((1..=4096).contains(&args.view_steps) && (1..=4096).contains(&args.sun_steps), "--view-steps and --sun-steps: expected 1..=4096");
     let atm = Atmosphere::default();
-    let list = cases::read_cases(&args.cases, atm.thickness_km())?;
+    let all = cases::read_cases(&args.cases, atm.thickness_km())?;
+    let shard = args.shard.unwrap_or(Shard::WHOLE);
+    let list = shard.take(&all);
+    // Everything a shard's rows depend on: its arguments but where it writes, and its cases.
+    let inputs = {
+        let mut a = args.clone();
+        (a.out, a.shard) = (Default::default(), None);
+        shard::inputs_key(&[format!("{a:?}").as_bytes(), &std::fs::read(&args.cases).unwrap_or_default()])
+    };
+    if !shard.is_whole() && std::fs::read_to_string(&args.out).is_ok_and(|t| shard.is_complete(&t, all.len(), inputs)) {
+        println!("{}: shard {shard} is complete already (the same inputs); skipped", args.out.display());
+        return Ok(());
+    }
     let started = std::time::Instant::now();
     let units =
         "sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); default atmosphere (Hillaire 2020); sun disc and ground surface excluded";
-    // The reference's standard errors, written beside its radiance.
-    let mut std_err = None;
+    // The reference's standard errors and paths, written beside its radiance.
+    let mut estimates = None;
     let (out, units, comment) = match args.model {
         cli::RadianceModel::Reference => {
-            let (out, errors, comment) = reference_radiance(args, atm, &list);
-            std_err = Some(errors);
+            let (e, comment) = reference_radiance(args, atm, &list)?;
+            let out = e.iter().map(|e| e.all).collect();
+            estimates = Some(e);
             (out, units, comment)
         }
         cli::RadianceModel::Single => {
@@ -213,47 +253,70 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
         }
     };
     let name = clap::ValueEnum::to_possible_value(&args.model).map_or_else(String::new, |v| v.get_name().to_string());
-    let comment = format!("skytune radiance --model {name}: {units}\n{comment}");
-    match &std_err {
-        Some(errors) => cases::write_radiance_with_errors(&args.out, &comment, &list, &out, errors)?,
+    let mut comment = format!("skytune radiance --model {name}: {units}\n{comment}");
+    if !shard.is_whole() {
+        comment = format!("{}\n{comment}", shard.table_line(all.len(), inputs).trim_start_matches("# "));
+    }
+    match &estimates {
+        Some(e) => cases::write_reference(&args.out, &comment, &list, e)?,
         None => cases::write_radiance(&args.out, &comment, &list, &out)?,
     }
     println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());
     Ok(())
 }
 
-/// The reference's radiance for every case and its standard error, on every core; with a line
-/// saying how it was computed.
-fn reference_radiance(args: &cli::RadianceArgs, atm: skytune::atmosphere::Atmosphere, list: &[skytune::atmosphere::reference::Case]) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, String) {
-    use skytune::atmosphere::reference::{Estimate, Reference, ReferenceSettings};
-    let settings = ReferenceSettings { max_order: args.max_order, paths: args.paths, seed: args.seed, ..Default::default() };
+/// The reference's estimate for every case, on every core; with a line saying how it was
+/// computed.
+fn reference_radiance(
+    args: &cli::RadianceArgs,
+    atm: skytune::atmosphere::Atmosphere,
+    list: &[skytune::atmosphere::reference::Case],
+) -> anyhow::Result<(Vec<skytune::atmosphere::reference::Estimate>, String)> {
+    use skytune::atmosphere::reference::{estimate_many, Reference, ReferenceSettings};
+    let settings = ReferenceSettings { max_order: args.max_order, paths: args.paths, seed: args.seed, target_rel_se: args.target_se, ..Default::default() };
     let model = Reference::new(atm, settings);
     let bar = skytune::support::progress::Reporter::new(list.len() as u64, "radiance");
-    let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).min(list.len().max(1));
-    // Cases taken one at a time from a shared counter: their costs differ by an order of
-    // magnitude (twilight, long horizontal rays), so fixed chunks would leave cores idle.
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let results = std::sync::Mutex::new(vec![Estimate { single: [0.0; 3], all: [0.0; 3], std_err: [0.0; 3] }; list.len()]);
-    std::thread::scope(|scope| {
-        for _ in 0..workers {
-            let (model, bar, next, results) = (&model, &bar, &next, &results);
-            scope.spawn(move || loop {
-                let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let Some(c) = list.get(k) else { break };
-                let e = model.estimate(c);
-                results.lock().unwrap_or_else(std::sync::PoisonError::into_inner)[k] = e;
-                bar.inc(1);
-            });
-        }
-    });
-    let estimates = results.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let jobs: Vec<_> = list.iter().map(|c| (&model, *c)).collect();
+    let estimates = estimate_many(&jobs, &|done, _| {
+        bar.set_position(done as u64);
+        Ok(())
+    })?;
     bar.finish();
     let worst = estimates.iter().flat_map(|e| (0..3).map(move |c| e.std_err[c] / e.all[c].max(1e-30))).fold(0.0, f64::max);
-    let comment = format!(
-        "model reference: max order {}, {} paths per case, seed {}; largest relative standard error of a value {:.2e}",
-        settings.max_order, settings.paths, settings.seed, worst
-    );
-    (estimates.iter().map(|e| e.all).collect(), estimates.iter().map(|e| e.std_err).collect(), comment)
+    let paths: u64 = estimates.iter().map(|e| u64::from(e.paths)).sum();
+    let capped = settings.target_rel_se.map_or(0, |t| estimates.iter().filter(|e| e.paths >= settings.paths && (0..3).any(|c| e.std_err[c] > t * e.all[c])).count());
+    // The worst noise is printed, not written: a shard's would differ from the whole run's.
+    println!("largest relative standard error of a value: {worst:.2e}; {paths} paths in all");
+    if capped > 0 {
+        println!("{capped} of {} cases reached the cap of {} paths above the target standard error (their se_ columns say how far)", list.len(), settings.paths);
+    }
+    let precision = match settings.target_rel_se {
+        Some(t) => format!(
+            "paths until a relative standard error of {t} per channel (at most {}, in batches of {}, at least {})",
+            settings.paths,
+            skytune::atmosphere::reference::BATCH_PATHS,
+            skytune::atmosphere::reference::MIN_TARGET_PATHS
+        ),
+        None => format!("{} paths per case", settings.paths),
+    };
+    Ok((estimates, format!("model reference: max order {}, {precision}, seed {}", settings.max_order, settings.seed)))
+}
+
+/// `skytune merge`: the shards' outputs combined into what the unsharded run writes.
+fn merge(args: &cli::MergeArgs) -> anyhow::Result<()> {
+    let parts: Vec<(String, String)> =
+        args.parts.iter().map(|p| Ok((p.display().to_string(), std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?))).collect::<anyhow::Result<_>>()?;
+    let first = parts.first().context("merge: name the shards' files")?;
+    let merged = if shard::is_shard_table(&first.1) {
+        shard::merge_tables(&parts)?
+    } else if stability_report::is_sweep_part(&first.1) {
+        return stability_report::merge(&parts, &args.out);
+    } else {
+        bail!("{}: neither a shard's table (`radiance --shard`, `bench models --shard`) nor a shard of `sweep --shard`", first.0);
+    };
+    skytune::support::safe_write::write_atomic(&args.out, merged.as_bytes()).with_context(|| format!("writing {}", args.out.display()))?;
+    println!("wrote {} from {} shards", args.out.display(), parts.len());
+    Ok(())
 }
 
 /// The sky a command names (or the built-in one).

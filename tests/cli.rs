@@ -151,9 +151,10 @@ fn radiance_answers_every_case_and_locates_bad_rows() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(&out).unwrap();
     let rows: Vec<Vec<f64>> = text.lines().filter(|l| !l.starts_with('#')).skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
-    // The reference reports its standard errors beside its radiance: none for single scattering.
-    assert!(text.lines().any(|l| l == "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg,r,g,b,se_r,se_g,se_b"), "{text}");
-    assert!(rows.iter().all(|r| r.len() == 11 && r[8..] == [0.0; 3]), "{rows:?}");
+    // The reference reports its standard errors and paths beside its radiance: none for single
+    // scattering.
+    assert!(text.lines().any(|l| l == "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg,r,g,b,se_r,se_g,se_b,paths"), "{text}");
+    assert!(rows.iter().all(|r| r.len() == 12 && r[8..] == [0.0; 4]), "{rows:?}");
     assert!(text.starts_with("# ") && text.contains("sr^-1"), "the units are stated: {text}");
     assert_eq!(rows.len(), 3);
     // The input columns are repeated; a day sky is blue, the night sky is black.

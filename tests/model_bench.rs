@@ -138,8 +138,21 @@ fn pareto_front_has_no_dominated_point() {
         psnr_db: 0.0,
         de_mean: de,
         de_p95: de,
-        gpu_frame_ms: ms,
+        rmse_day: 0.0,
+        rmse_low_sun: 0.0,
+        rmse_twilight: 0.0,
+        noise_day: 0.0,
+        noise_low_sun: 0.0,
+        noise_twilight: 0.0,
+        de_day: de,
+        de_low_sun: de,
+        de_twilight: de,
+        model_gpu_ms_moving: 0.0,
+        model_gpu_ms_still: 0.0,
         cpu_ms: 0.0,
+        frame_ms_moving: ms,
+        frame_ms_still: ms,
+        floor_ms: 1.0,
         build_ms: 0.0,
         fit_turbidity: None,
         fit_scale: None,
@@ -175,19 +188,32 @@ fn quick_benchmark_writes_the_csv_and_both_charts() {
     let rows = model_points::rows_from_csv(&csv).expect("parses");
     let quick: Vec<String> = model_points::points().into_iter().filter(|p| p.quick).map(|p| p.id).collect();
     assert_eq!(rows.iter().map(|r| r.id.clone()).collect::<Vec<_>>(), quick);
-    assert!(rows.iter().all(|r| r.de_mean.is_finite() && r.gpu_frame_ms > 0.0), "{rows:?}");
+    assert!(rows.iter().all(|r| r.de_mean.is_finite() && r.frame_ms_moving > 0.0 && r.floor_ms > 0.0 && r.floor_ratio_still() > 1.0), "{rows:?}");
+    // The model's own cost: a sky-view map recomputed when the sun moves, none for the bitmaps.
+    let row = |id: &str| rows.iter().find(|r| r.id == id).unwrap_or_else(|| panic!("no {id}"));
+    assert!(row("lut-default").model_gpu_ms_moving > 0.0 && row("lut-default").model_gpu_ms_moving > row("lut-default").model_gpu_ms_still, "{:?}", row("lut-default"));
+    assert!(rows.iter().filter(|r| r.model == "baked").all(|r| r.model_gpu_ms_moving == 0.0), "{rows:?}");
+    // Every regime has an error and the reference's noise as its error bar.
+    for r in &rows {
+        for g in dome::Regime::ALL {
+            let (e, n) = r.regime(g);
+            assert!(e.is_finite() && e > 0.0 && n > 0.0 && n < 0.5, "{} {g:?}: {e} +- {n}", r.id);
+        }
+    }
     assert!(rows.iter().any(|r| r.pareto));
     // lut (multiple scattering) is closer to the reference than single scattering.
     let de = |id: &str| rows.iter().find(|r| r.id == id).map_or(f64::NAN, |r| r.de_mean);
     assert!(de("lut-default") < de("single-erf-32"));
-    for stem in ["models-cost", "models-by-sun"] {
+    for (stem, size) in [("models-cost", (1800, 720)), ("models-by-sun", (1100, 700))] {
         let svg = std::fs::read_to_string(out.path().join(format!("{stem}.svg"))).expect("svg");
         assert!(svg.contains("<svg") && svg.contains("lut-default"), "{stem}.svg has the points' labels");
         let png = image::open(out.path().join(format!("{stem}.png"))).expect("png").to_rgb8();
-        assert_eq!(png.dimensions(), (1100, 700));
+        assert_eq!(png.dimensions(), size);
         assert!(png.pixels().any(|p| p.0 != [255, 255, 255]), "{stem}.png is not blank");
     }
     let by_sun = std::fs::read_to_string(out.path().join("models-by-sun.csv")).expect("by sun");
     assert_eq!(by_sun.lines().count(), 1 + quick.len() * dome::QUICK_SUN_ELEVATIONS_DEG.len());
-    assert!(std::fs::read_to_string(out.path().join("models.md")).expect("md").contains("dE2000"));
+    let md = std::fs::read_to_string(out.path().join("models.md")).expect("md");
+    assert!(md.contains("dE2000") && md.contains("model GPU ms, sun moving / still") && md.contains("frame / floor"), "{md}");
+    assert!(md.contains("## Accuracy by regime") && md.contains("twilight (sun 0 deg and below) rel. RMSE"), "{md}");
 }

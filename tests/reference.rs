@@ -184,3 +184,51 @@ fn twilight_orders_two_and_up_agree_with_a_long_run_within_their_standard_error(
         }
     }
 }
+
+#[test]
+fn a_target_standard_error_gives_the_same_bytes_on_one_and_two_threads_and_stops_on_fixed_batches() {
+    use skytune::atmosphere::reference::{BATCH_PATHS, MIN_TARGET_PATHS};
+    let atm = Atmosphere::default();
+    let target = Reference::new(atm, ReferenceSettings { paths: 2048, target_rel_se: Some(0.02), ..Default::default() });
+    // A day case (stops early) and a twilight one (draws more, or all of the cap).
+    for c in [case(30.0, 20.0, 90.0), Case { camera_km: 0.2, albedo: 0.0, sun_elev_deg: -3.0, view_elev_deg: 0.0, rel_azimuth_deg: 180.0 }] {
+        let one = target.estimate_on(&c, 1);
+        let two = target.estimate_on(&c, 2);
+        let three = target.estimate_on(&c, 3);
+        assert_eq!(one, two, "{c:?}: 1 and 2 threads");
+        assert_eq!(one, three, "{c:?}: 1 and 3 threads");
+        assert!(one.paths >= MIN_TARGET_PATHS && one.paths <= 2048 && (one.paths.is_multiple_of(BATCH_PATHS) || one.paths == 2048), "{c:?}: {} paths", one.paths);
+        let met = (0..3).all(|ch| one.std_err[ch] <= 0.02 * one.all[ch]);
+        // Either the target is met, or the whole cap was drawn (and the error says how far).
+        assert!(met || one.paths == 2048, "{c:?}: stopped at {} paths above the target: {one:?}", one.paths);
+        if one.paths > MIN_TARGET_PATHS {
+            // It stopped at the first batch that met the target: one batch fewer did not.
+            let fewer = Reference::new(atm, ReferenceSettings { paths: one.paths - BATCH_PATHS, target_rel_se: None, ..target.settings }).estimate(&c);
+            assert!((0..3).any(|ch| fewer.std_err[ch] > 0.02 * fewer.all[ch]), "{c:?}: the target was met a batch earlier");
+        }
+        // The same paths without a target give the same numbers: batches change no sum.
+        let fixed = Reference::new(atm, ReferenceSettings { paths: one.paths, target_rel_se: None, ..target.settings }).estimate(&c);
+        assert_eq!((fixed.all, fixed.std_err, fixed.paths), (one.all, one.std_err, one.paths), "{c:?}");
+    }
+    // A day case meets 2% long before the cap (blue is about 1.4% at 2048 paths).
+    let day = target.estimate(&case(30.0, 20.0, 90.0));
+    assert!(day.paths < 2048, "a day case used all {} paths", day.paths);
+}
+
+#[test]
+fn a_twilight_case_reaches_its_target_or_reports_the_cap_and_agrees_with_the_long_run() {
+    // The committed long run's twilight cases, to a 3% target with a cap of 4096 paths: every
+    // value within 4 combined standard errors of the long run, and either at the target or at
+    // the cap.
+    let atm = Atmosphere::default();
+    let r = Reference::new(atm, ReferenceSettings { paths: 4096, target_rel_se: Some(0.03), ..Default::default() });
+    for (c, long, long_se) in twilight_long_run().into_iter().step_by(3) {
+        let a = r.estimate(&c);
+        let met = (0..3).all(|ch| a.std_err[ch] <= 0.03 * a.all[ch]);
+        assert!(met || a.paths == 4096, "{c:?}: {a:?}");
+        for ch in 0..3 {
+            let sigma = (a.std_err[ch].powi(2) + long_se[ch].powi(2)).sqrt();
+            assert!((a.all[ch] - long[ch]).abs() < 4.0 * sigma, "{c:?} channel {ch}: {:.4e} +- {:.1e} against {:.4e} +- {:.1e}", a.all[ch], a.std_err[ch], long[ch], long_se[ch]);
+        }
+    }
+}

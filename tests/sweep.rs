@@ -12,7 +12,7 @@ fn shipped_models_have_zero_counters_and_raw_fits_fail() {
     let ev = Evaluator::new(&ctx).expect("probe");
     for model in SweptModel::ALL {
         let count = 10_000;
-        let c = stability::sweep(&ev, model, count, 42, &mut |_| {}).expect("swept");
+        let c = stability::sweep(&ev, model, count, 42, skytune::support::shard::Shard::WHOLE, &mut |_| {}).expect("swept");
         assert_eq!(c.evaluated, count as u64);
         if model.shipped() {
             assert_eq!(c.failures(), 0, "{}: {:?}", model.name(), c);

@@ -48,6 +48,8 @@ struct RadianceErrorRow {
     se_r: f64,
     se_g: f64,
     se_b: f64,
+    /// Monte Carlo paths the case drew (fewer than the cap where a target was met).
+    paths: u32,
 }
 
 impl RadianceRow {
@@ -66,9 +68,9 @@ impl RadianceRow {
     }
 
     /// The same row with the standard errors `se` of its radiance.
-    fn with_errors(self, se: Rgb) -> RadianceErrorRow {
+    fn with_errors(self, se: Rgb, paths: u32) -> RadianceErrorRow {
         let Self { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b } = self;
-        RadianceErrorRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b, se_r: se[0], se_g: se[1], se_b: se[2] }
+        RadianceErrorRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b, se_r: se[0], se_g: se[1], se_b: se[2], paths }
     }
 }
 
@@ -150,12 +152,14 @@ pub fn write_radiance(path: &Path, comment: &str, cases: &[Case], radiance: &[Rg
     write_radiance_rows(path, comment, cases, radiance, None)
 }
 
-/// As [`write_radiance`], with the standard error of each value in `se_r, se_g, se_b` columns.
-pub fn write_radiance_with_errors(path: &Path, comment: &str, cases: &[Case], radiance: &[Rgb], std_err: &[Rgb]) -> Result<(), CasesError> {
-    write_radiance_rows(path, comment, cases, radiance, Some(std_err))
+/// As [`write_radiance`], with the standard error of each value in `se_r, se_g, se_b` columns
+/// and the paths each case drew in a `paths` column: the reference's estimates.
+pub fn write_reference(path: &Path, comment: &str, cases: &[Case], estimates: &[crate::atmosphere::reference::Estimate]) -> Result<(), CasesError> {
+    let radiance: Vec<Rgb> = estimates.iter().map(|e| e.all).collect();
+    write_radiance_rows(path, comment, cases, &radiance, Some(estimates))
 }
 
-fn write_radiance_rows(path: &Path, comment: &str, cases: &[Case], radiance: &[Rgb], std_err: Option<&[Rgb]>) -> Result<(), CasesError> {
+fn write_radiance_rows(path: &Path, comment: &str, cases: &[Case], radiance: &[Rgb], estimates: Option<&[crate::atmosphere::reference::Estimate]>) -> Result<(), CasesError> {
     let file = path.display().to_string();
     let io = |source| CasesError::Io { file: file.clone(), source };
     let mut text = String::new();
@@ -165,8 +169,8 @@ fn write_radiance_rows(path: &Path, comment: &str, cases: &[Case], radiance: &[R
     let mut writer = csv::Writer::from_writer(Vec::new());
     for (k, (c, l)) in cases.iter().zip(radiance).enumerate() {
         let row = RadianceRow::new(c, *l);
-        let written = match std_err.and_then(|e| e.get(k)) {
-            Some(e) => writer.serialize(row.with_errors(*e)),
+        let written = match estimates.and_then(|e| e.get(k)) {
+            Some(e) => writer.serialize(row.with_errors(e.std_err, e.paths)),
             None => writer.serialize(row),
         };
         written.map_err(|e| io(std::io::Error::other(e.to_string())))?;

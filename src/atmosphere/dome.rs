@@ -7,7 +7,6 @@
 //! Radiance is in sr^-1 per unit of solar irradiance, as everywhere in [`crate::atmosphere`].
 
 use std::f64::consts::PI;
-use std::fmt::Write as _;
 use std::path::Path;
 
 use deltae::{DEMethod, DeltaE, LabValue, XyzValue};
@@ -15,6 +14,7 @@ use deltae::{DEMethod, DeltaE, LabValue, XyzValue};
 use super::reference::{Case, Reference, ReferenceSettings};
 use super::{Atmosphere, Rgb};
 use crate::support::progress::Cancelled;
+use crate::support::shard::Shard;
 
 /// One view direction of the dome and the solid angle it stands for.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -240,8 +240,8 @@ fn sanitize(l: Rgb) -> Rgb {
 /// The reference's radiance over a dome for a set of atmospheres and sun elevations.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReferenceDome {
-    /// Monte Carlo paths per direction.
-    pub paths: u32,
+    /// The reference's settings (paths, target standard error, seed).
+    pub settings: ReferenceSettings,
     /// Dome layout (bands, azimuths) of [`dome_directions`].
     pub dome: (usize, usize),
     /// One entry per (atmosphere, sun elevation): radiance and its standard error per direction.
@@ -259,6 +259,58 @@ pub struct ReferenceSun {
     pub radiance: Vec<Rgb>,
     /// Monte Carlo standard error per direction.
     pub std_err: Vec<Rgb>,
+}
+
+/// The sun's regimes, where models fail differently.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Regime {
+    /// Sun above 10 degrees.
+    Day,
+    /// Sun above 0 and up to 10 degrees.
+    LowSun,
+    /// Sun at 0 degrees and below: the planet's shadow in the sky.
+    Twilight,
+}
+
+impl Regime {
+    /// Every regime, sun highest first.
+    pub const ALL: [Regime; 3] = [Regime::Day, Regime::LowSun, Regime::Twilight];
+
+    /// The regime of a sun elevation.
+    pub fn of(sun_elev_deg: f64) -> Self {
+        if sun_elev_deg > 10.0 {
+            Regime::Day
+        } else if sun_elev_deg > 0.0 {
+            Regime::LowSun
+        } else {
+            Regime::Twilight
+        }
+    }
+
+    /// Name in tables and charts.
+    pub fn name(self) -> &'static str {
+        match self {
+            Regime::Day => "day (sun above 10 deg)",
+            Regime::LowSun => "low sun (0 to 10 deg)",
+            Regime::Twilight => "twilight (sun 0 deg and below)",
+        }
+    }
+}
+
+impl ReferenceSun {
+    /// The reference's own noise as a relative RMSE over the dome (solid-angle weighted, every
+    /// channel): how far its radiance may be from the truth, one standard error. A model's
+    /// relative RMSE against it is within about this of its RMSE against the truth.
+    pub fn relative_noise(&self, dirs: &[DomeDir]) -> f64 {
+        let (mut num, mut den) = (0.0, 0.0);
+        for ((d, l), e) in dirs.iter().zip(&self.radiance).zip(&self.std_err) {
+            for c in 0..3 {
+                num += d.weight_sr * e[c] * e[c];
+                den += d.weight_sr * l[c] * l[c];
+            }
+        }
+        (num / den.max(1e-300)).sqrt()
+    }
 }
 
 /// Why a cached reference dome could not be used.
@@ -297,75 +349,123 @@ pub fn compute_domes(
     atmospheres: &[Atmosphere],
     suns_deg: &[f64],
     dome: (usize, usize),
-    paths: u32,
-    seed: u64,
+    settings: ReferenceSettings,
     progress: &(dyn Fn(usize, usize) -> Result<(), Cancelled> + Sync),
 ) -> Result<Vec<DomeEstimate>, Cancelled> {
     let dirs = dome_directions(dome.0, dome.1);
-    let mut jobs: Vec<(usize, f64, Case)> = Vec::new();
-    for k in 0..atmospheres.len() {
-        for &s in suns_deg {
-            jobs.extend(cases(s, &dirs).into_iter().map(|c| (k, s, c)));
-        }
-    }
-    let references: Vec<Reference> = atmospheres.iter().map(|a| Reference::new(*a, ReferenceSettings { paths, seed, ..Default::default() })).collect();
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let results = std::sync::Mutex::new(vec![None; jobs.len()]);
-    let stopped = std::sync::atomic::AtomicBool::new(false);
-    let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
-    std::thread::scope(|scope| {
-        for _ in 0..workers {
-            scope.spawn(|| loop {
-                if stopped.load(std::sync::atomic::Ordering::Relaxed) {
-                    break;
-                }
-                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let Some((k, _, case)) = jobs.get(i) else { break };
-                let e = references[*k].estimate(case);
-                results.lock().unwrap_or_else(|p| p.into_inner())[i] = Some(e);
-                if progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, jobs.len()).is_err() {
-                    stopped.store(true, std::sync::atomic::Ordering::Relaxed);
-                }
-            });
-        }
-    });
-    if stopped.into_inner() {
-        return Err(Cancelled);
-    }
-    let results = results.into_inner().unwrap_or_else(|p| p.into_inner());
+    let jobs = dome_jobs(atmospheres.len(), suns_deg, &dirs);
+    let results = estimate_jobs(atmospheres, &jobs, settings, progress)?;
     Ok(jobs
         .chunks(dirs.len().max(1))
         .zip(results.chunks(dirs.len().max(1)))
-        .map(|(chunk, estimates)| {
-            let estimates: Vec<_> = estimates.iter().flatten().collect();
-            (chunk[0].0, chunk[0].1, estimates.iter().map(|e| e.all).collect(), estimates.iter().map(|e| e.std_err).collect())
-        })
+        .map(|(chunk, estimates)| (chunk[0].0, chunk[0].1, estimates.iter().map(|e| e.all).collect(), estimates.iter().map(|e| e.std_err).collect()))
         .collect())
+}
+
+/// Every (atmosphere index, sun elevation, case) of a set of domes, dome after dome.
+fn dome_jobs(atmospheres: usize, suns_deg: &[f64], dirs: &[DomeDir]) -> Vec<(usize, f64, Case)> {
+    let mut jobs = Vec::new();
+    for k in 0..atmospheres {
+        for &s in suns_deg {
+            jobs.extend(cases(s, dirs).into_iter().map(|c| (k, s, c)));
+        }
+    }
+    jobs
+}
+
+/// The reference's estimate of every job, on every core.
+fn estimate_jobs(
+    atmospheres: &[Atmosphere],
+    jobs: &[(usize, f64, Case)],
+    settings: ReferenceSettings,
+    progress: &(dyn Fn(usize, usize) -> Result<(), Cancelled> + Sync),
+) -> Result<Vec<crate::atmosphere::reference::Estimate>, Cancelled> {
+    let references: Vec<Reference> = atmospheres.iter().map(|a| Reference::new(*a, settings)).collect();
+    let jobs: Vec<(&Reference, Case)> = jobs.iter().map(|(k, _, c)| (&references[*k], *c)).collect();
+    crate::atmosphere::reference::estimate_many(&jobs, progress)
+}
+
+/// One row of the dataset's CSV.
+fn dome_row(haze: Haze, sun_elev_deg: f64, d: &DomeDir, l: Rgb, e: Rgb) -> String {
+    format!("{},{},{:.4},{:.4},{:.6e},{:.6e},{:.6e},{:.3e},{:.3e},{:.3e}\n", haze.name(), sun_elev_deg, d.elev_deg, d.rel_az_deg, l[0], l[1], l[2], e[0], e[1], e[2])
 }
 
 /// The benchmark's reference dataset as committed (assets/reference_dome.csv, embedded).
 pub fn committed_reference() -> Result<ReferenceDome, ReferenceDomeError> {
-    ReferenceDome::parse(include_str!("../../assets/reference_dome.csv"), "assets/reference_dome.csv", COMMITTED_PATHS, BENCH_DOME)
+    ReferenceDome::parse(include_str!("../../assets/reference_dome.csv"), "assets/reference_dome.csv", committed_settings(), BENCH_DOME)
 }
 
-/// Monte Carlo paths per direction of the committed reference dataset.
-pub const COMMITTED_PATHS: u32 = 1024;
+/// Monte Carlo paths per direction of the committed reference dataset (the cap, with a target).
+pub const COMMITTED_PATHS: u32 = 512;
+
+/// The reference's settings of the committed dataset.
+pub fn committed_settings() -> ReferenceSettings {
+    ReferenceSettings { paths: COMMITTED_PATHS, seed: REFERENCE_SEED, ..Default::default() }
+}
 
 /// Seed of the benchmark's reference (fixed: the dataset is reproducible).
 pub const REFERENCE_SEED: u64 = 0x5eed;
 
 impl ReferenceDome {
     /// Header line naming everything the values depend on; a cache with another header is stale.
-    pub fn header(paths: u32, dome: (usize, usize)) -> String {
+    pub fn header(settings: ReferenceSettings, dome: (usize, usize)) -> String {
         let atmospheres: Vec<String> = Haze::ALL.iter().map(|h| format!("{}={:?}", h.name(), h.atmosphere())).collect();
         format!(
-            "skytune reference dome v2 (sun fading below each point's horizon): paths={paths} seed={REFERENCE_SEED} dome={}x{} camera_km={CAMERA_KM} albedo={ALBEDO} settings={:?} atmospheres=[{}]",
+            "skytune reference dome v3 (orders 2 and up: sunlit strata per segment, spectral MIS per path, phase-function directions): dome={}x{} camera_km={CAMERA_KM} albedo={ALBEDO} settings={settings:?} atmospheres=[{}]",
             dome.0,
             dome.1,
-            ReferenceSettings { paths, seed: REFERENCE_SEED, ..Default::default() },
             atmospheres.join("; ")
         )
+    }
+
+    /// The lines before the rows: the header and the column names.
+    fn head(settings: ReferenceSettings, dome: (usize, usize)) -> String {
+        format!("# {}\nhaze,sun_elev_deg,view_elev_deg,rel_azimuth_deg,r,g,b,r_err,g_err,b_err\n", Self::header(settings, dome))
+    }
+
+    /// The key of a shard's inputs ([`Shard::table_line`]): the header names them all.
+    fn shard_inputs(hazes: &[Haze], suns_deg: &[f64], dome: (usize, usize), settings: ReferenceSettings) -> u64 {
+        let names: Vec<&str> = hazes.iter().map(|h| h.name()).collect();
+        crate::support::shard::inputs_key(&[Self::header(settings, dome).as_bytes(), names.join(",").as_bytes(), format!("{suns_deg:?}").as_bytes()])
+    }
+
+    /// Whether `text` is the complete output of [`Self::shard_table`] with these arguments.
+    pub fn is_complete_shard(text: &str, hazes: &[Haze], suns_deg: &[f64], dome: (usize, usize), settings: ReferenceSettings, shard: Shard) -> bool {
+        let total = hazes.len() * suns_deg.len() * dome.0 * dome.1;
+        shard.is_complete(text, total, Self::shard_inputs(hazes, suns_deg, dome, settings))
+    }
+
+    /// How hard the reference worked, for reports: "512 Monte Carlo paths per direction", or
+    /// with a target, the target and the cap.
+    pub fn describe_precision(&self) -> String {
+        match self.settings.target_rel_se {
+            Some(t) => format!("Monte Carlo paths per direction until a relative standard error of {t} per channel (at most {})", self.settings.paths),
+            None => format!("{} Monte Carlo paths per direction", self.settings.paths),
+        }
+    }
+
+    /// One shard's rows of what [`Self::compute`] and [`Self::save`] write, as a shard's table
+    /// (`skytune merge` combines the shards into the dataset, byte for byte).
+    pub fn shard_table(
+        hazes: &[Haze],
+        suns_deg: &[f64],
+        dome: (usize, usize),
+        settings: ReferenceSettings,
+        shard: Shard,
+        progress: &(dyn Fn(usize, usize) -> Result<(), Cancelled> + Sync),
+    ) -> Result<String, Cancelled> {
+        let atmospheres: Vec<Atmosphere> = hazes.iter().map(|h| h.atmosphere()).collect();
+        let dirs = dome_directions(dome.0, dome.1);
+        let all = dome_jobs(atmospheres.len(), suns_deg, &dirs);
+        let index: Vec<usize> = (0..all.len()).collect();
+        let mine = shard.take(&index);
+        let jobs: Vec<(usize, f64, Case)> = mine.iter().map(|i| all[*i]).collect();
+        let estimates = estimate_jobs(&atmospheres, &jobs, settings, progress)?;
+        let mut text = format!("{}\n{}", shard.table_line(all.len(), Self::shard_inputs(hazes, suns_deg, dome, settings)), Self::head(settings, dome));
+        for ((i, (k, sun, _)), e) in mine.iter().zip(&jobs).zip(&estimates) {
+            text.push_str(&dome_row(hazes[*k], *sun, &dirs[i % dirs.len()], e.all, e.std_err));
+        }
+        Ok(text)
     }
 
     /// Computes the reference for every (haze, sun) pair on every core; `progress(done, total)`
@@ -374,13 +474,13 @@ impl ReferenceDome {
         hazes: &[Haze],
         suns_deg: &[f64],
         dome: (usize, usize),
-        paths: u32,
+        settings: ReferenceSettings,
         progress: &(dyn Fn(usize, usize) -> Result<(), Cancelled> + Sync),
     ) -> Result<Self, Cancelled> {
         let atmospheres: Vec<Atmosphere> = hazes.iter().map(|h| h.atmosphere()).collect();
-        let domes = compute_domes(&atmospheres, suns_deg, dome, paths, REFERENCE_SEED, progress)?;
+        let domes = compute_domes(&atmospheres, suns_deg, dome, settings, progress)?;
         let suns = domes.into_iter().map(|(k, sun_elev_deg, radiance, std_err)| ReferenceSun { haze: hazes[k], sun_elev_deg, radiance, std_err }).collect();
-        Ok(Self { paths, dome, suns })
+        Ok(Self { settings, dome, suns })
     }
 
     /// The dome for an atmosphere and sun elevation, if computed.
@@ -390,41 +490,28 @@ impl ReferenceDome {
 
     /// Writes the dataset as CSV with its header.
     pub fn save(&self, path: &Path) -> Result<(), ReferenceDomeError> {
-        let mut text = format!("# {}\nhaze,sun_elev_deg,view_elev_deg,rel_azimuth_deg,r,g,b,r_err,g_err,b_err\n", Self::header(self.paths, self.dome));
+        let mut text = Self::head(self.settings, self.dome);
         let dirs = dome_directions(self.dome.0, self.dome.1);
         for s in &self.suns {
             for ((d, l), e) in dirs.iter().zip(&s.radiance).zip(&s.std_err) {
-                let _ = writeln!(
-                    text,
-                    "{},{},{:.4},{:.4},{:.6e},{:.6e},{:.6e},{:.3e},{:.3e},{:.3e}",
-                    s.haze.name(),
-                    s.sun_elev_deg,
-                    d.elev_deg,
-                    d.rel_az_deg,
-                    l[0],
-                    l[1],
-                    l[2],
-                    e[0],
-                    e[1],
-                    e[2]
-                );
+                text.push_str(&dome_row(s.haze, s.sun_elev_deg, d, *l, *e));
             }
         }
         crate::support::safe_write::write_atomic(path, text.as_bytes()).map_err(|e| ReferenceDomeError::Io { file: path.display().to_string(), source: e.source })
     }
 
     /// Reads a dataset written by [`Self::save`] for these settings.
-    pub fn load(path: &Path, paths: u32, dome: (usize, usize)) -> Result<Self, ReferenceDomeError> {
+    pub fn load(path: &Path, settings: ReferenceSettings, dome: (usize, usize)) -> Result<Self, ReferenceDomeError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|source| ReferenceDomeError::Io { file: file.clone(), source })?;
-        Self::parse(&text, &file, paths, dome)
+        Self::parse(&text, &file, settings, dome)
     }
 
     /// Parses [`Self::save`]'s format.
-    pub fn parse(text: &str, file: &str, paths: u32, dome: (usize, usize)) -> Result<Self, ReferenceDomeError> {
+    pub fn parse(text: &str, file: &str, settings: ReferenceSettings, dome: (usize, usize)) -> Result<Self, ReferenceDomeError> {
         let bad = |line: usize, message: String| ReferenceDomeError::Format { file: file.into(), line, message };
         let mut lines = text.lines().enumerate();
-        let expected = format!("# {}", Self::header(paths, dome));
+        let expected = format!("# {}", Self::header(settings, dome));
         match lines.next() {
             Some((_, h)) if h == expected => {}
             _ => return Err(bad(1, "written for other settings or atmospheres (header differs); recompute it".into())),
@@ -453,7 +540,7 @@ impl ReferenceDome {
         if let Some(s) = suns.iter().find(|s| s.radiance.len() != n) {
             return Err(bad(0, format!("{} at sun {} has {} directions, expected {n}", s.haze.name(), s.sun_elev_deg, s.radiance.len())));
         }
-        Ok(Self { paths, dome, suns })
+        Ok(Self { settings, dome, suns })
     }
 }
 
@@ -465,7 +552,7 @@ mod tests {
     fn a_cancelled_dome_stops_early_and_returns_nothing_partial() {
         let atm = [Atmosphere::default()];
         let calls = std::sync::atomic::AtomicUsize::new(0);
-        let out = compute_domes(&atm, &[-6.0, 30.0], BENCH_DOME, 8, REFERENCE_SEED, &|done, _| {
+        let out = compute_domes(&atm, &[-6.0, 30.0], BENCH_DOME, ReferenceSettings { paths: 8, ..Default::default() }, &|done, _| {
             calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             if done >= 3 {
                 Err(Cancelled)
@@ -478,7 +565,7 @@ mod tests {
         // Each worker finishes the direction it holds, then stops.
         let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
         assert!(calls.into_inner() <= 3 + workers, "stopped early, of {directions}");
-        let whole = compute_domes(&atm, &[30.0], (2, 3), 8, REFERENCE_SEED, &|_, _| Ok(())).expect("not cancelled");
+        let whole = compute_domes(&atm, &[30.0], (2, 3), ReferenceSettings { paths: 8, ..Default::default() }, &|_, _| Ok(())).expect("not cancelled");
         assert_eq!(whole.len(), 1);
         assert_eq!(whole[0].2.len(), dome_directions(2, 3).len());
     }

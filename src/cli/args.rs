@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
+use skytune::support::shard::Shard;
 
 /// Author and debug real-time skies: live preview, headless renders, validation and benchmarks.
 #[derive(Debug, Parser)]
@@ -65,9 +66,23 @@ pub enum Command {
     /// Render the same view twice (two skies, models, tiers or times), print the difference
     /// (FLIP and channel figures) and write A, B and the heat map; exit status 1 above a threshold.
     Compare(CompareArgs),
+    /// Combine the outputs of `--shard K/N` runs (radiance, bench models' reference, sweep) into
+    /// the files one unsharded run writes (docs/batch.md).
+    Merge(MergeArgs),
     /// Render many frames with random changes, sky reloads (good and broken) and shader rebuilds;
     /// fail on memory growth or any unexpected error; write a report.
     Soak(SoakArgs),
+}
+
+/// `merge` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct MergeArgs {
+    /// The file to write: what the unsharded run writes.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Every shard's output, in any order.
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
 }
 
 /// `soak` arguments.
@@ -189,12 +204,22 @@ pub struct RadianceArgs {
     /// Highest order of scattering (1: single scattering).
     #[arg(long, default_value_t = 24)]
     pub max_order: u32,
-    /// Monte Carlo paths per case for orders >= 2 (the reference's noise falls as 1/sqrt).
+    /// Monte Carlo paths per case for orders >= 2 (the reference's noise falls as 1/sqrt); with
+    /// `--target-se`, the most a case may draw.
     #[arg(long, default_value_t = 8192)]
     pub paths: u32,
+    /// Draw paths in fixed batches until every channel's standard error is at most this
+    /// fraction of its radiance (0.005: 0.5%), or `--paths` are drawn; the `paths` column says
+    /// how many each case used.
+    #[arg(long, value_parser = parse_target_se)]
+    pub target_se: Option<f64>,
     /// Seed of the reference's paths.
     #[arg(long, default_value_t = 0x5eed)]
     pub seed: u64,
+    /// Only every N-th case from the K-th (K/N, or `auto` from a Slurm job array or a
+    /// Kubernetes indexed Job: docs/batch.md); `skytune merge` combines the shards' files.
+    #[arg(long)]
+    pub shard: Option<Shard>,
     /// `single` and `lut`: samples along the view ray.
     #[arg(long, default_value_t = 32)]
     pub view_steps: u32,
@@ -402,6 +427,26 @@ pub enum BenchWhat {
     /// Every sky model at several quality settings: error against the reference over the dome
     /// (sun -10 to 90 degrees, three atmospheres) against GPU cost; CSV, Markdown and charts.
     Models(ModelBenchArgs),
+    /// How the reference converges: relative error against paths per regime, reported and
+    /// measured against a longer run (docs/reference-convergence.md and its chart).
+    Reference(ReferenceBenchArgs),
+}
+
+/// `bench reference` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct ReferenceBenchArgs {
+    /// Path counts to measure, comma-separated.
+    #[arg(long, default_value = "256,1024,4096")]
+    pub paths: String,
+    /// Paths of the long run every count is compared with (another seed).
+    #[arg(long, default_value_t = 16384)]
+    pub long: u32,
+    /// Seed of the measured runs.
+    #[arg(long, default_value_t = 0x5eed)]
+    pub seed: u64,
+    /// Folder of reference-convergence.md, .svg and .png.
+    #[arg(long, default_value = "docs")]
+    pub out: PathBuf,
 }
 
 /// The models `bake` can bake from.
@@ -422,8 +467,9 @@ pub enum BakeModel {
 /// `bake` arguments.
 #[derive(Debug, Args, Clone)]
 pub struct BakeArgs {
-    /// The sky whose sun path and atmosphere are baked (default: the built-in sky).
-    pub sky: Option<PathBuf>,
+    /// The skies whose sun paths and atmospheres are baked (default: the built-in sky). With
+    /// more than one, `--out` holds one folder per sky, named after the sky's folder.
+    pub skies: Vec<PathBuf>,
     /// The model to bake from.
     #[arg(long, value_enum, default_value = "lut")]
     pub model: BakeModel,
@@ -433,9 +479,13 @@ pub struct BakeArgs {
     /// Weather steps (one gradient bitmap each).
     #[arg(long, default_value_t = 3)]
     pub weathers: usize,
-    /// Folder to write (sky.toml and its bitmaps).
+    /// Folder to write (sky.toml and its bitmaps; with several skies, a folder per sky in it).
     #[arg(long)]
     pub out: PathBuf,
+    /// Only every N-th sky from the K-th (K/N or `auto`): each shard writes its skies' folders,
+    /// complete, so the shards' outputs together are the unsharded run's and need no merge.
+    #[arg(long)]
+    pub shard: Option<Shard>,
     /// Force the software adapter (lavapipe).
     #[arg(long)]
     pub cpu: bool,
@@ -450,9 +500,12 @@ pub struct SweepArgs {
     /// Seed of the parameter sets (the same seed gives the same sets).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Markdown report to write.
+    /// Markdown report to write (with `--shard`: the shard's counts, a .toml file).
     #[arg(long, default_value = "docs/stability.md")]
     pub out: PathBuf,
+    /// Only every N-th atmosphere from the K-th (K/N or `auto`); `skytune merge` writes the report.
+    #[arg(long)]
+    pub shard: Option<Shard>,
     /// Force the software adapter (lavapipe).
     #[arg(long)]
     pub cpu: bool,
@@ -477,9 +530,17 @@ pub struct ModelBenchArgs {
     /// The reference's radiance over the dome (computed and written when missing or stale).
     #[arg(long, default_value = "assets/reference_dome.csv")]
     pub reference: PathBuf,
-    /// Monte Carlo paths per direction of the reference.
-    #[arg(long, default_value_t = 1024)]
+    /// Monte Carlo paths per direction of the reference (with `--target-se`, the most).
+    #[arg(long, default_value_t = skytune::atmosphere::dome::COMMITTED_PATHS)]
     pub paths: u32,
+    /// The reference's target relative standard error per direction (see `radiance`).
+    #[arg(long, value_parser = parse_target_se)]
+    pub target_se: Option<f64>,
+    /// Compute only the K-th of N shards of the reference dome (K/N or `auto`), written to
+    /// `--out` (a .csv); `skytune merge` combines the shards into `--reference`. The benchmark
+    /// itself then runs once, on one machine: its costs compare only within one run.
+    #[arg(long)]
+    pub shard: Option<Shard>,
     /// Force the software adapter (lavapipe).
     #[arg(long)]
     pub cpu: bool,
@@ -542,4 +603,12 @@ pub fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
     let (w, h): (u32, u32) = (w.trim().parse()?, h.trim().parse()?);
     anyhow::ensure!((1..=8192).contains(&w) && (1..=8192).contains(&h), "--size: sides must be in 1..=8192, found {w}x{h}");
     Ok((w, h))
+}
+
+/// A `--target-se` value: a fraction in (0, 1).
+fn parse_target_se(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v < 1.0 => Ok(v),
+        _ => Err(format!("expected a relative standard error between 0 and 1 (0.005 for 0.5%), found \"{s}\"")),
+    }
 }

@@ -67,7 +67,7 @@ struct Samples {
 }
 
 /// Wall time of one frame recorded by `record`, submitted and waited for, ms.
-fn timed(ctx: &GpuContext, record: impl FnOnce(&mut wgpu::CommandEncoder)) -> anyhow::Result<f64> {
+pub(crate) fn timed(ctx: &GpuContext, record: impl FnOnce(&mut wgpu::CommandEncoder)) -> anyhow::Result<f64> {
     let t = Instant::now();
     let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("BenchFrame::encoder") });
     record(&mut encoder);
@@ -79,7 +79,7 @@ fn timed(ctx: &GpuContext, record: impl FnOnce(&mut wgpu::CommandEncoder)) -> an
 /// After a frame timed by [`timed`]: its GPU timestamps read back, so that the renderer's phase
 /// times are this frame's (not the one before, of another case or options) and the next frame
 /// records its own.
-fn settle(ctx: &GpuContext, hl: &mut Headless) -> anyhow::Result<()> {
+pub(crate) fn settle(ctx: &GpuContext, hl: &mut Headless) -> anyhow::Result<()> {
     hl.renderer.after_submit();
     ctx.wait_idle()?;
     hl.renderer.collect_gpu_timings();

@@ -6,6 +6,7 @@ pub mod args;
 pub mod bench_frame;
 pub mod bench_models;
 pub mod bench_passes;
+pub mod bench_reference;
 pub mod charts;
 pub mod stability_report;
 

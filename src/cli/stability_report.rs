@@ -1,22 +1,100 @@
-//! `skytune sweep`: runs the stability sweep of every model and writes docs/stability.md.
+//! `skytune sweep`: runs the stability sweep of every model and writes docs/stability.md; with
+//! `--shard K/N`, one shard's counts as TOML, which `skytune merge` turns into the report.
 
 use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::Context as _;
+use serde::{Deserialize, Serialize};
 
 use crate::cli::SweepArgs;
 use skytune::measure::model_points::Evaluator;
-use skytune::measure::stability::{self, Counters, SweptModel};
+use skytune::measure::stability::{self, Counters, SweptModel, WORST_KEPT};
 use skytune::render::{AdapterChoice, GpuContext};
+use skytune::support::shard::Shard;
+
+/// One model's counts in a report: a run's, or the sum of shards'.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+struct ModelCounts {
+    name: String,
+    evaluated: u64,
+    nan: u64,
+    infinite: u64,
+    negative: u64,
+    discontinuous: u64,
+    refused: u64,
+    seconds: f64,
+    /// (batch, report line) of the first failing cases.
+    worst: Vec<(usize, String)>,
+}
+
+impl ModelCounts {
+    fn new(model: SweptModel, c: &Counters, seconds: f64) -> Self {
+        Self {
+            name: model.name().into(),
+            evaluated: c.evaluated,
+            nan: c.nan,
+            infinite: c.infinite,
+            negative: c.negative,
+            discontinuous: c.discontinuous,
+            refused: c.refused,
+            seconds,
+            worst: c.worst.iter().map(|w| (w.batch, w.line())).collect(),
+        }
+    }
+
+    fn failures(&self) -> u64 {
+        self.nan + self.infinite + self.negative + self.discontinuous + self.refused
+    }
+}
+
+/// What one shard writes.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct SweepPart {
+    /// Always [`PART_KIND`].
+    kind: String,
+    shard: String,
+    count: usize,
+    seed: u64,
+    adapter: String,
+    seconds: f64,
+    models: Vec<ModelCounts>,
+}
+
+const PART_KIND: &str = "skytune sweep shard";
+
+/// Whether `text` is a sweep shard's file.
+pub fn is_sweep_part(text: &str) -> bool {
+    text.lines().next().is_some_and(|l| l.trim() == format!("kind = \"{PART_KIND}\""))
+}
 
 pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     anyhow::ensure!(args.count >= 1, "--count: expected at least 1");
+    let shard = args.shard.unwrap_or(Shard::WHOLE);
+    if !shard.is_whole() {
+        anyhow::ensure!(
+            args.out.extension().is_some_and(|e| e == "toml"),
+            "--out: a shard writes its counts as TOML (for `skytune merge`), so name a .toml file, found {}",
+            args.out.display()
+        );
+        // A complete part of the same shard, count, seed and models is not computed again.
+        let done = std::fs::read_to_string(&args.out).ok().and_then(|t| toml::from_str::<SweepPart>(&t).ok());
+        if let Some(part) = done.filter(|p| {
+            (p.kind.as_str(), p.shard.as_str(), p.count, p.seed) == (PART_KIND, shard.to_string().as_str(), args.count, args.seed)
+                && SweptModel::ALL.iter().all(|m| p.models.iter().any(|c| c.name == m.name()))
+        }) {
+            println!("{}: shard {shard} is complete already (the same --count and --seed); skipped", args.out.display());
+            return fail_on_shipped(&part.models);
+        }
+    }
     let started = std::time::Instant::now();
     let ctx = GpuContext::headless(if args.cpu { AdapterChoice::Cpu } else { AdapterChoice::from_env() })?;
     let ev = Evaluator::new(&ctx)?;
-    let mut results: Vec<(SweptModel, Counters, f64)> = Vec::new();
+    let mut results: Vec<ModelCounts> = Vec::new();
     for model in SweptModel::ALL {
         let bar = skytune::support::progress::Reporter::new(args.count as u64, model.name());
         let t = std::time::Instant::now();
-        let counters = stability::sweep(&ev, model, args.count, args.seed, &mut |n| bar.inc(n as u64))?;
+        let counters = stability::sweep(&ev, model, args.count, args.seed, shard, &mut |n| bar.inc(n as u64))?;
         bar.finish();
         println!(
             "{:<36} {:>8} sets: NaN {} inf {} negative {} jumps {} refused {}",
@@ -28,20 +106,91 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
             counters.discontinuous,
             counters.refused
         );
-        results.push((model, counters, t.elapsed().as_secs_f64()));
+        results.push(ModelCounts::new(model, &counters, t.elapsed().as_secs_f64()));
     }
-    let md = report(args, &ctx.adapter_line(), &results, started.elapsed().as_secs_f64());
-    skytune::support::safe_write::write_atomic(&args.out, md.as_bytes())?;
+    let text = if shard.is_whole() {
+        report(args.count, args.seed, &ctx.adapter_line(), &results, started.elapsed().as_secs_f64(), None)
+    } else {
+        let part = SweepPart {
+            kind: PART_KIND.into(),
+            shard: shard.to_string(),
+            count: args.count,
+            seed: args.seed,
+            adapter: ctx.adapter_line(),
+            seconds: started.elapsed().as_secs_f64(),
+            models: results.clone(),
+        };
+        toml::to_string(&part).context("writing the shard's counts")?
+    };
+    skytune::support::safe_write::write_atomic(&args.out, text.as_bytes())?;
     println!("wrote {}", args.out.display());
-    let failing: Vec<&str> = results.iter().filter(|(m, c, _)| m.shipped() && c.failures() > 0).map(|(m, _, _)| m.name()).collect();
+    fail_on_shipped(&results)
+}
+
+/// An error naming the shipped models that failed.
+fn fail_on_shipped(results: &[ModelCounts]) -> anyhow::Result<()> {
+    let failing: Vec<&str> = results.iter().filter(|c| c.failures() > 0 && SweptModel::ALL.iter().any(|m| m.name() == c.name && m.shipped())).map(|c| c.name.as_str()).collect();
     anyhow::ensure!(failing.is_empty(), "shipped models failed the sweep: {}", failing.join(", "));
     Ok(())
 }
 
-fn report(args: &SweepArgs, adapter: &str, results: &[(SweptModel, Counters, f64)], seconds: f64) -> String {
+/// The report of a sweep run in shards: counts summed, the first failing cases of the whole.
+pub fn merge(parts: &[(String, String)], out: &Path) -> anyhow::Result<()> {
+    let mut read: Vec<SweepPart> = Vec::new();
+    for (file, text) in parts {
+        let part: SweepPart = toml::from_str(text).map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+        let shard = Shard::parse(&part.shard).with_context(|| format!("{file}: shard"))?;
+        if let Some(first) = read.first() {
+            anyhow::ensure!(
+                (part.count, part.seed, Shard::parse(&first.shard)?.count) == (first.count, first.seed, shard.count),
+                "{file}: shard {} of --count {} --seed {} does not fit with {}'s {} of --count {} --seed {}",
+                part.shard,
+                part.count,
+                part.seed,
+                parts[0].0,
+                first.shard,
+                first.count,
+                first.seed
+            );
+        }
+        anyhow::ensure!(!read.iter().any(|p| p.shard == part.shard), "{file}: shard {} again", part.shard);
+        read.push(part);
+    }
+    let first = read.first().context("merge: no shards")?;
+    let count = Shard::parse(&first.shard)?.count;
+    anyhow::ensure!(read.len() == count, "{} of {count} sweep shards given", read.len());
+    let mut models: Vec<ModelCounts> = Vec::new();
+    for m in &first.models {
+        let mut sum = ModelCounts { worst: Vec::new(), seconds: 0.0, evaluated: 0, nan: 0, infinite: 0, negative: 0, discontinuous: 0, refused: 0, ..m.clone() };
+        for p in &read {
+            let c = p.models.iter().find(|c| c.name == m.name).with_context(|| format!("shard {} has no {}", p.shard, m.name))?;
+            sum.evaluated += c.evaluated;
+            sum.nan += c.nan;
+            sum.infinite += c.infinite;
+            sum.negative += c.negative;
+            sum.discontinuous += c.discontinuous;
+            sum.refused += c.refused;
+            sum.seconds += c.seconds;
+            sum.worst.extend(c.worst.iter().cloned());
+        }
+        // Each shard kept its first cases in the order of the sets: the first of the whole are among them.
+        sum.worst.sort_by_key(|(batch, _)| *batch);
+        sum.worst.truncate(WORST_KEPT);
+        models.push(sum);
+    }
+    let seconds = read.iter().map(|p| p.seconds).sum();
+    let md = report(first.count, first.seed, &first.adapter, &models, seconds, Some(count));
+    skytune::support::safe_write::write_atomic(out, md.as_bytes())?;
+    println!("wrote {} from {count} shards", out.display());
+    fail_on_shipped(&models)
+}
+
+/// The Markdown report; `shards`: how many shards the counts were summed from.
+fn report(count: usize, seed: u64, adapter: &str, results: &[ModelCounts], seconds: f64, shards: Option<usize>) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "# Stability of the sky models\n");
-    let _ = writeln!(md, "Written by `skytune sweep --count {} --seed {}` in {seconds:.0} s on {adapter}; re-run it to refresh this file.\n", args.count, args.seed);
+    let how = shards.map_or_else(String::new, |n| format!(" in {n} shards (`--shard K/{n}`, combined by `skytune merge`; seconds summed over the shards)"));
+    let _ = writeln!(md, "Written by `skytune sweep --count {count} --seed {seed}`{how} in {seconds:.0} s on {adapter}; re-run it to refresh this file.\n");
     let _ = writeln!(md, "## Method\n");
     let _ = writeln!(
         md,
@@ -51,7 +200,7 @@ fn report(args: &SweepArgs, adapter: &str, results: &[(SweptModel, Counters, f64
          - the sun from -18 degrees (astronomical night) to 90, half of the sets within 3 degrees of the horizon (where the erf optical depth crosses its regime boundary b = 7 sqrt(a) and b turns negative, and where the LUT parameterisation is tightest);\n\
          - views all round, half within 5 degrees of the horizon, rays into the ground included; ground albedo 0..1; turbidity 0.5..15 for `preetham` and `hosek` (beyond 1.3..10).\n\n\
          Each set is evaluated three times, with the sun moved by -{d}, 0 and +{d} degrees. Counted: results with a NaN, an infinite or a negative channel, and jumps: a step that changes a channel by more than {} of the brightest channel of the three results plus {:e} sr^-1, and by more than {} times the other step, and whose change, re-evaluated in {} sub-steps plus one on either side, happens within one sub-step for more than half and is more than that ratio times each neighbouring sub-step (a discontinuity stays in one sub-step; a kink, even a clamp at 0, or a steep smooth change, as a twilight on a small planet, continues into its neighbours). GPU models run on the GPU through the radiance probe, as they ship.\n",
-        args.count,
+        count,
         stability::JUMP_RELATIVE,
         stability::JUMP_FLOOR_SR,
         stability::JUMP_STEP_RATIO,
@@ -61,8 +210,8 @@ fn report(args: &SweepArgs, adapter: &str, results: &[(SweptModel, Counters, f64
     let _ = writeln!(md, "## Counts\n");
     let _ = writeln!(md, "| model | sets | NaN | infinite | negative | jumps | refused | seconds |");
     let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|");
-    for (m, c, s) in results {
-        let _ = writeln!(md, "| {} | {} | {} | {} | {} | {} | {} | {s:.1} |", m.name(), c.evaluated, c.nan, c.infinite, c.negative, c.discontinuous, c.refused);
+    for c in results {
+        let _ = writeln!(md, "| {} | {} | {} | {} | {} | {} | {} | {:.1} |", c.name, c.evaluated, c.nan, c.infinite, c.negative, c.discontinuous, c.refused, c.seconds);
     }
     let _ = writeln!(md, "\n## Where the published models fail, and what skytune ships\n");
     let _ = writeln!(
@@ -80,26 +229,13 @@ fn report(args: &SweepArgs, adapter: &str, results: &[(SweptModel, Counters, f64
         "- **single** and **lut** treated the sun as a point: each ray-march sample was lit or in the planet's shadow, so as the sun set, samples switched off one by one and the sky jumped (64% over 0.05 degrees on a small planet). Shipped: a sample's sunlight fades smoothly to nothing while the sun sinks 0.1 degrees below its horizon, lit along the horizon meanwhile (`sun_visible_fraction` in shaders/sky_model/atmosphere.wgsl); the reference does the same (`Reference::sunlight`), so the models still converge to it (`single` at 128 x 128 steps: 0.09% at low sun). A fade as wide as the sun's disc (0.53 degrees) moved low-sun skies 1.7% away from a point-sun reference."
     );
     let _ = writeln!(md, "\n## Worst cases found\n");
-    for (m, c, _) in results {
+    for c in results {
         if c.worst.is_empty() {
             continue;
         }
-        let _ = writeln!(md, "**{}**\n", m.name());
-        for (what, case) in &c.worst {
-            let a = &case.atmosphere;
-            let _ = writeln!(
-                md,
-                "- {what}: sun {:.3} deg, view {:.3} deg, azimuth {:.1} deg, camera {:.3} km, turbidity {:.2}; ground radius {:.0} km, thickness {:.0} km, Rayleigh {:.3e} km^-1 (blue), Mie {:.3e} km^-1",
-                case.case.sun_elev_deg,
-                case.case.view_elev_deg,
-                case.case.rel_azimuth_deg,
-                case.case.camera_km,
-                case.turbidity,
-                a.ground_radius_km,
-                a.thickness_km(),
-                a.rayleigh_scattering_per_km[2],
-                a.mie_scattering_per_km
-            );
+        let _ = writeln!(md, "**{}**\n", c.name);
+        for (_, line) in &c.worst {
+            let _ = writeln!(md, "- {line}");
         }
         let _ = writeln!(md);
     }

@@ -8,8 +8,9 @@
 //!   sky's sun reaches (plus the one on either side of its range), the mean CIE dE2000 over the
 //!   benchmark's dome at its fixed exposure; a candidate's error is the worst of these. Analytic
 //!   models are measured as they render: their own units, the turbidity fitted to the atmosphere.
-//! - Reference: the committed dataset for the benchmark's atmospheres, else computed once (256
-//!   paths) and cached on disk per atmosphere, as are picks, so loading stays fast.
+//! - Reference: the committed dataset for the benchmark's atmospheres, else computed once (to a
+//!   2% standard error: [`custom_reference_settings`]) and cached on disk per atmosphere, as are
+//!   picks, so loading stays fast.
 
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -17,6 +18,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use crate::atmosphere::dome::{self, DomeDir, Haze};
+use crate::atmosphere::reference::ReferenceSettings;
 use crate::atmosphere::{Atmosphere, Rgb};
 use crate::measure::model_points::{self, Evaluator, FitTarget, Method, Prepared};
 use crate::sky::resolved::{Budget, SkyModel, SkyModelKind};
@@ -124,8 +126,13 @@ fn hash_of(x: &impl std::fmt::Debug) -> u64 {
     h.finish()
 }
 
-/// Paths per direction of references computed for atmospheres outside the benchmark.
-pub const CUSTOM_REFERENCE_PATHS: u32 = 256;
+/// The reference's settings for atmospheres outside the benchmark: paths until a relative
+/// standard error of 2% per channel, at most 512. A pick compares mean dE2000 over the dome
+/// against a budget of about 2, which noise of 2% barely moves; day directions meet it after a
+/// few batches, twilight ones draw more (docs/sky-models.md measures both).
+pub fn custom_reference_settings() -> ReferenceSettings {
+    ReferenceSettings { paths: 512, target_rel_se: Some(0.02), seed: dome::REFERENCE_SEED, ..Default::default() }
+}
 
 /// The committed or cached reference for `atm` at `suns`, if there is one (no computing).
 fn known_reference(atm: &Atmosphere, suns: &[f64]) -> Option<anyhow::Result<Vec<Vec<Rgb>>>> {
@@ -143,7 +150,7 @@ fn known_reference(atm: &Atmosphere, suns: &[f64]) -> Option<anyhow::Result<Vec<
 
 /// Where the reference computed for `atm` at `suns` is cached.
 fn reference_file(atm: &Atmosphere, suns: &[f64]) -> Option<PathBuf> {
-    let key = hash_of(&(atm, suns, CUSTOM_REFERENCE_PATHS, dome::ReferenceDome::header(CUSTOM_REFERENCE_PATHS, dome::BENCH_DOME)));
+    let key = hash_of(&(atm, suns, dome::ReferenceDome::header(custom_reference_settings(), dome::BENCH_DOME)));
     cache_dir().map(|d| d.join(format!("reference-{key:016x}.csv")))
 }
 
@@ -153,7 +160,7 @@ fn reference_file(atm: &Atmosphere, suns: &[f64]) -> Option<PathBuf> {
 fn compute_reference(atm: &Atmosphere, suns: &[f64], phase: Phase<'_>) -> anyhow::Result<Vec<Vec<Rgb>>> {
     let file = reference_file(atm, suns);
     log::info!("auto model: computing the reference for this atmosphere at {} sun elevations (once; cached)", suns.len());
-    let domes = dome::compute_domes(&[*atm], suns, dome::BENCH_DOME, CUSTOM_REFERENCE_PATHS, dome::REFERENCE_SEED, &|done, total| {
+    let domes = dome::compute_domes(&[*atm], suns, dome::BENCH_DOME, custom_reference_settings(), &|done, total| {
         phase.report(done, total);
         phase.job.check()
     })?;
@@ -257,7 +264,7 @@ static SCORES: Mutex<Vec<(u64, Vec<Scored>)>> = Mutex::new(Vec::new());
 /// The key of `sky`'s scores: everything they depend on (its atmospheres and sun range, the
 /// committed benchmark), not its budget or anything else in the file.
 pub fn scores_key(sky: &Sky) -> u64 {
-    hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&model_points::COMMITTED_CSV), dome::ReferenceDome::header(dome::COMMITTED_PATHS, dome::BENCH_DOME)))
+    hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&model_points::COMMITTED_CSV), dome::ReferenceDome::header(dome::committed_settings(), dome::BENCH_DOME)))
 }
 
 /// Where the scores of `key` are cached.

@@ -318,10 +318,38 @@ pub struct ChartRow {
     pub de_mean: f64,
     /// Mean of the 95th percentiles of dE2000.
     pub de_p95: f64,
-    /// GPU ms of a frame of the skydome in which the sun moved.
-    pub gpu_frame_ms: f64,
-    /// CPU ms when the sun moves.
+    /// Mean relative RMSE (over r, g, b) by day: sun above 10 degrees.
+    pub rmse_day: f64,
+    /// Mean relative RMSE at low sun: 0 to 10 degrees.
+    pub rmse_low_sun: f64,
+    /// Mean relative RMSE at twilight: sun at 0 degrees and below.
+    pub rmse_twilight: f64,
+    /// The reference's own relative noise over the dome by day (one standard error): the
+    /// error bar of `rmse_day`.
+    pub noise_day: f64,
+    /// The reference's relative noise at low sun.
+    pub noise_low_sun: f64,
+    /// The reference's relative noise at twilight.
+    pub noise_twilight: f64,
+    /// Mean dE2000 by day.
+    pub de_day: f64,
+    /// Mean dE2000 at low sun.
+    pub de_low_sun: f64,
+    /// Mean dE2000 at twilight.
+    pub de_twilight: f64,
+    /// GPU ms of the model itself per frame with the sun moving: its sky-view map or tables
+    /// recomputed (the compute phase of a frame drawing only the skydome).
+    pub model_gpu_ms_moving: f64,
+    /// GPU ms of the model itself per frame with the sun still.
+    pub model_gpu_ms_still: f64,
+    /// CPU ms per frame when the sun moves (CPU paths fill the sky-view map).
     pub cpu_ms: f64,
+    /// Whole frame of the built-in sky drawn with the model, the sun moving, wall ms.
+    pub frame_ms_moving: f64,
+    /// Whole frame with the sun still, wall ms.
+    pub frame_ms_still: f64,
+    /// The adapter's fill-rate floor in the same run, wall ms (`skytune bench frame`'s).
+    pub floor_ms: f64,
     /// One-off ms (tables, solving, fitting, baking).
     pub build_ms: f64,
     /// Fitted turbidity in the default atmosphere (analytic models).
@@ -338,9 +366,28 @@ impl ChartRow {
         [self.rel_rmse_r, self.rel_rmse_g, self.rel_rmse_b]
     }
 
-    /// Cost of a frame in which the sun moved, ms.
+    /// Cost of a whole frame in which the sun moved, ms: the frame plus the CPU's share.
     pub fn frame_ms(&self) -> f64 {
-        self.gpu_frame_ms + self.cpu_ms
+        self.frame_ms_moving + self.cpu_ms
+    }
+
+    /// A whole frame with the sun moving as a multiple of the fill-rate floor.
+    pub fn floor_ratio_moving(&self) -> f64 {
+        self.frame_ms() / self.floor_ms
+    }
+
+    /// A whole frame with the sun still as a multiple of the fill-rate floor.
+    pub fn floor_ratio_still(&self) -> f64 {
+        self.frame_ms_still / self.floor_ms
+    }
+
+    /// Mean relative RMSE and the reference's noise in a regime.
+    pub fn regime(&self, regime: dome::Regime) -> (f64, f64) {
+        match regime {
+            dome::Regime::Day => (self.rmse_day, self.noise_day),
+            dome::Regime::LowSun => (self.rmse_low_sun, self.noise_low_sun),
+            dome::Regime::Twilight => (self.rmse_twilight, self.noise_twilight),
+        }
     }
 
     /// The chart's error axis: mean dE2000.

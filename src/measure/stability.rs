@@ -10,6 +10,7 @@ use crate::atmosphere::cells::{CellModel, CellSettings};
 use crate::atmosphere::reference::Case;
 use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, Rgb, SingleSettings};
 use crate::measure::model_points::{Evaluator, Method};
+use crate::support::shard::Shard;
 
 /// Step of the sun between the two evaluations of a case, degrees.
 pub const JUMP_DELTA_DEG: f64 = 0.05;
@@ -107,8 +108,45 @@ pub struct Counters {
     pub discontinuous: u64,
     /// Cases that could not be evaluated at all (the raw Hosek model refuses a sun below the horizon).
     pub refused: u64,
-    /// The worst cases: what went wrong, and the parameters.
-    pub worst: Vec<(String, SweepCase)>,
+    /// The first cases that went wrong (at most [`WORST_KEPT`], in the order of the sets).
+    pub worst: Vec<Worst>,
+    /// The batch (one atmosphere) being checked: notes carry it, so that a merge of shards
+    /// keeps the same first cases as one run.
+    batch: usize,
+}
+
+/// How many failing cases a sweep keeps per model.
+pub const WORST_KEPT: usize = 3;
+
+/// A failing case.
+#[derive(Debug, Clone)]
+pub struct Worst {
+    /// Index of its batch (one atmosphere) among the sweep's.
+    pub batch: usize,
+    /// What went wrong.
+    pub what: String,
+    /// The parameters.
+    pub case: SweepCase,
+}
+
+impl Worst {
+    /// The report's line for this case.
+    pub fn line(&self) -> String {
+        let (case, a) = (&self.case, &self.case.atmosphere);
+        format!(
+            "{}: sun {:.3} deg, view {:.3} deg, azimuth {:.1} deg, camera {:.3} km, turbidity {:.2}; ground radius {:.0} km, thickness {:.0} km, Rayleigh {:.3e} km^-1 (blue), Mie {:.3e} km^-1",
+            self.what,
+            case.case.sun_elev_deg,
+            case.case.view_elev_deg,
+            case.case.rel_azimuth_deg,
+            case.case.camera_km,
+            case.turbidity,
+            a.ground_radius_km,
+            a.thickness_km(),
+            a.rayleigh_scattering_per_km[2],
+            a.mie_scattering_per_km
+        )
+    }
 }
 
 impl Counters {
@@ -118,8 +156,8 @@ impl Counters {
     }
 
     fn note(&mut self, what: String, case: &SweepCase) {
-        if self.worst.len() < 3 {
-            self.worst.push((what, *case));
+        if self.worst.len() < WORST_KEPT {
+            self.worst.push(Worst { batch: self.batch, what, case: *case });
         }
     }
 
@@ -246,11 +284,21 @@ fn per_atmosphere(model: SweptModel) -> usize {
     }
 }
 
-/// Sweeps one model over `count` parameter sets; `progress(done)` after each atmosphere.
-pub fn sweep(ev: &Evaluator<'_>, model: SweptModel, count: usize, seed: u64, progress: &mut dyn FnMut(usize)) -> anyhow::Result<Counters> {
+/// Batches (one atmosphere each) of a sweep of `count` sets of `model`.
+pub fn batches(model: SweptModel, count: usize) -> usize {
+    count.div_ceil(per_atmosphere(model))
+}
+
+/// Sweeps one model over `count` parameter sets, or over the batches (atmospheres) of them that
+/// `shard` owns; `progress(done)` after each atmosphere.
+pub fn sweep(ev: &Evaluator<'_>, model: SweptModel, count: usize, seed: u64, shard: Shard, progress: &mut dyn FnMut(usize)) -> anyhow::Result<Counters> {
     let cases = random_cases(count, per_atmosphere(model), seed);
     let mut counters = Counters::default();
-    for batch in cases.chunks(per_atmosphere(model)) {
+    for (b, batch) in cases.chunks(per_atmosphere(model)).enumerate() {
+        if !shard.owns(b) {
+            continue;
+        }
+        counters.batch = b;
         let atm = batch[0].atmosphere;
         // The cell model is solved once per atmosphere (and ground albedo of its first case).
         let cells = (model == SweptModel::Cells).then(|| CellModel::solve(atm, batch[0].case.albedo, CellSettings::default()));

@@ -3,3 +3,4 @@
 
 pub mod progress;
 pub mod safe_write;
+pub mod shard;

@@ -29,8 +29,11 @@ use std::f64::consts::PI;
 
 use glam::DVec3;
 
+mod many;
 mod segment;
 mod sunlit;
+
+pub use many::estimate_many;
 
 use segment::Segment;
 use sunlit::SunlitStrata;
@@ -46,17 +49,30 @@ pub struct ReferenceSettings {
     pub max_panel_km: f64,
     /// Highest order of scattering (1: single scattering only).
     pub max_order: u32,
-    /// Monte Carlo paths per radiance value for orders >= 2.
+    /// Monte Carlo paths per radiance value for orders >= 2: all of them, or with
+    /// `target_rel_se` the most a value may draw.
     pub paths: u32,
     /// Seed of the paths.
     pub seed: u64,
+    /// Stop drawing paths once every channel's standard error is at most this fraction of its
+    /// radiance (checked after each batch of [`BATCH_PATHS`], from [`MIN_TARGET_PATHS`] on);
+    /// `None` draws `paths` every time.
+    pub target_rel_se: Option<f64>,
 }
 
 impl Default for ReferenceSettings {
     fn default() -> Self {
-        Self { tau_tolerance: 1e-7, max_panel_km: 1.0, max_order: 24, paths: 8192, seed: 0x5eed }
+        Self { tau_tolerance: 1e-7, max_panel_km: 1.0, max_order: 24, paths: 8192, seed: 0x5eed, target_rel_se: None }
     }
 }
+
+/// Paths drawn between two looks at a target standard error. Fixed, so that where an estimate
+/// stops depends on the seed and the target only, never on how many threads drew the batches.
+pub const BATCH_PATHS: u32 = 64;
+
+/// Fewest paths before a target standard error may stop an estimate: the variance of fewer
+/// paths is itself too noisy to trust (a twilight case's rare bright paths are not yet seen).
+pub const MIN_TARGET_PATHS: u32 = 256;
 
 /// One radiance query: where the camera is, where the sun is, where it looks.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,6 +98,48 @@ pub struct Estimate {
     pub all: Rgb,
     /// Standard error of `all` (Monte Carlo noise of orders >= 2).
     pub std_err: Rgb,
+    /// Monte Carlo paths drawn (0 when only single scattering is asked for).
+    pub paths: u32,
+}
+
+/// Running sums of the paths' contributions, added in path order (the same bytes however the
+/// batches were drawn).
+#[derive(Default)]
+struct PathSums {
+    sum: Rgb,
+    sum_sq: Rgb,
+    n: u32,
+}
+
+impl PathSums {
+    fn add(&mut self, x: Rgb) {
+        self.sum = add(self.sum, x);
+        self.sum_sq = add(self.sum_sq, x.map(|v| v * v));
+        self.n += 1;
+    }
+
+    /// (mean, standard error of the mean) per channel.
+    fn mean_and_error(&self) -> (Rgb, Rgb) {
+        if self.n == 0 {
+            return ([0.0; 3], [0.0; 3]);
+        }
+        let n = self.n as f64;
+        let mean = scale(self.sum, 1.0 / n);
+        (mean, std::array::from_fn(|c| ((self.sum_sq[c] / n - mean[c] * mean[c]).max(0.0) / n).sqrt()))
+    }
+
+    /// Whether every channel's standard error is within `target` of `single` plus the mean.
+    fn within(&self, single: Rgb, target: f64) -> bool {
+        let (mean, err) = self.mean_and_error();
+        (0..3).all(|c| {
+            let total = single[c] + mean[c];
+            if total > 0.0 {
+                err[c] <= target * total
+            } else {
+                err[c] <= 0.0
+            }
+        })
+    }
 }
 
 /// Henyey-Greenstein asymmetry of the direction-sampling lobe around the sun.
@@ -443,89 +501,121 @@ impl Reference {
         (out, pdf)
     }
 
-    /// Orders 2..=max_order by path tracing; `seg` is the view ray. Returns the estimate and its
-    /// standard error per channel.
+    /// Orders 2..=max_order by path tracing; `seg` is the view ray, `single` the deterministic
+    /// first order (what a target standard error is relative to). Returns the estimate, its
+    /// standard error per channel and the paths drawn.
+    ///
+    /// Paths go in batches of [`BATCH_PATHS`], up to `threads` batches at once; their
+    /// contributions are added in path order and a target is checked after each batch in
+    /// order, so the result is the same on any number of threads (batches drawn past the stop
+    /// are thrown away).
+    fn multiple(&self, seg: &Segment, towards_sun: DVec3, albedo: f64, single: Rgb, threads: usize) -> (Rgb, Rgb, u32) {
+        let max_order = self.settings.max_order;
+        let total = seg.total();
+        if max_order < 2 || total.iter().all(|t| *t <= 0.0) || self.settings.paths == 0 {
+            return ([0.0; 3], [0.0; 3], 0);
+        }
+        // Probability that a forced collision lands anywhere in the view segment, per channel.
+        let p_in = total.map(|t| -(-t).exp_m1());
+        let cap = self.settings.paths;
+        let batches = cap.div_ceil(BATCH_PATHS);
+        let batch = |b: u32| -> Vec<Rgb> { (b * BATCH_PATHS..((b + 1) * BATCH_PATHS).min(cap)).map(|i| self.path(seg, towards_sun, albedo, p_in, u64::from(i))).collect() };
+        let mut sums = PathSums::default();
+        let mut next = 0;
+        'batches: while next < batches {
+            let round = (threads.max(1) as u32).min(batches - next);
+            let drawn: Vec<Vec<Rgb>> = if round == 1 {
+                vec![batch(next)]
+            } else {
+                std::thread::scope(|s| {
+                    let handles: Vec<_> = (next..next + round).map(|b| s.spawn(move || batch(b))).collect();
+                    handles.into_iter().map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p))).collect()
+                })
+            };
+            for paths in drawn {
+                for x in paths {
+                    sums.add(x);
+                }
+                if let Some(target) = self.settings.target_rel_se {
+                    if sums.n >= MIN_TARGET_PATHS && sums.within(single, target) {
+                        break 'batches;
+                    }
+                }
+            }
+            next += round;
+        }
+        let (mean, std_err) = sums.mean_and_error();
+        (mean, std_err, sums.n)
+    }
+
+    /// One path's contribution (orders 2 and up), path number `path` of the seed's stream.
     ///
     /// Distances are sampled by free flight in one channel per path (chosen at random) and
     /// every channel is weighed by the average over the three of the whole path's distance pdf
     /// (spectral MIS per path): each channel's weight stays below 3 however long the path, where
     /// averaging per segment lets a channel's weight grow with every bounce (heavy tails in the
     /// high orders at twilight, where paths are long).
-    fn multiple(&self, seg: &Segment, towards_sun: DVec3, albedo: f64) -> (Rgb, Rgb) {
+    fn path(&self, seg: &Segment, towards_sun: DVec3, albedo: f64, p_in: Rgb, path: u64) -> Rgb {
         let max_order = self.settings.max_order;
-        let total = seg.total();
-        if max_order < 2 || total.iter().all(|t| *t <= 0.0) || self.settings.paths == 0 {
-            return ([0.0; 3], [0.0; 3]);
+        let mut path_sum = [0.0; 3];
+        // One stream per path: truncating at an order changes no other path.
+        let rng = &mut fastrand::Rng::with_seed(self.settings.seed.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(path));
+        let hero = rng.usize(0..3);
+        if p_in[hero] <= 0.0 {
+            return [0.0; 3];
         }
-        // Probability that a forced collision lands anywhere in the view segment, per channel.
-        let p_in = total.map(|t| -(-t).exp_m1());
-        let (mut sum, mut sum_sq) = ([0.0; 3], [0.0; 3]);
-        for path in 0..self.settings.paths {
-            let mut path_sum = [0.0; 3];
-            // One stream per path: truncating at an order changes no other path.
-            let rng = &mut fastrand::Rng::with_seed(self.settings.seed.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(path as u64));
-            let hero = rng.usize(0..3);
-            if p_in[hero] <= 0.0 {
-                continue;
+        // Vertex 1: forced into the view segment (its own sunlight is order 1, done exactly).
+        let t = seg.invert(hero, -(1.0 - rng.f64() * p_in[hero]).ln());
+        let (tau, slope) = seg.at(t);
+        let mut weight = PathWeight::default();
+        weight.distance(std::array::from_fn(|c| (-tau[c]).exp()), std::array::from_fn(|c| if p_in[c] > 0.0 { slope[c] * (-tau[c]).exp() / p_in[c] } else { 0.0 }));
+        let mut pos = seg.origin + seg.dir * t;
+        let mut d_in = seg.dir;
+        let mut k = 1;
+        let mut on_ground = false;
+        while k < max_order {
+            // Leave the vertex: scatter in the air, or reflect off the ground.
+            let dir = if on_ground {
+                let n = pos.normalize();
+                let (u, v) = (rng.f64(), 2.0 * PI * rng.f64());
+                let (t1, t2) = n.any_orthonormal_pair();
+                let r = u.sqrt();
+                weight.scale([albedo; 3]);
+                (n * (1.0 - u).sqrt() + t1 * (r * v.cos()) + t2 * (r * v.sin())).normalize()
+            } else {
+                let (dir, pdf) = self.sample_direction(pos, d_in, towards_sun, rng);
+                let s = self.scattering(pos, d_in.dot(dir));
+                weight.scale(s.map(|x| x / pdf));
+                dir
+            };
+            if weight.throughput().iter().all(|x| *x <= 0.0) {
+                break;
             }
-            // Vertex 1: forced into the view segment (its own sunlight is order 1, done exactly).
-            let t = seg.invert(hero, -(1.0 - rng.f64() * p_in[hero]).ln());
-            let (tau, slope) = seg.at(t);
-            let mut weight = PathWeight::default();
-            weight.distance(std::array::from_fn(|c| (-tau[c]).exp()), std::array::from_fn(|c| if p_in[c] > 0.0 { slope[c] * (-tau[c]).exp() / p_in[c] } else { 0.0 }));
-            let mut pos = seg.origin + seg.dir * t;
-            let mut d_in = seg.dir;
-            let mut k = 1;
-            let mut on_ground = false;
-            while k < max_order {
-                // Leave the vertex: scatter in the air, or reflect off the ground.
-                let dir = if on_ground {
-                    let n = pos.normalize();
-                    let (u, v) = (rng.f64(), 2.0 * PI * rng.f64());
-                    let (t1, t2) = n.any_orthonormal_pair();
-                    let r = u.sqrt();
-                    weight.scale([albedo; 3]);
-                    (n * (1.0 - u).sqrt() + t1 * (r * v.cos()) + t2 * (r * v.sin())).normalize()
-                } else {
-                    let (dir, pdf) = self.sample_direction(pos, d_in, towards_sun, rng);
-                    let s = self.scattering(pos, d_in.dot(dir));
-                    weight.scale(s.map(|x| x / pdf));
-                    dir
-                };
-                if weight.throughput().iter().all(|x| *x <= 0.0) {
-                    break;
-                }
-                let (lit, next) = self.gathered(pos, dir, weight.throughput(), towards_sun, albedo, rng);
-                path_sum = add(path_sum, lit);
-                let total = next.total();
-                let target = -(1.0 - rng.f64()).ln();
-                if target < total[hero] {
-                    let t = next.invert(hero, target);
-                    let (tau, slope) = next.at(t);
-                    let tr = tau.map(|x| (-x).exp());
-                    weight.distance(tr, std::array::from_fn(|c| slope[c] * tr[c]));
-                    pos += dir * t;
-                    d_in = dir;
-                    on_ground = false;
-                    k += 1;
-                } else if next.ground {
-                    // Every channel's flight passes the whole segment with its transmittance.
-                    let tr = total.map(|x| (-x).exp());
-                    weight.distance(tr, tr);
-                    pos = (pos + dir * next.length()).normalize() * self.atm.ground_radius_km;
-                    on_ground = true;
-                    k += 1;
-                } else {
-                    break;
-                }
+            let (lit, next) = self.gathered(pos, dir, weight.throughput(), towards_sun, albedo, rng);
+            path_sum = add(path_sum, lit);
+            let total = next.total();
+            let target = -(1.0 - rng.f64()).ln();
+            if target < total[hero] {
+                let t = next.invert(hero, target);
+                let (tau, slope) = next.at(t);
+                let tr = tau.map(|x| (-x).exp());
+                weight.distance(tr, std::array::from_fn(|c| slope[c] * tr[c]));
+                pos += dir * t;
+                d_in = dir;
+                on_ground = false;
+                k += 1;
+            } else if next.ground {
+                // Every channel's flight passes the whole segment with its transmittance.
+                let tr = total.map(|x| (-x).exp());
+                weight.distance(tr, tr);
+                pos = (pos + dir * next.length()).normalize() * self.atm.ground_radius_km;
+                on_ground = true;
+                k += 1;
+            } else {
+                break;
             }
-            sum = add(sum, path_sum);
-            sum_sq = add(sum_sq, path_sum.map(|x| x * x));
         }
-        let n = self.settings.paths as f64;
-        let mean = scale(sum, 1.0 / n);
-        let std_err = std::array::from_fn(|c| ((sum_sq[c] / n - mean[c] * mean[c]).max(0.0) / n).sqrt());
-        (mean, std_err)
+        path_sum
     }
 
     /// The light a path gathers leaving `pos` along `dir` with throughput `thr` (one order more
@@ -561,6 +651,12 @@ impl Reference {
 
     /// Sky radiance for a case with the Monte Carlo standard error of its orders >= 2.
     pub fn estimate(&self, case: &Case) -> Estimate {
+        self.estimate_on(case, 1)
+    }
+
+    /// [`Self::estimate`] with the case's paths drawn on up to `threads` threads (the same
+    /// result on any number): for when there are fewer cases than cores.
+    pub fn estimate_on(&self, case: &Case, threads: usize) -> Estimate {
         let p = DVec3::new(0.0, self.atm.ground_radius_km + case.camera_km.max(0.0), 0.0);
         let se = case.sun_elev_deg.to_radians();
         let towards_sun = DVec3::new(se.cos(), se.sin(), 0.0);
@@ -568,8 +664,8 @@ impl Reference {
         let d = DVec3::new(ve.cos() * az.cos(), ve.sin(), ve.cos() * az.sin()).normalize();
         let seg = self.segment(p, d);
         let single = self.single(&seg, towards_sun);
-        let (multiple, std_err) = self.multiple(&seg, towards_sun, case.albedo.clamp(0.0, 1.0));
-        Estimate { single, all: add(single, multiple), std_err }
+        let (multiple, std_err, paths) = self.multiple(&seg, towards_sun, case.albedo.clamp(0.0, 1.0), single, threads);
+        Estimate { single, all: add(single, multiple), std_err, paths }
     }
 
     /// Sky radiance for a case (all orders up to `max_order`), sr^-1 per unit of solar irradiance.
