@@ -31,11 +31,13 @@ use glam::DVec3;
 
 mod many;
 mod segment;
+mod sun_table;
 mod sunlit;
 
 pub use many::estimate_many;
 
 use segment::Segment;
+use sun_table::SunTable;
 use sunlit::SunlitStrata;
 
 use super::{cornette_shanks_phase, henyey_greenstein_phase, rayleigh_phase, Atmosphere, Rgb};
@@ -226,6 +228,17 @@ pub struct Reference {
     atm: Atmosphere,
     /// Quadrature and sampling settings.
     pub settings: ReferenceSettings,
+    /// The sun's optical depth for orders 2 and up, made on the first path.
+    sun_table: std::sync::OnceLock<SunTable>,
+}
+
+/// How a point's sunlight is found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SunlightBy {
+    /// The adaptive quadrature along the ray to the sun (single scattering).
+    Quadrature,
+    /// The tabulated optical depth (reference/sun_table.rs; orders 2 and up).
+    Table,
 }
 
 /// Distances along `p + t d` where it crosses a sphere of `radius` centred on the planet.
@@ -250,7 +263,7 @@ fn scale(a: Rgb, k: f64) -> Rgb {
 impl Reference {
     /// A reference for `atm` (which should be valid: see [`Atmosphere::validate`]).
     pub fn new(atm: Atmosphere, settings: ReferenceSettings) -> Self {
-        Self { atm, settings }
+        Self { atm, settings, sun_table: std::sync::OnceLock::new() }
     }
 
     /// The atmosphere.
@@ -361,6 +374,11 @@ impl Reference {
     /// [`super::SUN_SET_FADE_RAD`], lit along the horizon (the GPU models do the same, so that no
     /// model's sky jumps as the sun sets).
     pub fn sunlight(&self, p: DVec3, towards_sun: DVec3) -> Rgb {
+        self.sunlight_by(p, towards_sun, SunlightBy::Quadrature)
+    }
+
+    /// [`Self::sunlight`], its transmittance found `by` quadrature or the table.
+    pub fn sunlight_by(&self, p: DVec3, towards_sun: DVec3, by: SunlightBy) -> Rgb {
         let (up, mu_s, mu_h, above) = self.sun_geometry(p, towards_sun);
         let fraction = super::sun_set_fade(above);
         if fraction <= 0.0 {
@@ -374,7 +392,14 @@ impl Reference {
             let mu = (mu_h.asin() + 1e-6).sin();
             up * mu + side * (1.0 - mu * mu).max(0.0).sqrt()
         };
-        self.transmittance_to_space(p, dir).map(|t| t * fraction)
+        match by {
+            SunlightBy::Quadrature => self.transmittance_to_space(p, dir).map(|t| t * fraction),
+            SunlightBy::Table => {
+                let r = p.length();
+                let table = self.sun_table.get_or_init(|| SunTable::new(self));
+                table.optical_depth(r, p.dot(dir) / r).map(|tau| (-tau).exp() * fraction)
+            }
+        }
     }
 
     /// At `p`: the local up, the cosines of the sun's zenith angle and of the horizon's, and the
@@ -436,8 +461,8 @@ impl Reference {
     }
 
     /// Sunlight scattered once towards `-d` at `y`, per unit length: S(y, d·s) T_sun(y).
-    fn sun_scattered(&self, y: DVec3, d: DVec3, towards_sun: DVec3) -> Rgb {
-        let t_sun = self.sunlight(y, towards_sun);
+    fn sun_scattered(&self, y: DVec3, d: DVec3, towards_sun: DVec3, by: SunlightBy) -> Rgb {
+        let t_sun = self.sunlight_by(y, towards_sun, by);
         if t_sun.iter().all(|t| *t == 0.0) {
             return [0.0; 3];
         }
@@ -456,7 +481,7 @@ impl Reference {
     fn single(&self, seg: &Segment, towards_sun: DVec3) -> Rgb {
         let mut sum = [0.0; 3];
         let j = |t: f64, tau: Rgb| -> Rgb {
-            let s = self.sun_scattered(seg.origin + seg.dir * t, seg.dir, towards_sun);
+            let s = self.sun_scattered(seg.origin + seg.dir * t, seg.dir, towards_sun, SunlightBy::Quadrature);
             std::array::from_fn(|c| s[c] * (-tau[c]).exp())
         };
         let mut j_a = j(seg.nodes[0], seg.tau[0]);
@@ -627,14 +652,14 @@ impl Reference {
         let mut sum = [0.0; 3];
         let strata = SunlitStrata::new(&next, &self.sunlit(&next, towards_sun));
         if !strata.is_empty() {
-            let lit = strata.estimate(&next, rng, |t| self.sun_scattered(pos + dir * t, dir, towards_sun));
+            let lit = strata.estimate(&next, rng, |t| self.sun_scattered(pos + dir * t, dir, towards_sun, SunlightBy::Table));
             sum = add(sum, std::array::from_fn(|c| thr[c] * lit[c]));
         }
         if next.ground && albedo > 0.0 {
             let n = (pos + dir * next.length()).normalize();
             let cos_sun = n.dot(towards_sun);
             if cos_sun > 0.0 {
-                let t_sun = self.sunlight(n * self.atm.ground_radius_km, towards_sun);
+                let t_sun = self.sunlight_by(n * self.atm.ground_radius_km, towards_sun, SunlightBy::Table);
                 let total = next.total();
                 sum = add(sum, std::array::from_fn(|c| thr[c] * (-total[c]).exp() * albedo / PI * cos_sun * t_sun[c]));
             }
