@@ -18,3 +18,9 @@ pub mod measure;
 pub mod render;
 pub mod sky;
 pub mod support;
+
+/// Which build this is, for measurements: "release build of skytune at 1a2b3c4" (the commit the
+/// build was made from; uncommitted changes are not named).
+pub fn build_line() -> String {
+    format!("{} build of skytune at {}", if cfg!(debug_assertions) { "debug" } else { "release" }, env!("SKYTUNE_COMMIT"))
+}

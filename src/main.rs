@@ -154,7 +154,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
         (a.out, a.shard) = (Default::default(), None);
         shard::inputs_key(&[format!("{a:?}").as_bytes(), &std::fs::read(&args.cases).unwrap_or_default()])
     };
-    if !shard.is_whole() && std::fs::read_to_string(&args.out).is_ok_and(|t| shard.is_complete(&t, all.len(), inputs)) {
+    if !shard.is_whole() && std::fs::read_to_string(&args.out).is_ok_and(|t| shard.is_complete(&t, all.len(), 1, inputs)) {
         println!("{}: shard {shard} is complete already (the same inputs); skipped", args.out.display());
         return Ok(());
     }
@@ -255,7 +255,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     let name = clap::ValueEnum::to_possible_value(&args.model).map_or_else(String::new, |v| v.get_name().to_string());
     let mut comment = format!("skytune radiance --model {name}: {units}\n{comment}");
     if !shard.is_whole() {
-        comment = format!("{}\n{comment}", shard.table_line(all.len(), inputs).trim_start_matches("# "));
+        comment = format!("{}\n{comment}", shard.table_line(all.len(), 1, inputs).trim_start_matches("# "));
     }
     match &estimates {
         Some(e) => cases::write_reference(&args.out, &comment, &list, e)?,
@@ -302,10 +302,29 @@ fn reference_radiance(
     Ok((estimates, format!("model reference: max order {}, {precision}, seed {}", settings.max_order, settings.seed)))
 }
 
-/// `skytune merge`: the shards' outputs combined into what the unsharded run writes.
+/// `skytune merge`: the shards' outputs combined into what the unsharded run writes: tables,
+/// sweep counts, or folders (`bench models --part errors`) whose same-named tables are merged.
 fn merge(args: &cli::MergeArgs) -> anyhow::Result<()> {
-    let parts: Vec<(String, String)> =
-        args.parts.iter().map(|p| Ok((p.display().to_string(), std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?))).collect::<anyhow::Result<_>>()?;
+    if args.parts.iter().all(|p| p.is_dir()) {
+        let first = &args.parts[0];
+        let mut names: Vec<std::ffi::OsString> = std::fs::read_dir(first).with_context(|| format!("reading {}", first.display()))?.flatten().map(|e| e.file_name()).collect();
+        names.sort();
+        std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+        let mut merged = 0;
+        for name in names {
+            let parts: Vec<(String, String)> = args.parts.iter().map(|d| read_part(&d.join(&name))).collect::<anyhow::Result<_>>()?;
+            if !shard::is_shard_table(&parts[0].1) {
+                continue;
+            }
+            let out = args.out.join(&name);
+            skytune::support::safe_write::write_atomic(&out, shard::merge_tables(&parts)?.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
+            println!("wrote {} from {} shards", out.display(), parts.len());
+            merged += 1;
+        }
+        anyhow::ensure!(merged > 0, "{}: holds no shard's table", first.display());
+        return Ok(());
+    }
+    let parts: Vec<(String, String)> = args.parts.iter().map(|p| read_part(p)).collect::<anyhow::Result<_>>()?;
     let first = parts.first().context("merge: name the shards' files")?;
     let merged = if shard::is_shard_table(&first.1) {
         shard::merge_tables(&parts)?
@@ -317,6 +336,11 @@ fn merge(args: &cli::MergeArgs) -> anyhow::Result<()> {
     skytune::support::safe_write::write_atomic(&args.out, merged.as_bytes()).with_context(|| format!("writing {}", args.out.display()))?;
     println!("wrote {} from {} shards", args.out.display(), parts.len());
     Ok(())
+}
+
+/// A shard's output file: (its name, its text).
+fn read_part(p: &Path) -> anyhow::Result<(String, String)> {
+    Ok((p.display().to_string(), std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?))
 }
 
 /// The sky a command names (or the built-in one).

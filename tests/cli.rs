@@ -244,3 +244,16 @@ fn new_sky_refuses_an_existing_folder_and_writes_never_leave_half_files() {
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
+
+#[test]
+fn bench_reference_writes_its_table_and_chart() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = skytune().args(["bench", "reference", "--paths", "64,128", "--long", "256", "--out"]).arg(dir.path()).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let md = std::fs::read_to_string(dir.path().join("reference-convergence.md")).unwrap();
+    for regime in ["day", "low sun", "twilight"] {
+        assert!(md.contains(regime), "{md}");
+    }
+    let png = image::open(dir.path().join("reference-convergence.png")).unwrap().to_rgb8();
+    assert!(png.pixels().any(|p| p.0 != [255, 255, 255]), "the chart is not blank");
+}

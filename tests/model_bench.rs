@@ -216,4 +216,22 @@ fn quick_benchmark_writes_the_csv_and_both_charts() {
     let md = std::fs::read_to_string(out.path().join("models.md")).expect("md");
     assert!(md.contains("dE2000") && md.contains("model GPU ms, sun moving / still") && md.contains("frame / floor"), "{md}");
     assert!(md.contains("## Accuracy by regime") && md.contains("twilight (sun 0 deg and below) rel. RMSE"), "{md}");
+    assert!(md.contains("the reference's relative standard error per value"), "{md}");
+
+    // The error part in 3 shards, merged folder by folder: the unsharded run's file, byte for byte.
+    let shards = tempfile::tempdir().expect("temp dir");
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_skytune")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().expect("running skytune");
+        assert!(o.status.success(), "skytune {args:?}: {}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let dir = |k: usize| shards.path().join(format!("part{k}")).display().to_string();
+    for k in 1..=3 {
+        run(&["bench", "models", "--quick", "--cpu", "--part", "errors", "--shard", &format!("{k}/3"), "--out", &dir(k)]);
+    }
+    // A complete shard is not computed again.
+    assert!(run(&["bench", "models", "--quick", "--cpu", "--part", "errors", "--shard", "2/3", "--out", &dir(2)]).contains("skipped"));
+    let merged = shards.path().join("merged");
+    run(&["merge", "--out", &merged.display().to_string(), &dir(3), &dir(1), &dir(2)]);
+    assert_eq!(std::fs::read_to_string(merged.join("models-by-sun.csv")).expect("merged"), by_sun, "3 shards of the errors merged differ from the unsharded run");
 }

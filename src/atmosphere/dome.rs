@@ -395,12 +395,16 @@ pub fn committed_reference() -> Result<ReferenceDome, ReferenceDomeError> {
     ReferenceDome::parse(include_str!("../../assets/reference_dome.csv"), "assets/reference_dome.csv", committed_settings(), BENCH_DOME)
 }
 
-/// Monte Carlo paths per direction of the committed reference dataset (the cap, with a target).
-pub const COMMITTED_PATHS: u32 = 512;
+/// Most Monte Carlo paths per direction of the committed reference dataset.
+pub const COMMITTED_PATHS: u32 = 16384;
 
-/// The reference's settings of the committed dataset.
+/// Relative standard error per channel the committed reference dataset draws paths until.
+pub const COMMITTED_TARGET_SE: f64 = 0.01;
+
+/// The reference's settings of the committed dataset: every direction to 1% per channel, or
+/// 16,384 paths (twilight, where the goal is 3%: docs/models.md states what was reached).
 pub fn committed_settings() -> ReferenceSettings {
-    ReferenceSettings { paths: COMMITTED_PATHS, seed: REFERENCE_SEED, ..Default::default() }
+    ReferenceSettings { paths: COMMITTED_PATHS, seed: REFERENCE_SEED, target_rel_se: Some(COMMITTED_TARGET_SE), ..Default::default() }
 }
 
 /// Seed of the benchmark's reference (fixed: the dataset is reproducible).
@@ -411,7 +415,7 @@ impl ReferenceDome {
     pub fn header(settings: ReferenceSettings, dome: (usize, usize)) -> String {
         let atmospheres: Vec<String> = Haze::ALL.iter().map(|h| format!("{}={:?}", h.name(), h.atmosphere())).collect();
         format!(
-            "skytune reference dome v3 (orders 2 and up: sunlit strata per segment, spectral MIS per path, phase-function directions): dome={}x{} camera_km={CAMERA_KM} albedo={ALBEDO} settings={settings:?} atmospheres=[{}]",
+            "skytune reference dome v4 (orders 2 and up: sunlit strata per segment, spectral MIS per path, phase-function directions, tabulated sunlight; paths to a target standard error): dome={}x{} camera_km={CAMERA_KM} albedo={ALBEDO} settings={settings:?} atmospheres=[{}]",
             dome.0,
             dome.1,
             atmospheres.join("; ")
@@ -432,7 +436,7 @@ impl ReferenceDome {
     /// Whether `text` is the complete output of [`Self::shard_table`] with these arguments.
     pub fn is_complete_shard(text: &str, hazes: &[Haze], suns_deg: &[f64], dome: (usize, usize), settings: ReferenceSettings, shard: Shard) -> bool {
         let total = hazes.len() * suns_deg.len() * dome.0 * dome.1;
-        shard.is_complete(text, total, Self::shard_inputs(hazes, suns_deg, dome, settings))
+        shard.is_complete(text, total, 1, Self::shard_inputs(hazes, suns_deg, dome, settings))
     }
 
     /// How hard the reference worked, for reports: "512 Monte Carlo paths per direction", or
@@ -461,7 +465,7 @@ impl ReferenceDome {
         let mine = shard.take(&index);
         let jobs: Vec<(usize, f64, Case)> = mine.iter().map(|i| all[*i]).collect();
         let estimates = estimate_jobs(&atmospheres, &jobs, settings, progress)?;
-        let mut text = format!("{}\n{}", shard.table_line(all.len(), Self::shard_inputs(hazes, suns_deg, dome, settings)), Self::head(settings, dome));
+        let mut text = format!("{}\n{}", shard.table_line(all.len(), 1, Self::shard_inputs(hazes, suns_deg, dome, settings)), Self::head(settings, dome));
         for ((i, (k, sun, _)), e) in mine.iter().zip(&jobs).zip(&estimates) {
             text.push_str(&dome_row(hazes[*k], *sun, &dirs[i % dirs.len()], e.all, e.std_err));
         }

@@ -511,6 +511,15 @@ pub struct SweepArgs {
     pub cpu: bool,
 }
 
+/// What a shard of `bench models` computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum BenchPart {
+    /// Its directions of the reference dome.
+    Reference,
+    /// Its points' errors against the reference, per atmosphere and sun elevation.
+    Errors,
+}
+
 /// `bench models` arguments.
 #[derive(Debug, Args, Clone)]
 pub struct ModelBenchArgs {
@@ -534,13 +543,17 @@ pub struct ModelBenchArgs {
     #[arg(long, default_value_t = skytune::atmosphere::dome::COMMITTED_PATHS)]
     pub paths: u32,
     /// The reference's target relative standard error per direction (see `radiance`).
-    #[arg(long, value_parser = parse_target_se)]
-    pub target_se: Option<f64>,
-    /// Compute only the K-th of N shards of the reference dome (K/N or `auto`), written to
-    /// `--out` (a .csv); `skytune merge` combines the shards into `--reference`. The benchmark
-    /// itself then runs once, on one machine: its costs compare only within one run.
+    #[arg(long, value_parser = parse_target_se, default_value_t = skytune::atmosphere::dome::COMMITTED_TARGET_SE)]
+    pub target_se: f64,
+    /// Compute only the K-th of N shards (K/N or `auto`) of `--part`; `skytune merge` combines
+    /// them. The costs are not sharded: they compare only within one run on one machine.
     #[arg(long)]
     pub shard: Option<Shard>,
+    /// What `--shard` computes: the reference dome (written to `--out`, a .csv, merged into
+    /// `--reference`), or the points' errors against it (`--out` a folder holding
+    /// models-by-sun.csv, merged folder by folder into the unsharded run's file).
+    #[arg(long, value_enum, default_value = "reference")]
+    pub part: BenchPart,
     /// Force the software adapter (lavapipe).
     #[arg(long)]
     pub cpu: bool,

@@ -204,39 +204,33 @@ fn reference_shard(args: &ModelBenchArgs, shard: Shard) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The reference's settings `bench models` asks for.
-fn reference_settings(args: &ModelBenchArgs) -> ReferenceSettings {
-    ReferenceSettings { paths: args.paths, target_rel_se: args.target_se, ..dome::committed_settings() }
+/// The points' errors against the reference: rows per (atmosphere, point, sun), the analytic
+/// fits, build times and each point prepared for the default atmosphere.
+struct Accuracy {
+    by_sun: Vec<SunRow>,
+    fits: Vec<(String, Haze, model_points::Fit)>,
+    build_ms: Vec<Vec<f64>>,
+    prepared_default: Vec<Option<Prepared>>,
 }
 
-pub fn run(args: &ModelBenchArgs) -> anyhow::Result<()> {
-    if let Some(shard) = args.shard {
-        return reference_shard(args, shard);
-    }
-    let started = Instant::now();
-    let reference = reference_dome(&args.reference, reference_settings(args))?;
-    let (w, h) = cli::parse_size(&args.size)?;
-    let ctx = GpuContext::headless(if args.cpu { AdapterChoice::Cpu } else { AdapterChoice::from_env() })?;
-    let adapter = ctx.adapter_line();
-    println!("adapter: {adapter}");
-    let ev = Evaluator::new(&ctx)?;
-    let hazes: Vec<Haze> = if args.quick { vec![Haze::Default] } else { Haze::ALL.to_vec() };
-    let suns: Vec<f64> = if args.quick { dome::QUICK_SUN_ELEVATIONS_DEG.to_vec() } else { dome::SUN_ELEVATIONS_DEG.to_vec() };
-    let points: Vec<Point> = model_points::points().into_iter().filter(|p| !args.quick || p.quick).collect();
+/// Measures the points of `shard` (an item is an (atmosphere, point) pair, atmosphere after
+/// atmosphere) against the reference.
+fn accuracy(ev: &Evaluator<'_>, reference: &ReferenceDome, hazes: &[Haze], suns: &[f64], points: &[Point], shard: Shard) -> anyhow::Result<Accuracy> {
     let dirs = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
-
-    // Accuracy.
-    let bar = Reporter::new((points.len() * hazes.len()) as u64, "accuracy");
+    let bar = Reporter::new((points.len() * hazes.len()).div_ceil(shard.count) as u64, "accuracy");
     let mut by_sun: Vec<SunRow> = Vec::new();
     let mut fits: Vec<(String, Haze, model_points::Fit)> = Vec::new();
     let mut build_ms = vec![Vec::new(); points.len()];
     let mut prepared_default: Vec<Option<Prepared>> = (0..points.len()).map(|_| None).collect();
-    for &haze in &hazes {
+    for (h, &haze) in hazes.iter().enumerate() {
         let atm = haze.atmosphere();
         let refs: Vec<&dome::ReferenceSun> =
             suns.iter().map(|s| reference.sun(haze, *s).with_context(|| format!("the reference has no {} sun {s}", haze.name()))).collect::<anyhow::Result<_>>()?;
         let targets: Vec<FitTarget<'_>> = refs.iter().map(|r| FitTarget { sun_elev_deg: r.sun_elev_deg, dirs: &dirs, radiance: &r.radiance }).collect();
         for (k, p) in points.iter().enumerate() {
+            if !shard.owns(h * points.len() + k) {
+                continue;
+            }
             bar.set_message(format!("{} {}", p.id, haze.name()));
             let t = Instant::now();
             let prepared = ev.prepare(&p.method, &atm, &targets)?;
@@ -256,6 +250,65 @@ pub fn run(args: &ModelBenchArgs) -> anyhow::Result<()> {
         }
     }
     bar.finish();
+    Ok(Accuracy { by_sun, fits, build_ms, prepared_default })
+}
+
+/// `--shard K/N --part errors`: this shard's rows of models-by-sun.csv, as a shard's table in
+/// `--out` (a folder), for `skytune merge` to put together folder by folder.
+fn errors_shard(args: &ModelBenchArgs, shard: Shard) -> anyhow::Result<()> {
+    let reference = reference_dome(&args.reference, reference_settings(args))?;
+    let (hazes, suns, points) = selection(args);
+    let rows = hazes.len() * points.len() * suns.len();
+    let ids: Vec<&str> = points.iter().map(|p| p.id.as_str()).collect();
+    let inputs = skytune::support::shard::inputs_key(&[ReferenceDome::header(reference.settings, reference.dome).as_bytes(), format!("{hazes:?} {suns:?} {ids:?}").as_bytes()]);
+    let file = args.out.join("models-by-sun.csv");
+    if std::fs::read_to_string(&file).is_ok_and(|t| shard.is_complete(&t, rows, suns.len(), inputs)) {
+        println!("{}: shard {shard} of the errors is complete already (the same inputs); skipped", file.display());
+        return Ok(());
+    }
+    let ctx = GpuContext::headless(if args.cpu { AdapterChoice::Cpu } else { AdapterChoice::from_env() })?;
+    let ev = Evaluator::new(&ctx)?;
+    let acc = accuracy(&ev, &reference, &hazes, &suns, &points, shard)?;
+    let text = format!("{}\n{}", shard.table_line(rows, suns.len(), inputs), model_points::sun_rows_to_csv(&acc.by_sun));
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    skytune::support::safe_write::write_atomic(&file, text.as_bytes()).with_context(|| format!("writing {}", file.display()))?;
+    println!("wrote shard {shard} of the errors to {}; `skytune merge --out DIR FOLDERS...` combines them", file.display());
+    Ok(())
+}
+
+/// The atmospheres, sun elevations and points a run measures (`--quick`: fewer).
+fn selection(args: &ModelBenchArgs) -> (Vec<Haze>, Vec<f64>, Vec<Point>) {
+    let hazes: Vec<Haze> = if args.quick { vec![Haze::Default] } else { Haze::ALL.to_vec() };
+    let suns: Vec<f64> = if args.quick { dome::QUICK_SUN_ELEVATIONS_DEG.to_vec() } else { dome::SUN_ELEVATIONS_DEG.to_vec() };
+    let points: Vec<Point> = model_points::points().into_iter().filter(|p| !args.quick || p.quick).collect();
+    (hazes, suns, points)
+}
+
+/// The reference's settings `bench models` asks for.
+fn reference_settings(args: &ModelBenchArgs) -> ReferenceSettings {
+    ReferenceSettings { paths: args.paths, target_rel_se: Some(args.target_se), ..dome::committed_settings() }
+}
+
+pub fn run(args: &ModelBenchArgs) -> anyhow::Result<()> {
+    if let Some(shard) = args.shard {
+        return match args.part {
+            cli::BenchPart::Reference => reference_shard(args, shard),
+            cli::BenchPart::Errors => errors_shard(args, shard),
+        };
+    }
+    let started = Instant::now();
+    let reference = reference_dome(&args.reference, reference_settings(args))?;
+    let (w, h) = cli::parse_size(&args.size)?;
+    let ctx = GpuContext::headless(if args.cpu { AdapterChoice::Cpu } else { AdapterChoice::from_env() })?;
+    let adapter = ctx.adapter_line();
+    println!("adapter: {adapter}");
+    let ev = Evaluator::new(&ctx)?;
+    let (hazes, suns, points) = selection(args);
+    let dirs = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
+
+    // Accuracy.
+    let acc = accuracy(&ev, &reference, &hazes, &suns, &points, Shard::WHOLE)?;
+    let (by_sun, fits, mut build_ms, prepared_default) = (acc.by_sun, acc.fits, acc.build_ms, acc.prepared_default);
 
     // Cost: one frame measurement per distinct draw, side by side.
     let mut draws: Vec<Draw> = Vec::new();
@@ -370,12 +423,7 @@ fn report(
         if args.quick { " --quick" } else { "" }
     );
     let _ = writeln!(md, "- adapter: {adapter}");
-    let _ = writeln!(
-        md,
-        "- machine: {} logical CPUs; {} build of skytune",
-        std::thread::available_parallelism().map_or(0, |n| n.get()),
-        if cfg!(debug_assertions) { "debug" } else { "release" }
-    );
+    let _ = writeln!(md, "- machine: {} logical CPUs; {}", std::thread::available_parallelism().map_or(0, |n| n.get()), skytune::build_line());
     let _ = writeln!(
         md,
         "- dome: {} directions ({} equal-area elevation bands x {} azimuths over half a turn, solid-angle weights), camera at {} km, ground albedo {}",
@@ -397,6 +445,25 @@ fn report(
         "- the reference's own Monte Carlo noise, as a relative RMSE over the dome: mean {:.2}%, worst {:.2}% (errors below this are not resolved; by regime in the table below)",
         noise_mean * 100.0,
         noise.iter().cloned().fold(0.0, f64::max) * 100.0
+    );
+    let per_regime: Vec<String> = Regime::ALL
+        .iter()
+        .filter_map(|regime| {
+            let mut v: Vec<f64> = reference
+                .suns
+                .iter()
+                .filter(|s| hazes.contains(&s.haze) && suns.contains(&s.sun_elev_deg) && Regime::of(s.sun_elev_deg) == *regime)
+                .flat_map(|s| s.radiance.iter().zip(&s.std_err).flat_map(|(l, e)| (0..3).filter(|c| l[*c] > 0.0).map(move |c| e[c] / l[c])))
+                .collect();
+            v.sort_by(f64::total_cmp);
+            let median = *v.get(v.len() / 2)?;
+            Some(format!("{} median {:.2}%, worst {:.2}%", regime.name(), median * 100.0, v.last().copied().unwrap_or(0.0) * 100.0))
+        })
+        .collect();
+    let _ = writeln!(
+        md,
+        "- the reference's relative standard error per value (direction and channel), by regime (the goal: median at most 1% by day and at low sun and 3% at twilight, worst at most 5% and 10%): {}",
+        per_regime.join("; ")
     );
     let _ = writeln!(
         md,

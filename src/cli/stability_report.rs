@@ -190,7 +190,8 @@ fn report(count: usize, seed: u64, adapter: &str, results: &[ModelCounts], secon
     let mut md = String::new();
     let _ = writeln!(md, "# Stability of the sky models\n");
     let how = shards.map_or_else(String::new, |n| format!(" in {n} shards (`--shard K/{n}`, combined by `skytune merge`; seconds summed over the shards)"));
-    let _ = writeln!(md, "Written by `skytune sweep --count {count} --seed {seed}`{how} in {seconds:.0} s on {adapter}; re-run it to refresh this file.\n");
+    let _ =
+        writeln!(md, "Written by `skytune sweep --count {count} --seed {seed}`{how} in {seconds:.0} s on {adapter}, {}; re-run it to refresh this file.\n", skytune::build_line());
     let _ = writeln!(md, "## Method\n");
     let _ = writeln!(
         md,

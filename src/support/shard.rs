@@ -104,23 +104,33 @@ impl Shard {
         items.iter().enumerate().filter(|(i, _)| self.owns(*i)).map(|(_, t)| t.clone()).collect()
     }
 
-    /// The line a shard's table starts with; [`merge_tables`] reads it back. `inputs` names
-    /// everything the rows depend on (a hash of the settings and inputs), so that a shard
-    /// whose complete output is already there can be told from one of other settings.
-    pub fn table_line(self, total: usize, inputs: u64) -> String {
-        format!("# skytune shard {self} of {total} rows, inputs {inputs:016x} (every {}th row from row {}); combine the shards with `skytune merge`", self.count, self.index + 1)
+    /// The line a shard's table starts with; [`merge_tables`] reads it back. The table has
+    /// `total` rows in items of `rows_per_item` (1 for a row per item), dealt out in turn by item;
+    /// `inputs` names everything the rows depend on (a hash of the settings and inputs), so that
+    /// a shard whose complete output is already there can be told from one of other settings.
+    pub fn table_line(self, total: usize, rows_per_item: usize, inputs: u64) -> String {
+        format!(
+            "# skytune shard {self} of {total} rows, {rows_per_item} per item, inputs {inputs:016x} (every {}th item from item {}); combine the shards with `skytune merge`",
+            self.count,
+            self.index + 1
+        )
+    }
+
+    /// How many of a table's `total` rows in items of `rows_per_item` are this shard's.
+    fn rows_of(self, total: usize, rows_per_item: usize) -> usize {
+        (0..total).filter(|i| self.owns(i / rows_per_item.max(1))).count()
     }
 
     /// Whether `text` is this shard's whole table for these inputs ([`Self::table_line`], its
     /// heading lines and every row): a rerun of an interrupted array may skip it.
-    pub fn is_complete(self, text: &str, total: usize, inputs: u64) -> bool {
+    pub fn is_complete(self, text: &str, total: usize, rows_per_item: usize, inputs: u64) -> bool {
         let mut lines = text.lines();
-        if lines.next() != Some(self.table_line(total, inputs).as_str()) || !text.ends_with('\n') {
+        if lines.next() != Some(self.table_line(total, rows_per_item, inputs).as_str()) || !text.ends_with('\n') {
             return false;
         }
         let rest: Vec<&str> = lines.collect();
         let head = rest.iter().take_while(|l| l.starts_with('#')).count() + 1;
-        rest.len() == head + (0..total).filter(|i| self.owns(*i)).count()
+        rest.len() == head + self.rows_of(total, rows_per_item)
     }
 }
 
@@ -152,12 +162,18 @@ impl fmt::Display for Shard {
     }
 }
 
-/// Reads a shard's first line: (shard, total rows), or `None` when the text is no shard's table.
-fn read_table_line(line: &str) -> Option<(Shard, usize)> {
+/// Reads a shard's first line: (shard, total rows, rows per item), or `None` when the text is
+/// no shard's table.
+fn read_table_line(line: &str) -> Option<(Shard, usize, usize)> {
     let rest = line.strip_prefix("# skytune shard ")?;
     let (shard, rest) = rest.split_once(" of ")?;
-    let total = rest.split_once(" rows")?.0.parse().ok()?;
-    Some((Shard::parse(shard).ok()?, total))
+    let (total, rest) = rest.split_once(" rows")?;
+    // Tables of an earlier build name no item size: a row per item.
+    let per_item = match rest.strip_prefix(", ").and_then(|r| r.split_once(" per item")) {
+        Some((g, _)) => g.parse().ok().filter(|g| *g > 0)?,
+        None => 1,
+    };
+    Some((Shard::parse(shard).ok()?, total.parse().ok()?, per_item))
 }
 
 /// Whether `text` is a shard's table (as [`Shard::table_line`] starts it).
@@ -172,15 +188,20 @@ pub fn is_shard_table(text: &str) -> bool {
 pub fn merge_tables(parts: &[(String, String)]) -> Result<String, ShardError> {
     let bad = |file: &str, line: usize, message: String| ShardError::Part { file: file.into(), line, message };
     let mut read: Vec<(Shard, &str, Vec<&str>, Vec<&str>)> = Vec::new();
-    let mut expected: Option<(usize, usize)> = None;
+    let mut expected: Option<(usize, usize, usize)> = None;
     for (file, text) in parts {
         let mut lines = text.lines();
         let first = lines.next().unwrap_or("");
-        let (shard, total) = read_table_line(first).ok_or_else(|| bad(file, 1, "not a shard's table (its first line is not \"# skytune shard K/N of M rows ...\")".into()))?;
+        let (shard, total, per_item) =
+            read_table_line(first).ok_or_else(|| bad(file, 1, "not a shard's table (its first line is not \"# skytune shard K/N of M rows, G per item, ...\")".into()))?;
         match expected {
-            None => expected = Some((shard.count, total)),
-            Some((n, t)) if (n, t) != (shard.count, total) => {
-                return Err(bad(file, 1, format!("shard {shard} of {total} rows does not fit with {}'s {n} shards of {t} rows", parts[0].0)));
+            None => expected = Some((shard.count, total, per_item)),
+            Some((n, t, g)) if (n, t, g) != (shard.count, total, per_item) => {
+                return Err(bad(
+                    file,
+                    1,
+                    format!("shard {shard} of {total} rows in items of {per_item} does not fit with {}'s {n} shards of {t} rows in items of {g}", parts[0].0),
+                ));
             }
             Some(_) => {}
         }
@@ -198,13 +219,13 @@ pub fn merge_tables(parts: &[(String, String)]) -> Result<String, ShardError> {
         if let Some((_, other, _, _)) = read.iter().find(|(s, ..)| *s == shard) {
             return Err(bad(file, 1, format!("shard {shard} again (also {other})")));
         }
-        let owned = (0..total).filter(|i| shard.owns(*i)).count();
+        let owned = shard.rows_of(total, per_item);
         if rows.len() != owned {
             return Err(bad(file, head_lines + 2, format!("shard {shard} of {total} rows should hold {owned} rows, found {}", rows.len())));
         }
         read.push((shard, file.as_str(), head.to_vec(), rows.to_vec()));
     }
-    let (count, total) = expected.ok_or_else(|| bad("", 0, "no parts to merge".into()))?;
+    let (count, total, per_item) = expected.ok_or_else(|| bad("", 0, "no parts to merge".into()))?;
     if read.len() != count {
         let missing: Vec<String> = (0..count).filter(|k| !read.iter().any(|(s, ..)| s.index == *k)).map(|k| Shard { index: k, count }.to_string()).collect();
         return Err(bad(read[0].1, 1, format!("{} of {count} shards given; missing {}", read.len(), missing.join(", "))));
@@ -216,7 +237,8 @@ pub fn merge_tables(parts: &[(String, String)]) -> Result<String, ShardError> {
         out.push('\n');
     }
     for i in 0..total {
-        out.push_str(read[i % count].3[i / count]);
+        let item = i / per_item;
+        out.push_str(read[item % count].3[(item / count) * per_item + i % per_item]);
         out.push('\n');
     }
     Ok(out)
@@ -227,8 +249,12 @@ mod tests {
     use super::*;
 
     fn table(shard: Shard, total: usize) -> String {
-        let mut s = format!("{}\n# settings\nx,y\n", shard.table_line(total, 7));
-        for i in (0..total).filter(|i| shard.owns(*i)) {
+        grouped(shard, total, 1)
+    }
+
+    fn grouped(shard: Shard, total: usize, per_item: usize) -> String {
+        let mut s = format!("{}\n# settings\nx,y\n", shard.table_line(total, per_item, 7));
+        for i in (0..total).filter(|i| shard.owns(i / per_item)) {
             s.push_str(&format!("{i},{}\n", i * i));
         }
         s
@@ -268,13 +294,13 @@ mod tests {
     fn a_complete_part_is_recognised_and_a_cut_one_is_not() {
         let s = Shard { index: 1, count: 3 };
         let t = table(s, 10);
-        assert!(s.is_complete(&t, 10, 7));
-        assert!(!s.is_complete(&t, 10, 8), "other inputs");
-        assert!(!Shard { index: 0, count: 3 }.is_complete(&t, 10, 7), "another shard");
+        assert!(s.is_complete(&t, 10, 1, 7));
+        assert!(!s.is_complete(&t, 10, 1, 8), "other inputs");
+        assert!(!Shard { index: 0, count: 3 }.is_complete(&t, 10, 1, 7), "another shard");
         let cut = &t[..t.len() - 4];
-        assert!(!s.is_complete(cut, 10, 7));
+        assert!(!s.is_complete(cut, 10, 1, 7));
         let fewer: String = t.lines().take(t.lines().count() - 1).map(|l| format!("{l}\n")).collect();
-        assert!(!s.is_complete(&fewer, 10, 7));
+        assert!(!s.is_complete(&fewer, 10, 1, 7));
         assert_ne!(inputs_key(&[b"a", b"bc"]), inputs_key(&[b"ab", b"c"]));
     }
 
@@ -288,6 +314,9 @@ mod tests {
             s
         };
         let parts: Vec<(String, String)> = [2, 0, 1].iter().map(|k| (format!("part{k}"), table(Shard { index: *k, count: 3 }, 10))).collect();
+        assert_eq!(merge_tables(&parts).as_deref(), Ok(whole.as_str()));
+        // Items of 4 rows each (the last one short), dealt out by item.
+        let parts: Vec<(String, String)> = [1, 2, 0].iter().map(|k| (format!("part{k}"), grouped(Shard { index: *k, count: 3 }, 10, 4))).collect();
         assert_eq!(merge_tables(&parts).as_deref(), Ok(whole.as_str()));
     }
 
