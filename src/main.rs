@@ -295,7 +295,7 @@ fn reference_radiance(
             "paths until a relative standard error of {t} per channel (at most {}, in batches of {}, at least {})",
             settings.paths,
             skytune::atmosphere::reference::BATCH_PATHS,
-            skytune::atmosphere::reference::MIN_TARGET_PATHS
+            settings.min_paths
         ),
         None => format!("{} paths per case", settings.paths),
     };

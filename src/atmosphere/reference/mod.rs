@@ -57,14 +57,30 @@ pub struct ReferenceSettings {
     /// Seed of the paths.
     pub seed: u64,
     /// Stop drawing paths once every channel's standard error is at most this fraction of its
-    /// radiance (checked after each batch of [`BATCH_PATHS`], from [`MIN_TARGET_PATHS`] on);
+    /// radiance (checked after each batch of [`BATCH_PATHS`], from `min_paths` on);
     /// `None` draws `paths` every time.
     pub target_rel_se: Option<f64>,
+    /// With a target, the fewest paths before it may stop an estimate (rounded up to a whole
+    /// batch); [`MIN_TARGET_PATHS`] unless a coarse estimate will do.
+    pub min_paths: u32,
+    /// How single scattering finds the sunlight at its nodes: by quadrature (exact; the
+    /// default), or from the table orders 2 and up use (within 3.7e-4 of it, and five times
+    /// faster where few paths are drawn: `auto`'s references).
+    pub single_sunlight: SunlightBy,
 }
 
 impl Default for ReferenceSettings {
     fn default() -> Self {
-        Self { tau_tolerance: 1e-7, max_panel_km: 1.0, max_order: 24, paths: 8192, seed: 0x5eed, target_rel_se: None }
+        Self {
+            tau_tolerance: 1e-7,
+            max_panel_km: 1.0,
+            max_order: 24,
+            paths: 8192,
+            seed: 0x5eed,
+            target_rel_se: None,
+            min_paths: MIN_TARGET_PATHS,
+            single_sunlight: SunlightBy::Quadrature,
+        }
     }
 }
 
@@ -72,8 +88,9 @@ impl Default for ReferenceSettings {
 /// stops depends on the seed and the target only, never on how many threads drew the batches.
 pub const BATCH_PATHS: u32 = 64;
 
-/// Fewest paths before a target standard error may stop an estimate: the variance of fewer
-/// paths is itself too noisy to trust (a twilight case's rare bright paths are not yet seen).
+/// Fewest paths before a target standard error may stop an estimate, by default: the variance
+/// of fewer paths is itself too noisy to trust (a twilight case's rare bright paths are not yet
+/// seen).
 pub const MIN_TARGET_PATHS: u32 = 256;
 
 /// One radiance query: where the camera is, where the sun is, where it looks.
@@ -481,7 +498,7 @@ impl Reference {
     fn single(&self, seg: &Segment, towards_sun: DVec3) -> Rgb {
         let mut sum = [0.0; 3];
         let j = |t: f64, tau: Rgb| -> Rgb {
-            let s = self.sun_scattered(seg.origin + seg.dir * t, seg.dir, towards_sun, SunlightBy::Quadrature);
+            let s = self.sun_scattered(seg.origin + seg.dir * t, seg.dir, towards_sun, self.settings.single_sunlight);
             std::array::from_fn(|c| s[c] * (-tau[c]).exp())
         };
         let mut j_a = j(seg.nodes[0], seg.tau[0]);
@@ -562,7 +579,7 @@ impl Reference {
                     sums.add(x);
                 }
                 if let Some(target) = self.settings.target_rel_se {
-                    if sums.n >= MIN_TARGET_PATHS && sums.within(single, target) {
+                    if sums.n >= self.settings.min_paths && sums.within(single, target) {
                         break 'batches;
                     }
                 }
