@@ -22,5 +22,5 @@ pub mod support;
 /// Which build this is, for measurements: "release build of skytune at 1a2b3c4" (the commit the
 /// build was made from; uncommitted changes are not named).
 pub fn build_line() -> String {
-    format!("{} build of skytune at {}", if cfg!(debug_assertions) { "debug" } else { "release" }, env!("SKYTUNE_COMMIT"))
+    format!("{} build of skytune at {}", if cfg!(debug_assertions) { "debug" } else { "release" }, option_env!("SKYTUNE_COMMIT").unwrap_or("an unknown commit"))
 }

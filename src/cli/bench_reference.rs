@@ -133,11 +133,11 @@ fn report(args: &ReferenceBenchArgs, rows: &[Row], long_seconds: &[(Regime, f64)
     let _ = writeln!(md, "# How the reference converges\n");
     let _ = writeln!(
         md,
-        "Written by `skytune bench reference --paths {} --long {}` in {seconds:.0} s ({} logical CPUs, {} build); re-run it to refresh this file and the chart.\n",
+        "Written by `skytune bench reference --paths {} --long {}` in {seconds:.0} s ({} logical CPUs, {}); re-run it to refresh this file and the chart.\n",
         args.paths,
         args.long,
         std::thread::available_parallelism().map_or(0, |n| n.get()),
-        if cfg!(debug_assertions) { "debug" } else { "optimised" }
+        skytune::build_line()
     );
     let _ = writeln!(
         md,
