@@ -290,16 +290,7 @@ fn reference_radiance(
     if capped > 0 {
         println!("{capped} of {} cases reached the cap of {} paths above the target standard error (their se_ columns say how far)", list.len(), settings.paths);
     }
-    let precision = match settings.target_rel_se {
-        Some(t) => format!(
-            "paths until a relative standard error of {t} per channel (at most {}, in batches of {}, at least {})",
-            settings.paths,
-            skytune::atmosphere::reference::BATCH_PATHS,
-            settings.min_paths
-        ),
-        None => format!("{} paths per case", settings.paths),
-    };
-    Ok((estimates, format!("model reference: max order {}, {precision}, seed {}", settings.max_order, settings.seed)))
+    Ok((estimates, format!("model reference: max order {}, {}, seed {}", settings.max_order, settings.describe_paths(), settings.seed)))
 }
 
 /// `skytune merge`: the shards' outputs combined into what the unsharded run writes: tables,

@@ -439,15 +439,6 @@ impl ReferenceDome {
         shard.is_complete(text, total, 1, Self::shard_inputs(hazes, suns_deg, dome, settings))
     }
 
-    /// How hard the reference worked, for reports: "512 Monte Carlo paths per direction", or
-    /// with a target, the target and the cap.
-    pub fn describe_precision(&self) -> String {
-        match self.settings.target_rel_se {
-            Some(t) => format!("Monte Carlo paths per direction until a relative standard error of {t} per channel (at most {})", self.settings.paths),
-            None => format!("{} Monte Carlo paths per direction", self.settings.paths),
-        }
-    }
-
     /// One shard's rows of what [`Self::compute`] and [`Self::save`] write, as a shard's table
     /// (`skytune merge` combines the shards into the dataset, byte for byte).
     pub fn shard_table(

@@ -435,7 +435,7 @@ fn report(
     );
     let _ = writeln!(md, "- sun elevations (degrees): {}", suns.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(", "));
     let _ = writeln!(md, "- atmospheres: {}", hazes.iter().map(|h| h.name()).collect::<Vec<_>>().join(", "));
-    let _ = writeln!(md, "- reference: `src/atmosphere/reference/`, every order, {}, cached in {}", reference.describe_precision(), args.reference.display());
+    let _ = writeln!(md, "- reference: `src/atmosphere/reference/`, every order, {}, cached in {}", reference.settings.describe_paths(), args.reference.display());
     // The reference's own noise: a floor under every relative RMSE.
     let dirs = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
     let noise: Vec<f64> = reference.suns.iter().filter(|s| hazes.contains(&s.haze) && suns.contains(&s.sun_elev_deg)).map(|s| s.relative_noise(&dirs)).collect();

@@ -84,6 +84,21 @@ impl Default for ReferenceSettings {
     }
 }
 
+impl ReferenceSettings {
+    /// How many paths each value draws, for reports: "8192 Monte Carlo paths per value", or
+    /// with a target, the target, the least and the most.
+    pub fn describe_paths(&self) -> String {
+        match self.target_rel_se {
+            Some(t) => format!(
+                "Monte Carlo paths per value until a relative standard error of {t} per channel ({} to {}, in batches of {BATCH_PATHS})",
+                self.min_paths.min(self.paths),
+                self.paths
+            ),
+            None => format!("{} Monte Carlo paths per value", self.paths),
+        }
+    }
+}
+
 /// Paths drawn between two looks at a target standard error. Fixed, so that where an estimate
 /// stops depends on the seed and the target only, never on how many threads drew the batches.
 pub const BATCH_PATHS: u32 = 64;
