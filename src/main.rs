@@ -159,8 +159,9 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     let started = std::time::Instant::now();
-    let units =
-        "sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); default atmosphere (Hillaire 2020); sun disc and ground surface excluded";
+    let units: std::borrow::Cow<str> =
+        "sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); default atmosphere (Hillaire 2020); sun disc and ground surface excluded"
+            .into();
     // The reference's standard errors and paths, written beside its radiance.
     let mut estimates = None;
     let (out, units, comment) = match args.model {
@@ -220,9 +221,10 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
         cli::RadianceModel::Preetham | cli::RadianceModel::Hosek | cli::RadianceModel::Linear => {
             use skytune::atmosphere::analytic::{self, AnalyticModel, LinearParams};
             anyhow::ensure!(args.turbidity.is_finite(), "--turbidity: expected a finite number, found {}", args.turbidity);
+            let units = if args.published_units { analytic::AnalyticUnits::Published } else { analytic::AnalyticUnits::Calibrated };
             let model = match args.model {
-                cli::RadianceModel::Preetham => AnalyticModel::Preetham { turbidity: args.turbidity },
-                cli::RadianceModel::Hosek => AnalyticModel::Hosek { turbidity: args.turbidity, albedo: 0.0 },
+                cli::RadianceModel::Preetham => AnalyticModel::Preetham { turbidity: args.turbidity, units },
+                cli::RadianceModel::Hosek => AnalyticModel::Hosek { turbidity: args.turbidity, albedo: 0.0, units },
                 _ => AnalyticModel::Linear(
                     LinearParams::preset(&args.preset)
                         .ok_or_else(|| anyhow!("--preset: unknown table \"{}\"; expected one of {}", args.preset, analytic::LINEAR_PRESETS.map(|p| p.0).join(", ")))?,
@@ -230,7 +232,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             };
             let albedo_note = if matches!(model, AnalyticModel::Hosek { .. }) { " (the albedo column is used)" } else { "" };
             let per_case = |c: &skytune::atmosphere::reference::Case| match model {
-                AnalyticModel::Hosek { turbidity, .. } => AnalyticModel::Hosek { turbidity, albedo: c.albedo },
+                AnalyticModel::Hosek { turbidity, units, .. } => AnalyticModel::Hosek { turbidity, albedo: c.albedo, units },
                 m => m,
             };
             let out: Vec<[f64; 3]> = if args.on_cpu {
@@ -249,7 +251,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
                 probe.analytic(&ctx, &list, per_case)?.into_iter().map(|c| c.map(f64::from)).collect()
             };
             let place = if args.on_cpu { "CPU" } else { "GPU" };
-            (out, model.units(), format!("model {} on the {place}: turbidity {}{albedo_note}", model.name(), args.turbidity))
+            (out, model.units().into(), format!("model {} on the {place}: turbidity {}{albedo_note}", model.name(), args.turbidity))
         }
     };
     let name = clap::ValueEnum::to_possible_value(&args.model).map_or_else(String::new, |v| v.get_name().to_string());
@@ -588,7 +590,12 @@ fn check(path: &Path) -> anyhow::Result<()> {
         let mut failed = false;
         for (season, sky) in skytune::sky::load::SEASONS.iter().zip(&c.skies) {
             match skytune::sky::load_sky_file(sky) {
-                Ok(s) => println!("  {season}: {} -> \"{}\" ok", sky.display(), s.name),
+                Ok(s) => {
+                    println!("  {season}: {} -> \"{}\" ok", sky.display(), s.name);
+                    for w in &s.warnings {
+                        println!("  warning: {w}");
+                    }
+                }
                 Err(e) => {
                     println!("  {season}: {} has errors:\n{e}", sky.display());
                     failed = true;
@@ -602,6 +609,9 @@ fn check(path: &Path) -> anyhow::Result<()> {
     }
     let sky = skytune::sky::load_sky_file(path).map_err(|e| anyhow!("{e}"))?;
     print!("{}", summary(&sky));
+    for w in &sky.warnings {
+        println!("warning: {w}");
+    }
     if let Some(budget) = sky.auto_model {
         let ctx = GpuContext::headless(AdapterChoice::from_env())?;
         let pick = skytune::support::progress::run_reported("auto model", |job| skytune::measure::auto_model::pick_cached(&sky, budget, &ctx, job))?;

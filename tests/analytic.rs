@@ -61,10 +61,12 @@ fn gpu_evaluation_matches_the_cpu_evaluation() {
     // (model, threshold): f32 against f64 (Preetham) or the crate's f32 (Hosek); both well below
     // what a display shows.
     for (model, limit) in [
-        (AnalyticModel::Preetham { turbidity: 2.0 }, 2e-3),
-        (AnalyticModel::Preetham { turbidity: 8.0 }, 2e-3),
-        (AnalyticModel::Hosek { turbidity: 2.0, albedo: 0.3 }, 2e-3),
-        (AnalyticModel::Hosek { turbidity: 9.5, albedo: 1.0 }, 2e-3),
+        (AnalyticModel::Preetham { turbidity: 2.0, units: Default::default() }, 2e-3),
+        (AnalyticModel::Preetham { turbidity: 8.0, units: Default::default() }, 2e-3),
+        (AnalyticModel::Preetham { turbidity: 2.5, units: analytic::AnalyticUnits::Published }, 2e-3),
+        (AnalyticModel::Hosek { turbidity: 2.5, albedo: 0.3, units: analytic::AnalyticUnits::Published }, 2e-3),
+        (AnalyticModel::Hosek { turbidity: 2.0, albedo: 0.3, units: Default::default() }, 2e-3),
+        (AnalyticModel::Hosek { turbidity: 9.5, albedo: 1.0, units: Default::default() }, 2e-3),
         (AnalyticModel::Linear(LinearParams::preset("desert").unwrap()), 1e-6),
     ] {
         let gpu = probe.analytic(&ctx, &cases, |_| model).unwrap();
@@ -84,14 +86,16 @@ fn every_result_is_finite_and_non_negative_beyond_the_domains() {
         let turbidity = rng.f64() * 14.0 - 2.0;
         let sun = analytic::direction((rng.f64() * 110.0 - 20.0).to_radians(), rng.f64() * std::f64::consts::TAU);
         let view = dir(&mut rng);
-        for model in [AnalyticModel::Preetham { turbidity }, AnalyticModel::Hosek { turbidity, albedo: rng.f64() * 1.4 - 0.2 }] {
+        for model in
+            [AnalyticModel::Preetham { turbidity, units: Default::default() }, AnalyticModel::Hosek { turbidity, albedo: rng.f64() * 1.4 - 0.2, units: Default::default() }]
+        {
             let l = model.radiance(view, sun, 12.0);
             assert!(l.iter().all(|v| v.is_finite() && *v >= 0.0), "{model:?} sun {sun:?} view {view:?}: {l:?}");
         }
     }
     // Non-finite settings fall back rather than poison the frame.
     for t in [f64::NAN, f64::INFINITY] {
-        assert!(AnalyticModel::Preetham { turbidity: t }.radiance([0.0, 1.0, 0.0], [0.6, 0.8, 0.0], 12.0).iter().all(|v| v.is_finite()));
+        assert!(AnalyticModel::Preetham { turbidity: t, units: Default::default() }.radiance([0.0, 1.0, 0.0], [0.6, 0.8, 0.0], 12.0).iter().all(|v| v.is_finite()));
     }
 }
 
@@ -116,7 +120,7 @@ fn preetham_fails_below_its_clamp_and_not_above_it() {
 
 #[test]
 fn below_the_horizon_the_sky_fades_continuously() {
-    for model in [AnalyticModel::Preetham { turbidity: 3.0 }, AnalyticModel::Hosek { turbidity: 3.0, albedo: 0.2 }] {
+    for model in [AnalyticModel::Preetham { turbidity: 3.0, units: Default::default() }, AnalyticModel::Hosek { turbidity: 3.0, albedo: 0.2, units: Default::default() }] {
         let view = analytic::direction(0.3, 0.5);
         let at = |deg: f64| model.radiance(view, analytic::direction(deg.to_radians(), 0.0), 0.0)[1];
         // Hosek's coefficients go as the cube root of the elevation: steep, but continuous.
@@ -238,4 +242,22 @@ fn lit_clouds_follow_the_model() {
     let noon = mean(12.0, SkyModelKind::Lut);
     let evening = mean(18.0, SkyModelKind::Lut);
     assert!(evening[0] / evening[2].max(1.0) > 1.1 * noon[0] / noon[2].max(1.0), "noon {noon:?}, evening {evening:?}");
+}
+
+/// The calibration tables are what `calibration` gives today against the committed reference
+/// dome (so a new reference shows here, not as a silent exposure change).
+#[test]
+fn analytic_calibration_matches_the_committed_reference() {
+    use skytune::measure::model_points::{calibration, Method};
+    let fits = [(Method::Preetham, analytic::PREETHAM_CALIBRATION), (Method::Hosek, analytic::HOSEK_CALIBRATION)].map(|(m, c)| (calibration(&m).unwrap(), m, c));
+    for (fitted, method, _) in &fits {
+        eprintln!("{}: {}", method.model_name(), fitted.iter().map(|(e, k)| format!("({e:.1}, {k:.4e})")).collect::<Vec<_>>().join(", "));
+    }
+    for (fitted, method, committed) in fits {
+        assert_eq!(fitted.len(), committed.len(), "{}: {fitted:?}", method.model_name());
+        for (f, c) in fitted.iter().zip(&committed) {
+            assert_eq!(f.0, c.0, "{}: sun elevations", method.model_name());
+            assert!((f.1 / c.1 - 1.0).abs() < 0.005, "{}: at sun {} degrees the fit gives {:.4e}, the code has {:.4e}", method.model_name(), f.0, f.1, c.1);
+        }
+    }
 }

@@ -40,6 +40,30 @@ fn check_prints_a_summary_or_located_errors() {
 }
 
 #[test]
+fn check_warns_where_a_tiled_mesh_texture_meets_the_zenith() {
+    let (_dir, sky) = common::default_sky_folder();
+    let cloud_warnings = |o: &std::process::Output| String::from_utf8_lossy(&o.stdout).lines().filter(|l| l.starts_with("warning:") && l.contains("\"clouds_clear\"")).count();
+    let o = skytune().arg("check").arg(&sky).output().unwrap();
+    assert_eq!(cloud_warnings(&o), 0, "{}", String::from_utf8_lossy(&o.stdout));
+    // The first cloud stage back on the dome's mesh coordinates, tiled 3 x 2.
+    let layer = "uv_scale = [3, 3]\nuv = { kind = \"layer\", height_km = 2, radius_km = 4, size_km = 10, horizon_fade_deg = 0 }\n";
+    let text = std::fs::read_to_string(&sky).unwrap();
+    assert!(text.contains(layer), "the written sky's clouds changed");
+    let text = text.replacen(layer, "uv_scale = [3, 2]\n", 1);
+    std::fs::write(&sky, &text).unwrap();
+    let line = text[..text.find("uv_scale = [3, 2]").unwrap()].matches('\n').count() + 1;
+    let o = skytune().arg("check").arg(&sky).output().unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "a warning is not an error");
+    let warning = stdout.lines().find(|l| l.starts_with("warning:") && l.contains("\"clouds_clear\"")).unwrap_or_else(|| panic!("no warning in {stdout}"));
+    assert!(warning.contains(&format!("sky.toml:{line}:")) && warning.contains(".stage[0].uv_scale:") && warning.contains("zenith"), "{warning}");
+    // Untiled, or on a band below the zenith, the mesh mapping is fine.
+    std::fs::write(&sky, text.replacen("uv_scale = [3, 2]\n", "uv_scale = [1, 1]\n", 1)).unwrap();
+    let o = skytune().arg("check").arg(&sky).output().unwrap();
+    assert_eq!(cloud_warnings(&o), 0);
+}
+
+#[test]
 fn bad_arguments_are_clear_errors() {
     let o = skytune().args(["render", "--tier", "3", "--out", "/tmp/never.png"]).output().unwrap();
     assert!(!o.status.success());
@@ -132,7 +156,12 @@ fn every_committed_sky_is_valid() {
     for entry in std::fs::read_dir(&skies).unwrap() {
         let path = entry.unwrap().path().join("sky.toml");
         if path.is_file() {
-            skytune::sky::load_sky_file(&path).unwrap_or_else(|e| panic!("{e}"));
+            let sky = skytune::sky::load_sky_file(&path).unwrap_or_else(|e| panic!("{e}"));
+            // Only the skydome's tiled stars and their mask stay on the mesh mapping (drawn texel
+            // by texel by the software strategy); every cloud layer is on the layer mapping.
+            for w in &sky.warnings {
+                assert!(w.message.starts_with("\"skydome\":"), "{}: {w}", path.display());
+            }
             n += 1;
         }
     }

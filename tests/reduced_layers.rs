@@ -70,10 +70,11 @@ fn fine_layers_and_billboards_stay_at_full_resolution() {
 #[test]
 fn alpha_layers_too_fine_for_half_resolution_go_whole_to_a_finer_buffer() {
     // At 640 x 360 and 70 degrees of field a frame has 5.14 pixels per degree. The cloudy layer's
-    // finer texture has 2.69 texels per degree: too fine for a half-resolution buffer (2.57), and
-    // its terms cannot be split as an opaque layer's. `auto` draws it whole at 1.75 (2.94 pixels
-    // per degree) rather than on the frame; the clear layer's (4.04) needs 1.27, where a buffer
-    // costs more than it saves, and stays on the frame. `half` keeps both on the frame.
+    // finer texture (at its densest, towards the horizon of its cloud layer) is too fine for a
+    // half-resolution buffer (2.57), and its terms cannot be split as an opaque layer's. `auto`
+    // draws it whole in a buffer between 1.5 and 2 rather than on the frame; the clear layer's
+    // needs less than 1.5, where a buffer costs more than it saves, and stays on the frame.
+    // `half` keeps both on the frame.
     let sky = default_sky();
     let mut h = common::headless(640, 360);
     h.set_sky(&sky).expect("uploaded");
@@ -81,13 +82,12 @@ fn alpha_layers_too_fine_for_half_resolution_go_whole_to_a_finer_buffer() {
     let input = FrameInput::new(12.0, 0.6);
     let full = RenderOptions { glare: false, strategy: FillStrategy { dome_resolution: DomeResolution::Full, ..FillStrategy::software() }, ..Default::default() };
     let sharp = h.render(&sky, &input, &camera, &full).expect("rendered");
-    let at_1_75 = Divisor::at_most(1.75, Divisor::FULL, Divisor::HALF);
     h.render(&sky, &input, &camera, &RenderOptions { strategy: FillStrategy { dome_resolution: DomeResolution::Half, ..full.strategy }, ..full }).expect("rendered");
     let half = h.renderer.stats.clone();
     assert!(half.reduced_runs.iter().all(|&d| d == Divisor::HALF), "{half:?}");
     let soft = h.render(&sky, &input, &camera, &RenderOptions { strategy: FillStrategy { dome_resolution: DomeResolution::Auto, ..full.strategy }, ..full }).expect("rendered");
     let auto = h.renderer.stats.clone();
-    assert!(auto.reduced_runs.contains(&at_1_75), "the cloudy layer at 1.75 ({auto:?})");
+    assert!(auto.reduced_runs.iter().any(|&d| d > Divisor::FULL && d < Divisor::HALF), "the cloudy layer between 1.5 and 2 ({auto:?})");
     assert_eq!(auto.objects_reduced, half.objects_reduced + 1, "one layer more in a buffer, the clear clouds still on the frame ({auto:?})");
     let (d, _) = common::diff(&sharp, &soft, 6);
     assert!(d.differing < 0.002, "{:.4} of the pixels differ from the full-resolution frame by more than 6 levels (largest {})", d.differing, d.max);
@@ -201,10 +201,11 @@ fn joined_runs_give_the_same_picture_with_one_composite_less() {
         // The same sums in another order: rounding of the 8-bit target moves a level or two. A
         // seeded buffer also interpolates the product of the upper run's transmittance and the
         // lower run's colour where the composites multiply interpolated values: a few levels
-        // more at cloud edges, the coarser the clouds' buffer (noon's at 1.75: 0.2% of the
-        // pixels, 5 levels at most).
+        // more at cloud edges, the more detail a buffer pixel of the clouds holds: noon's cloud
+        // layers, whose texels crowd towards their horizon, 0.5% of the pixels, 19 levels at
+        // most (5 when the clouds were on the dome's mesh coordinates).
         let (d, _) = common::diff(&one, &two, 2);
-        assert!(d.differing < 0.005 && d.max <= 12, "{what}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
+        assert!(d.differing < 0.006 && d.max <= 24, "{what}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
         // Two runs: the second's buffer seeded with the first holds their combination, and the
         // draws between them take the first off again; the same picture as combining them in a
         // pass of their own. Three runs, or a second run coarser than the first (a physical
@@ -386,9 +387,9 @@ fn two_alpha_layers_drawn_at_once_give_the_same_picture() {
     // pair on the cloudy layer's grid). Over the seed and after a seeding pass, with and without
     // the scene, and on the HDR target.
     let sky = default_sky();
-    // Large enough for both cloud layers to go to a reduced buffer (at 640 x 360 the clear one
-    // needs a finer one than `auto` makes).
-    let mut h = common::headless(960, 540);
+    // Large enough for both cloud layers to go to a reduced buffer (at 960 x 540 the clear one,
+    // densest towards its layer's horizon, needs a finer one than `auto` makes).
+    let mut h = common::headless(1280, 720);
     h.set_sky(&sky).expect("uploaded");
     let horizon = Camera { pitch_deg: 5.0, ..Camera::default() };
     let up = Camera { pitch_deg: 80.0, ..Camera::default() };

@@ -42,6 +42,28 @@ fn storm() {
     render_default("default_storm", 15.0, 0.95);
 }
 
+/// Straight up by day under clouds (`skytune render --view zenith --hour 15 --weather 0.3`): the
+/// cloud layers meet no pole there (their `layer` mapping), where the dome's mesh coordinates
+/// drew an eight-armed star.
+fn render_zenith(name: &str, sky: &skytune::sky::Sky) {
+    let mut h = common::headless(W, H);
+    h.set_sky(sky).unwrap();
+    let camera = Camera::preset("zenith").unwrap();
+    let img = h.render(sky, &FrameInput::new(15.0, 0.3), &camera, &RenderOptions::default()).unwrap();
+    common::check_reference(name, &img);
+}
+
+#[test]
+fn zenith_of_the_built_in_sky() {
+    render_zenith("default_zenith", &default_sky());
+}
+
+#[test]
+fn zenith_of_the_forest_sky() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("skies/forest/sky.toml");
+    render_zenith("forest_zenith", &load_sky_file(&path).unwrap());
+}
+
 /// Adds an opaque full-dome object, drawn last, whose colour is `rgba` and whose ref colour is
 /// its diffuse: it paints the whole sky unless its alpha hides it.
 fn sky_with_wall(rgba: &str) -> (tempfile::TempDir, skytune::sky::Sky) {

@@ -122,3 +122,71 @@ fn multiple_scattering_models_match_the_reference() {
     let (b0, b1, b6) = (blue(&by_iterations[0]), blue(&by_iterations[1]), blue(&by_iterations[2]));
     assert!(b1 > b0 && b6 > b1 && b6 - b1 < b1 - b0, "blue sums by iteration: {b0} {b1} {b6}");
 }
+
+/// Solid-angle-weighted sum of the displayed luminance (Rec. 709 weights of the sRGB-decoded
+/// pixels) over the pixels of a square render by `camera` (90 degrees across) that look above
+/// the horizon, and the solid angle they cover, sr.
+fn sky_luminance(img: &image::RgbaImage, camera: &skytune::render::Camera) -> (f64, f64) {
+    let decode = |v: u8| skytune::atmosphere::dome::srgb_decode(v as f64 / 255.0);
+    let (w, h) = (img.width() as f32, img.height() as f32);
+    let sky_from_clip = camera.matrices(w / h).1.inverse();
+    let (mut sum, mut sr) = (0.0, 0.0);
+    for (x, y, p) in img.enumerate_pixels() {
+        let (u, v) = ((x as f32 + 0.5) / w * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / h * 2.0);
+        let d = sky_from_clip * glam::Vec4::new(u, v, 0.5, 1.0);
+        if (d.truncate() / d.w).normalize().y > 0.0 {
+            // A pixel of a face at distance 1 covers (2 / w)^2 / (1 + u^2 + v^2)^(3/2) sr.
+            let weight = (4.0 / (w * h)) as f64 / (1.0 + (u * u + v * v) as f64).powf(1.5);
+            sum += weight * (0.2126 * decode(p[0]) + 0.7152 * decode(p[1]) + 0.0722 * decode(p[2]));
+            sr += weight;
+        }
+    }
+    (sum, sr)
+}
+
+/// An artist flipping the model selector sees the same brightness: the skydome alone (no clouds,
+/// no scene, no glare), rendered at the default exposure by `lut`, `hosek` and `preetham` at noon
+/// and with the sun 10 degrees up, has nearly the same mean displayed luminance over the sky
+/// above the horizon (the five upper faces of a cube round the camera, by solid angle).
+#[test]
+fn switching_models_keeps_the_exposure() {
+    use skytune::render::{Camera, Headless, RenderOptions};
+    use skytune::sky::resolved::{SkyModel, SkyModelKind};
+    use skytune::sky::FrameInput;
+    let mut sky = skytune::sky::builtin::default_sky();
+    sky.objects.retain(|o| o.name == "skydome");
+    let mut h = Headless::new(GpuContext::headless(AdapterChoice::Cpu).unwrap(), 64, 64).unwrap();
+    h.set_sky(&sky).unwrap();
+    // The morning hour whose sun stands 10 degrees up, by bisection (the sun rises till noon).
+    let elevation = |hour: f32| skytune::sky::eval::azimuth_elevation(sky.path_at(sky.sun_path, hour).0).1;
+    let (mut lo, mut hi) = (0.0f32, 12.0f32);
+    for _ in 0..30 {
+        let mid = 0.5 * (lo + hi);
+        if elevation(mid) < 10.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let options = RenderOptions { scene: false, glare: false, ..RenderOptions::default() };
+    // Below the horizon the analytic models repeat the horizon, the physical ones darken
+    // towards the ground: the sky above it is what is compared.
+    let views = [(0.0, 0.0), (90.0, 0.0), (180.0, 0.0), (270.0, 0.0), (0.0, 90.0)];
+    for (hour, label) in [(12.0, "noon"), (hi, "sun at 10 degrees")] {
+        let means: Vec<(SkyModelKind, f64)> = [SkyModelKind::Lut, SkyModelKind::Hosek, SkyModelKind::Preetham]
+            .into_iter()
+            .map(|kind| {
+                let input = FrameInput { sky_model: Some(SkyModel { kind, ..sky.model }), ..FrameInput::new(hour, 0.0) };
+                let (sum, sr) = views.iter().fold((0.0, 0.0), |(s, n), &(yaw_deg, pitch_deg)| {
+                    let camera = Camera { yaw_deg, pitch_deg, fov_y_deg: 90.0, ..Camera::default() };
+                    let (a, b) = sky_luminance(&h.render(&sky, &input, &camera, &options).unwrap(), &camera);
+                    (s + a, n + b)
+                });
+                (kind, sum / sr)
+            })
+            .collect();
+        eprintln!("{label}: {means:?}");
+        let (lo, hi) = means.iter().fold((f64::INFINITY, 0.0f64), |(a, b), m| (a.min(m.1), b.max(m.1)));
+        assert!(hi / lo < 1.1, "{label}: mean displayed luminance {means:?} differs by {:.0}%", (hi / lo - 1.0) * 100.0);
+    }
+}

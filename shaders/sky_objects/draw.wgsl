@@ -5,7 +5,7 @@
 // Keep in sync with `StageUniform` in src/render/sky_objects/material.rs.
 struct Stage {
     scale_offset: vec4<f32>, // uv scale (xy) and offset (zw), repeats
-    params: vec4<f32>,       // sun: size_rad; quake: z_scale, z_offset, t_scale, time_scale
+    params: vec4<f32>,       // sun: size_rad; quake: z_scale, z_offset, t_scale, time_scale; layer: height, radius (repeats), sin(fade elevation)
     cfg: vec4<u32>,          // op (0 add, 1 modulate), uv mode (4: white, folded into the stage before), constant index (4 = none), live (0: its term is black this frame, not sampled)
 };
 
@@ -56,6 +56,9 @@ const UV_WHITE: u32 = 4u;
 // only, set by src/render/sky_objects/): level 0, without the derivatives below. Keep in sync
 // with `UV_CELESTIAL_LEVEL0` in src/render/sky_objects/material.rs.
 const UV_CELESTIAL_LEVEL0: u32 = 5u;
+// A cloud layer's point seen along the view direction (`layer_uv`). Keep in sync with `UV_LAYER`
+// in src/render/sky_objects/material.rs.
+const UV_LAYER: u32 = 6u;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,

@@ -8,6 +8,25 @@ fn celestial_uv(dir: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(atan2(c.x, -c.z) / (2.0 * PI) + 0.5, 0.5 - asin(clamp(c.y, -1.0, 1.0)) / PI);
 }
 
+// A cloud layer's texture coordinates along unit direction `dir`: where the ray meets a sphere of
+// radius R + h whose centre lies R below the camera (p.x = h, p.y = R, in repeats), as horizontal
+// displacement. The root of t^2 + 2 R y t - h (2 R + h) = 0 is taken in the form that does not
+// cancel on either side of the horizon. CPU twin: src/render/sky_objects/layer_map.rs.
+fn layer_uv(p: vec4<f32>, dir: vec3<f32>) -> vec2<f32> {
+    let c = p.x * (2.0 * p.y + p.x);
+    let s = sqrt(max(p.y * p.y * dir.y * dir.y + c, 0.0));
+    var t = s - p.y * dir.y;
+    if dir.y >= 0.0 { t = c / (p.y * dir.y + s); }
+    return dir.xz * t;
+}
+
+// The factor a cloud layer's sample is multiplied by: smooth from 0 at the horizon to 1 at the
+// fade's elevation (p.z, its sine; 0: no fade), where the layer's texels crowd together.
+fn layer_fade(p: vec4<f32>, dir: vec3<f32>) -> f32 {
+    if p.z <= 0.0 { return 1.0; }
+    return smoothstep(0.0, p.z, dir.y);
+}
+
 // Where a layer's fragment lies: the view direction and each stage's texture coordinates under
 // the mesh mapping (stages 0 and 1, then 2 and 3), as the vertex shader interpolated them.
 struct Place {
@@ -49,6 +68,8 @@ fn stage_uv(d: Draw, i: u32, mode: u32, at: Place) -> vec2<f32> {
         q.y = q.y * s.params.x + s.params.y;
         let scroll = globals.time.w * s.params.w;
         uv = vec2<f32>(scroll) + q.xz * (s.params.z / max(length(q), 1e-4));
+    } else if mode == UV_LAYER {
+        uv = layer_uv(s.params, dir);
     }
     return scaled(d, i, uv);
 }
@@ -116,7 +137,9 @@ fn stage_sample(l: u32, d: Draw, i: u32, t: texture_2d<f32>, smp: sampler, at: P
         let dy = select(dpdy(uv), dpdy(turned), abs(dpdy(turned).x) < abs(dpdy(uv).x));
         return textureSampleGrad(t, smp, uv, dx, dy);
     }
-    return textureSample(t, smp, stage_uv(d, i, mode, at));
+    let c = textureSample(t, smp, stage_uv(d, i, mode, at));
+    if mode == UV_LAYER { return c * layer_fade(d.stages[i].params, normalize(at.world_dir)); }
+    return c;
 }
 
 // The procedural-sky text's 2D cloud: along the view ray a constant scattering strength rho over

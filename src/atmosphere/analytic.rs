@@ -6,10 +6,11 @@
 //!
 //! Units (docs/sky-models.md):
 //! - `preetham`: luminance from the model (kcd m^-2) divided by the extraterrestrial solar
-//!   illuminance [`SOLAR_ILLUMINANCE_KLX`], so sr^-1 relative to a solar irradiance of 1, as the
-//!   physical models; chromaticity (x, y) to linear Rec. 709.
-//! - `hosek`: the RGB dataset's radiance times [`HOSEK_SCALE`] (one factor that matches the `lut`
-//!   model's mean sky radiance at 30 degrees of sun, default atmosphere, turbidity 2.5).
+//!   illuminance [`SOLAR_ILLUMINANCE_KLX`], chromaticity (x, y) to linear Rec. 709, then (by
+//!   default, [`AnalyticUnits::Calibrated`]) times [`PREETHAM_CALIBRATION`]: sr^-1 relative to a
+//!   solar irradiance of 1, as the physical models. Published, the sky is about 2.2 times brighter.
+//! - `hosek`: the RGB dataset's radiance, by default times [`HOSEK_CALIBRATION`], fitted the same
+//!   way.
 //! - `linear`: display values (sRGB-encoded, 0..1); the sky is one colour.
 //!
 //! Domains, and what happens outside them (every result stays finite and non-negative):
@@ -35,10 +36,79 @@ pub const SOLAR_ILLUMINANCE_KLX: f64 = 133.3;
 /// `tests/analytic.rs`; the published figure is about 1.3).
 pub const PREETHAM_MIN_TURBIDITY: f64 = 1.7;
 
-/// Scale from the Hosek-Wilkie RGB dataset's radiance to sr^-1 relative to a solar irradiance of
-/// 1: matches the `lut` model's mean radiance over the upper sky at 30 degrees of sun in the
-/// default atmosphere, at turbidity 2.5 (measured with `skytune radiance`, docs/sky-models.md).
-pub const HOSEK_SCALE: f64 = 2.8e-3;
+/// Turbidity of a sky that names none, and of the calibration ([`AnalyticUnits::Calibrated`]).
+pub const DEFAULT_TURBIDITY: f64 = 2.5;
+
+/// Factor from Preetham's published unit (luminance over the extraterrestrial solar illuminance)
+/// to the reference's radiance, by sun elevation (degrees): the factor that gives the model, at
+/// [`DEFAULT_TURBIDITY`], the reference's mean displayed luminance over the sky above the
+/// horizon, for each sun of the committed reference dome in the default atmosphere
+/// (`calibration` in src/measure/model_points.rs computes it; tests/analytic.rs checks these
+/// against it). Preetham's sky darkens more slowly than the reference's as the sun sets, hence a
+/// table.
+pub const PREETHAM_CALIBRATION: [(f64, f64); 13] = [
+    (0.0, 1.2267e-1),
+    (1.0, 1.7349e-1),
+    (2.0, 2.2008e-1),
+    (3.0, 2.5961e-1),
+    (5.0, 3.1660e-1),
+    (8.0, 3.6396e-1),
+    (12.0, 3.8993e-1),
+    (20.0, 3.9876e-1),
+    (30.0, 3.9593e-1),
+    (45.0, 3.9937e-1),
+    (60.0, 4.1482e-1),
+    (75.0, 4.2148e-1),
+    (90.0, 3.5755e-1),
+];
+
+/// Factor from the Hosek-Wilkie RGB dataset's radiance to the reference's, by sun elevation,
+/// found as [`PREETHAM_CALIBRATION`].
+pub const HOSEK_CALIBRATION: [(f64, f64); 13] = [
+    (0.0, 1.4119e-3),
+    (1.0, 2.0692e-3),
+    (2.0, 2.7240e-3),
+    (3.0, 2.7732e-3),
+    (5.0, 2.8447e-3),
+    (8.0, 2.8916e-3),
+    (12.0, 2.8922e-3),
+    (20.0, 2.8315e-3),
+    (30.0, 2.7697e-3),
+    (45.0, 2.7661e-3),
+    (60.0, 2.8094e-3),
+    (75.0, 2.7910e-3),
+    (90.0, 2.6538e-3),
+];
+
+/// A calibration table's factor at `sun_elev_deg`, linear between its suns (a sun below the
+/// lowest takes the lowest's: the models show a sun on the horizon, faded).
+pub fn calibration_at(table: &[(f64, f64)], sun_elev_deg: f64) -> f64 {
+    let Some(&(first_deg, first)) = table.first() else { return 1.0 };
+    if sun_elev_deg <= first_deg {
+        return first;
+    }
+    for w in table.windows(2) {
+        let ((a, fa), (b, fb)) = (w[0], w[1]);
+        if sun_elev_deg <= b {
+            return fa + (fb - fa) * (sun_elev_deg - a) / (b - a);
+        }
+    }
+    table[table.len() - 1].1
+}
+
+/// The unit an analytic model's radiance is given in.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AnalyticUnits {
+    /// The physical models' unit, sr^-1 per unit of solar irradiance: the published values
+    /// times a factor fitted once against the reference ([`PREETHAM_CALIBRATION`],
+    /// [`HOSEK_CALIBRATION`]), so one exposure shows every model about equally bright.
+    #[default]
+    Calibrated,
+    /// As published: Preetham's luminance over the solar illuminance, the Hosek-Wilkie RGB
+    /// dataset's radiance.
+    Published,
+}
 
 /// Lowest sun elevation at which Hosek-Wilkie's coefficients are evaluated, degrees (lower suns
 /// use these coefficients; see [`Hosek::new`]).
@@ -270,12 +340,12 @@ impl Hosek {
         Self { state, towards_sun: sun, fade: twilight_fade(elevation) }
     }
 
-    /// Radiance towards `view`, linear Rec. 709, times [`HOSEK_SCALE`] (the crate's evaluation).
+    /// Radiance towards `view`, linear Rec. 709, in the dataset's unit (the crate's evaluation).
     pub fn radiance(&self, view: [f64; 3]) -> Rgb {
         let theta = view[1].clamp(0.0, 1.0).acos() as f32;
         let gamma = dot(view, self.towards_sun).clamp(-1.0, 1.0).acos() as f32;
         use hw_skymodel::rgb::Channel;
-        [Channel::R, Channel::G, Channel::B].map(|c| (self.state.radiance(theta, gamma, c) as f64 * HOSEK_SCALE * self.fade).max(0.0))
+        [Channel::R, Channel::G, Channel::B].map(|c| (self.state.radiance(theta, gamma, c) as f64 * self.fade).max(0.0))
     }
 }
 
@@ -286,6 +356,8 @@ pub enum AnalyticModel {
     Preetham {
         /// Atmospheric turbidity (2: very clear, 10: hazy).
         turbidity: f64,
+        /// The unit of its radiance.
+        units: AnalyticUnits,
     },
     /// Hosek-Wilkie 2012 RGB.
     Hosek {
@@ -293,6 +365,8 @@ pub enum AnalyticModel {
         turbidity: f64,
         /// Ground albedo, 0..1.
         albedo: f64,
+        /// The unit of its radiance.
+        units: AnalyticUnits,
     },
     /// Braun and Cohen's simple model.
     Linear(LinearParams),
@@ -302,6 +376,7 @@ pub enum AnalyticModel {
 /// `analytic_radiance` in shaders/sky_model/analytic.wgsl.
 /// - preetham: [0..5] Perez A..E as (Y, x, y, 0); [5] zenith (Y, x, y, fade); [6] (F_Y, F_x, F_y
 ///   at the zenith, sun zenith angle); [11] sun direction used.
+/// - preetham's zenith .w is its fade times its unit's scale ([`AnalyticModel::scale`]);
 /// - hosek: [0..9] coefficients A..I as (r, g, b, 0); [9] radiance (r, g, b) times scale and fade;
 ///   [11] sun direction used.
 /// - linear: [0] the colour (display values).
@@ -325,21 +400,39 @@ impl AnalyticModel {
     }
 
     /// Units of what [`Self::radiance`] returns.
-    pub fn units(&self) -> &'static str {
-        match self {
-            AnalyticModel::Preetham { .. } => {
-                "sky radiance in sr^-1 per unit of solar irradiance: Preetham's luminance (kcd m^-2) over the extraterrestrial solar illuminance (133.3 klx), chromaticity to linear Rec. 709"
+    pub fn units(&self) -> String {
+        match *self {
+            AnalyticModel::Preetham { units: AnalyticUnits::Calibrated, .. } => {
+                "sr^-1 per unit of solar irradiance: Preetham's luminance over the extraterrestrial solar illuminance (133.3 klx), chromaticity to linear Rec. 709, times PREETHAM_CALIBRATION by sun elevation (calibrated against the reference)".into()
             }
-            AnalyticModel::Hosek { .. } => "Hosek-Wilkie RGB dataset radiance times HOSEK_SCALE (2.8e-3: about sr^-1 per unit of solar irradiance, fitted to the lut model)",
-            AnalyticModel::Linear(_) => "display values (sRGB-encoded, 0..1): Braun and Cohen's light factor / 255, the same for every direction",
+            AnalyticModel::Preetham { units: AnalyticUnits::Published, .. } => {
+                "as published: Preetham's luminance (kcd m^-2) over the extraterrestrial solar illuminance (133.3 klx), chromaticity to linear Rec. 709".into()
+            }
+            AnalyticModel::Hosek { units: AnalyticUnits::Calibrated, .. } => {
+                "sr^-1 per unit of solar irradiance: the Hosek-Wilkie RGB dataset's radiance times HOSEK_CALIBRATION by sun elevation (calibrated against the reference)".into()
+            }
+            AnalyticModel::Hosek { units: AnalyticUnits::Published, .. } => "as published: the Hosek-Wilkie RGB dataset's radiance".into(),
+            AnalyticModel::Linear(_) => "display values (sRGB-encoded, 0..1): Braun and Cohen's light factor / 255, the same for every direction".into(),
+        }
+    }
+
+    /// The factor from the model's published unit to the one it is given in, with the sun
+    /// towards `towards_sun`.
+    pub fn scale(&self, towards_sun: [f64; 3]) -> f64 {
+        let sun_elev_deg = || towards_sun[1].clamp(-1.0, 1.0).asin().to_degrees();
+        match *self {
+            AnalyticModel::Preetham { units: AnalyticUnits::Calibrated, .. } => calibration_at(&PREETHAM_CALIBRATION, sun_elev_deg()),
+            AnalyticModel::Hosek { units: AnalyticUnits::Calibrated, .. } => calibration_at(&HOSEK_CALIBRATION, sun_elev_deg()),
+            _ => 1.0,
         }
     }
 
     /// Radiance towards `view` with the sun towards `towards_sun` at `hour` (only `linear` reads it).
     pub fn radiance(&self, view: [f64; 3], towards_sun: [f64; 3], hour: f64) -> Rgb {
+        let k = self.scale(towards_sun);
         match *self {
-            AnalyticModel::Preetham { turbidity } => Preetham::new(turbidity, towards_sun).radiance(view),
-            AnalyticModel::Hosek { turbidity, albedo } => Hosek::new(turbidity, albedo, towards_sun).radiance(view),
+            AnalyticModel::Preetham { turbidity, .. } => Preetham::new(turbidity, towards_sun).radiance(view).map(|x| x * k),
+            AnalyticModel::Hosek { turbidity, albedo, .. } => Hosek::new(turbidity, albedo, towards_sun).radiance(view).map(|x| x * k),
             AnalyticModel::Linear(p) => p.color(hour),
         }
     }
@@ -348,24 +441,24 @@ impl AnalyticModel {
     pub fn coefficients(&self, towards_sun: [f64; 3], hour: f64) -> AnalyticCoefficients {
         let mut v = [[0.0f32; 4]; 12];
         let kind = match *self {
-            AnalyticModel::Preetham { turbidity } => {
+            AnalyticModel::Preetham { turbidity, .. } => {
                 let p = Preetham::new(turbidity, towards_sun);
                 for (k, row) in v.iter_mut().take(5).enumerate() {
                     *row = [p.perez[0][k] as f32, p.perez[1][k] as f32, p.perez[2][k] as f32, 0.0];
                 }
-                v[5] = [p.zenith[0] as f32, p.zenith[1] as f32, p.zenith[2] as f32, p.fade as f32];
+                v[5] = [p.zenith[0] as f32, p.zenith[1] as f32, p.zenith[2] as f32, (p.fade * self.scale(towards_sun)) as f32];
                 let f0: [f64; 3] = std::array::from_fn(|i| perez(p.perez[i], 1.0, p.sun_zenith));
                 v[6] = [f0[0] as f32, f0[1] as f32, f0[2] as f32, p.sun_zenith as f32];
                 v[11] = [p.towards_sun[0] as f32, p.towards_sun[1] as f32, p.towards_sun[2] as f32, 0.0];
                 0
             }
-            AnalyticModel::Hosek { turbidity, albedo } => {
+            AnalyticModel::Hosek { turbidity, albedo, .. } => {
                 let h = Hosek::new(turbidity, albedo, towards_sun);
                 let (params, radiances) = h.state.raw();
                 for (k, row) in v.iter_mut().take(9).enumerate() {
                     *row = [params[k], params[9 + k], params[18 + k], 0.0];
                 }
-                let s = (HOSEK_SCALE * h.fade) as f32;
+                let s = (self.scale(towards_sun) * h.fade) as f32;
                 v[9] = [radiances[0] * s, radiances[1] * s, radiances[2] * s, 0.0];
                 v[11] = [h.towards_sun[0] as f32, h.towards_sun[1] as f32, h.towards_sun[2] as f32, 0.0];
                 1

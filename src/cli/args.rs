@@ -245,8 +245,12 @@ pub struct RadianceArgs {
     #[arg(long)]
     pub cpu: bool,
     /// `preetham`, `hosek`: atmospheric turbidity (clamped into each model's domain).
-    #[arg(long, default_value_t = 2.5)]
+    #[arg(long, default_value_t = skytune::atmosphere::analytic::DEFAULT_TURBIDITY)]
     pub turbidity: f64,
+    /// `preetham`, `hosek`: radiance in the model's published unit instead of the calibrated
+    /// one (the physical models' unit, which rendering uses by default).
+    #[arg(long)]
+    pub published_units: bool,
     /// `linear`: parameter table of the paper (snow, desert, forest).
     #[arg(long, default_value = "snow")]
     pub preset: String,

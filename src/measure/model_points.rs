@@ -6,7 +6,7 @@
 //! GPU models are evaluated where they ship, through the radiance probe; CPU models and
 //! representations on the CPU.
 
-use crate::atmosphere::analytic::{self, AnalyticModel, LinearParams};
+use crate::atmosphere::analytic::{self, AnalyticModel, AnalyticUnits, LinearParams};
 use crate::atmosphere::cells::{CellModel, CellSettings};
 use crate::atmosphere::dome::{self, DomeDir};
 use crate::atmosphere::reference::Case;
@@ -185,8 +185,9 @@ impl<'a> Evaluator<'a> {
         Ok(match *method {
             Method::Single(s) => widen(self.probe.single(self.ctx, atm, &s, cases)?),
             Method::Lut(s) => widen(self.probe.lut(self.ctx, atm, &s, cases)?),
-            Method::Preetham => widen(self.probe.analytic(self.ctx, cases, |_| AnalyticModel::Preetham { turbidity })?),
-            Method::Hosek => widen(self.probe.analytic(self.ctx, cases, |c| AnalyticModel::Hosek { turbidity, albedo: c.albedo })?),
+            // In the published units: the fitted scale is then the factor from those.
+            Method::Preetham => widen(self.probe.analytic(self.ctx, cases, |_| AnalyticModel::Preetham { turbidity, units: AnalyticUnits::Published })?),
+            Method::Hosek => widen(self.probe.analytic(self.ctx, cases, |c| AnalyticModel::Hosek { turbidity, albedo: c.albedo, units: AnalyticUnits::Published })?),
             Method::Linear => {
                 let v: Vec<Rgb> = widen(self.probe.analytic(self.ctx, cases, |_| AnalyticModel::Linear(LinearParams::default()))?);
                 v.into_iter().map(|c| c.map(dome::srgb_decode)).collect()
@@ -470,4 +471,57 @@ pub fn point_for(model: &crate::sky::resolved::SkyModel) -> Option<String> {
         _ => None,
     };
     exact.map(|p| p.id.clone()).or(default.map(String::from))
+}
+
+/// The calibration of an analytic model's published unit ([`AnalyticUnits::Calibrated`]): for
+/// each sun of the committed reference dome at or above the horizon, in the default atmosphere,
+/// the factor that gives the model at [`analytic::DEFAULT_TURBIDITY`] the reference's mean
+/// displayed luminance over the sky above the horizon (solid-angle weighted; the default
+/// exposure and tone mapper, [`dome::EXPOSURE_EV`] and ACES), by bisection (CPU, double
+/// precision). On screen rather than in radiance: Preetham's sky is brighter overhead and darker
+/// at the horizon than the reference's, so at equal mean radiance it looked 15 to 20% brighter;
+/// the benchmark's least-squares fit of radiance follows the bright sky round the sun and left it
+/// brighter still.
+pub fn calibration(method: &Method) -> anyhow::Result<Vec<(f64, f64)>> {
+    let model = match method {
+        Method::Preetham => AnalyticModel::Preetham { turbidity: analytic::DEFAULT_TURBIDITY, units: AnalyticUnits::Published },
+        Method::Hosek => AnalyticModel::Hosek { turbidity: analytic::DEFAULT_TURBIDITY, albedo: dome::ALBEDO, units: AnalyticUnits::Published },
+        other => anyhow::bail!("only preetham and hosek are calibrated, not {}", other.model_name()),
+    };
+    let reference = dome::committed_reference()?;
+    let dirs = dome::dome_directions(reference.dome.0, reference.dome.1);
+    let shown = |radiance: &mut dyn Iterator<Item = Rgb>| -> f64 {
+        dirs.iter()
+            .zip(radiance)
+            .map(|(d, r)| {
+                let c = crate::render::passes::tone_map::tone_map_aces(r.map(|x| x * dome::EXPOSURE_EV.exp2()));
+                d.weight_sr * (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2])
+            })
+            .sum()
+    };
+    let mut table = Vec::new();
+    for s in reference.suns.iter().filter(|s| s.haze == dome::Haze::Default && s.sun_elev_deg >= 0.0) {
+        let sun = analytic::direction(s.sun_elev_deg.to_radians(), 0.0);
+        let published: Vec<Rgb> = dirs.iter().map(|d| model.radiance(analytic::direction(d.elev_deg.to_radians(), d.rel_az_deg.to_radians()), sun, 12.0)).collect();
+        let target = shown(&mut s.radiance.iter().copied());
+        // The mean display grows with the factor: bisect its logarithm.
+        let (mut lo, mut hi) = (-12.0f64, 4.0f64);
+        anyhow::ensure!(
+            shown(&mut published.iter().map(|c| c.map(|x| x * hi.exp()))) > target,
+            "{} cannot reach the reference's brightness at sun {} degrees",
+            model.name(),
+            s.sun_elev_deg
+        );
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if shown(&mut published.iter().map(|c| c.map(|x| x * mid.exp()))) < target {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        table.push((s.sun_elev_deg, (0.5 * (lo + hi)).exp()));
+    }
+    table.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Ok(table)
 }

@@ -361,8 +361,8 @@ fn evaluate(ev: &Evaluator<'_>, model: SweptModel, cells: Option<&CellModel>, at
             let models: Vec<analytic::AnalyticModel> = cases
                 .iter()
                 .map(|c| match model {
-                    SweptModel::Preetham => analytic::AnalyticModel::Preetham { turbidity: c.turbidity },
-                    SweptModel::Hosek => analytic::AnalyticModel::Hosek { turbidity: c.turbidity, albedo: c.case.albedo },
+                    SweptModel::Preetham => analytic::AnalyticModel::Preetham { turbidity: c.turbidity, units: Default::default() },
+                    SweptModel::Hosek => analytic::AnalyticModel::Hosek { turbidity: c.turbidity, albedo: c.case.albedo, units: Default::default() },
                     _ => analytic::AnalyticModel::Linear(analytic::LinearParams::default()),
                 })
                 .collect();
@@ -386,7 +386,10 @@ fn evaluate(ev: &Evaluator<'_>, model: SweptModel, cells: Option<&CellModel>, at
                 let s = sun(&c.case);
                 let gamma = (v[0] * s[0] + v[1] * s[1] + v[2] * s[2]).clamp(-1.0, 1.0).acos() as f32;
                 use hw_skymodel::rgb::Channel;
-                Some([Channel::R, Channel::G, Channel::B].map(|ch| state.radiance(theta, gamma, ch) as f64 * analytic::HOSEK_SCALE))
+                Some(
+                    [Channel::R, Channel::G, Channel::B]
+                        .map(|ch| state.radiance(theta, gamma, ch) as f64 * analytic::calibration_at(&analytic::HOSEK_CALIBRATION, c.case.sun_elev_deg)),
+                )
             })
             .collect(),
     })

@@ -140,10 +140,20 @@ pub fn load_sky(source: &dyn AssetSource) -> Result<Sky, SkyErrors> {
         return Err(one(&file, 1, 1, "<file>", format!("the sky file is {} bytes; at most {MAX_SKY_FILE_BYTES} are accepted", text.len())));
     }
     let parsed: SkyFile = parse_toml(&file, &text)?;
-    let mut v = Validator { source, file, text: &text, errors: Vec::new(), images: HashMap::new(), bitmaps: HashMap::new(), watched: HashSet::new(), texture_bytes: 0 };
+    let mut v = Validator {
+        source,
+        file,
+        text: &text,
+        errors: Vec::new(),
+        images: HashMap::new(),
+        bitmaps: HashMap::new(),
+        watched: HashSet::new(),
+        texture_bytes: 0,
+        warnings: Vec::new(),
+    };
     let sky = v.sky(parsed);
     match sky {
-        Some(sky) if v.errors.is_empty() => Ok(sky),
+        Some(sky) if v.errors.is_empty() => Ok(Sky { warnings: std::mem::take(&mut v.warnings), ..sky }),
         _ => Err(SkyErrors(v.errors)),
     }
 }
@@ -189,12 +199,41 @@ struct Validator<'a> {
     watched: HashSet<PathBuf>,
     /// Decoded bytes of the distinct images so far ([`MAX_TEXTURE_BYTES`]).
     texture_bytes: u64,
+    /// Problems that do not stop the sky from loading ([`Sky::warnings`]).
+    warnings: Vec<SkyError>,
 }
 
 impl Validator<'_> {
     fn err_at(&mut self, span: std::ops::Range<usize>, field: &str, message: impl Into<String>) {
         let (line, column) = line_col(self.text, span.start);
         self.errors.push(SkyError { file: self.file.clone(), line, column, field: field.to_string(), message: message.into() });
+    }
+
+    /// Warns when stage `s` of version `v` tiles its texture under the mesh mapping of a dome
+    /// that reaches the zenith: u runs round the azimuth there, so the repeats converge on the
+    /// pole into a star (the cloud-layer mapping has no pole).
+    fn warn_if_pinched(&mut self, v: &model::VersionDef, s: &model::StageDef, sf: &str, name: &str) {
+        let reaches_zenith = match v.shape {
+            model::Shape::Dome { .. } => true,
+            model::Shape::DomeBand { top_deg, .. } => top_deg.get() >= 90.0,
+            model::Shape::Billboard { .. } | model::Shape::Quad { .. } => false,
+        };
+        let scale = s.uv_scale.get_ref();
+        if reaches_zenith && s.texture.is_some() && s.uv == model::UvSource::Mesh && scale.iter().any(|x| x.get().abs() > 1.0) {
+            let (line, column) = line_col(self.text, s.uv_scale.span().start);
+            self.warnings.push(SkyError {
+                file: self.file.clone(),
+                line,
+                column,
+                field: format!("{sf}.uv_scale"),
+                message: format!(
+                    "\"{name}\": a texture repeated [{}, {}] times under the mesh mapping converges into a star at the zenith; \
+                     use uv = {{ kind = \"layer\" }} for tiled clouds and stars",
+                    scale[0].get(),
+                    scale[1].get()
+                ),
+            });
+        }
     }
 
     /// Errors without a span of their own point at the first `key` after `anchor` (usually the
@@ -373,7 +412,8 @@ impl Validator<'_> {
                 reference_paths: m.reference_paths.map_or(256, |s| s.0),
                 reference_grid: m.reference_grid.map_or([48, 27], |[a, b]| [a.0.max(2), b.0.max(2)]),
                 drive_scene: m.drive_scene,
-                turbidity: m.turbidity.map_or(2.5, |t| t.get()),
+                turbidity: m.turbidity.map_or(crate::atmosphere::analytic::DEFAULT_TURBIDITY as f32, |t| t.get()),
+                analytic_units: m.analytic_units,
                 linear: crate::atmosphere::analytic::LinearParams { hours_per_day: hours as f64, ..m.linear.as_ref().map_or_else(Default::default, |l| self.linear(l)) },
             }
         });
@@ -443,6 +483,7 @@ impl Validator<'_> {
             atmosphere,
             atmosphere_by_weather,
             auto_model,
+            warnings: Vec::new(),
         })
     }
 
@@ -723,6 +764,7 @@ impl Validator<'_> {
                     ok = false;
                 }
             }
+            self.warn_if_pinched(v, s, &sf, name);
             if k == 0 && s.op == model::StageOp::Modulate {
                 self.err_in(&anchor, "op = \"modulate\"", &format!("{sf}.op"), "the first stage cannot modulate: there is nothing before it");
                 ok = false;
@@ -742,7 +784,7 @@ impl Validator<'_> {
                 op: s.op,
                 constant: s.constant.as_ref().map(|c| *c.get_ref() as usize),
                 uv: s.uv,
-                uv_scale: s.uv_scale.map(|x| x.get()),
+                uv_scale: s.uv_scale.get_ref().map(|x| x.get()),
                 panner: s.panner.map(|x| x.get()),
                 uv_offset,
                 clamp: s.clamp,

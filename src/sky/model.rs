@@ -384,6 +384,11 @@ pub struct SkyModelDef {
     /// `preetham`, `hosek`: atmospheric turbidity, 1..=10 (default 2.5; Preetham clamps below 1.7).
     #[serde(default)]
     pub turbidity: Option<Turbidity>,
+    /// `preetham`, `hosek`: `calibrated` (default: the physical models' unit, so one exposure
+    /// suits every model) or `published` (the papers' own scale; Preetham's is about 2.2 times
+    /// brighter).
+    #[serde(default)]
+    pub analytic_units: crate::atmosphere::analytic::AnalyticUnits,
     /// `linear`: Braun and Cohen's parameters.
     #[serde(default)]
     pub linear: Option<LinearDef>,
@@ -739,7 +744,7 @@ pub struct StageDef {
     pub uv: UvSource,
     /// Repeats of the texture over the shape, (u, v).
     #[serde(default = "unit_scale")]
-    pub uv_scale: [Finite; 2],
+    pub uv_scale: Spanned<[Finite; 2]>,
     /// UV panner, in repeats per game hour (offset = frac(panner x game hours)).
     #[serde(default)]
     pub panner: [Finite; 2],
@@ -757,8 +762,8 @@ pub struct StageDef {
 fn unit() -> Finite {
     Finite(1.0)
 }
-fn unit_scale() -> [Finite; 2] {
-    [Finite(1.0), Finite(1.0)]
+fn unit_scale() -> Spanned<[Finite; 2]> {
+    Spanned::new(0..0, [Finite(1.0), Finite(1.0)])
 }
 
 /// How a stage joins the material.
@@ -801,6 +806,38 @@ pub enum UvSource {
         #[serde(default)]
         time_scale: Finite,
     },
+    /// A cloud layer: where the view ray meets a layer `height_km` above the camera that curves
+    /// round a planet of `radius_km` (smaller is more curved), in repeats of `size_km` along the
+    /// layer's x and z. Straight up is the layer's middle, not a pole: nothing converges there.
+    /// The stage's panner moves the texture within the layer (wind); `uv_scale` repeats it.
+    Layer {
+        /// Height of the layer above the camera, km.
+        #[serde(default = "layer_height_km")]
+        height_km: Positive,
+        /// Radius of the planet the layer curves round, km (the Earth's by default).
+        #[serde(default = "layer_radius_km")]
+        radius_km: Positive,
+        /// Length of the layer one repeat of the texture covers, km.
+        #[serde(default = "layer_size_km")]
+        size_km: Positive,
+        /// Elevation below which the stage fades, to nothing at the horizon and below (where
+        /// the layer's texels crowd together), degrees; 0: no fade.
+        #[serde(default = "layer_fade_deg")]
+        horizon_fade_deg: Angle90,
+    },
+}
+
+fn layer_height_km() -> Positive {
+    Positive(2.0)
+}
+fn layer_radius_km() -> Positive {
+    Positive(6360.0)
+}
+fn layer_size_km() -> Positive {
+    Positive(10.0)
+}
+fn layer_fade_deg() -> Angle90 {
+    Angle90(10.0)
 }
 
 fn quake_z_scale() -> Finite {
@@ -1071,6 +1108,9 @@ checked_f32!(
 checked_f32!(
     /// A light factor of Braun and Cohen's model, [0, 255].
     LightFactor, |v| (0.0..=255.0).contains(&v), "a light factor in [0, 255]");
+checked_f32!(
+    /// An angle in degrees within [0, 90].
+    Angle90, |v| (0.0..=90.0).contains(&v), "an angle in degrees within [0, 90]");
 checked_f32!(
     /// An elevation in degrees, [-90, 90].
     Elevation, |v| (-90.0..=90.0).contains(&v), "an elevation in degrees within [-90, 90]");

@@ -73,6 +73,8 @@ pub struct Sky {
     pub atmosphere_by_weather: Vec<crate::atmosphere::Atmosphere>,
     /// `kind = "auto"`: the error budget; `model` holds `lut` until `auto_model::resolve` picks.
     pub auto_model: Option<Budget>,
+    /// What the loader found questionable without refusing the sky (file, line and field each).
+    pub warnings: Vec<super::load::SkyError>,
 }
 
 /// A skydome colour source and its settings.
@@ -104,6 +106,9 @@ pub struct SkyModel {
     pub drive_scene: bool,
     /// `preetham`, `hosek`: turbidity.
     pub turbidity: f32,
+    /// `preetham`, `hosek`: the unit of their radiance (calibrated to the physical models'
+    /// by default).
+    pub analytic_units: crate::atmosphere::analytic::AnalyticUnits,
     /// `linear`: Braun and Cohen's parameters.
     pub linear: crate::atmosphere::analytic::LinearParams,
 }
@@ -113,8 +118,8 @@ impl SkyModel {
     pub fn analytic(&self) -> Option<crate::atmosphere::analytic::AnalyticModel> {
         use crate::atmosphere::analytic::AnalyticModel;
         match self.kind {
-            SkyModelKind::Preetham => Some(AnalyticModel::Preetham { turbidity: self.turbidity as f64 }),
-            SkyModelKind::Hosek => Some(AnalyticModel::Hosek { turbidity: self.turbidity as f64, albedo: self.ground_albedo as f64 }),
+            SkyModelKind::Preetham => Some(AnalyticModel::Preetham { turbidity: self.turbidity as f64, units: self.analytic_units }),
+            SkyModelKind::Hosek => Some(AnalyticModel::Hosek { turbidity: self.turbidity as f64, albedo: self.ground_albedo as f64, units: self.analytic_units }),
             SkyModelKind::Linear => Some(AnalyticModel::Linear(self.linear)),
             _ => None,
         }
@@ -136,7 +141,8 @@ impl Default for SkyModel {
             reference_paths: 256,
             reference_grid: [48, 27],
             drive_scene: false,
-            turbidity: 2.5,
+            turbidity: crate::atmosphere::analytic::DEFAULT_TURBIDITY as f32,
+            analytic_units: Default::default(),
             linear: Default::default(),
         }
     }

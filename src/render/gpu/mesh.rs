@@ -92,7 +92,7 @@ pub fn shape_mesh(shape: &Shape) -> MeshData {
 /// its bottom one, with the grid's segments ([`dome_grid`]). Its triangles cover the same
 /// directions as the grid's (their edges along the rings are the same chords, those between are
 /// on the same meridians), but its texture coordinates follow only the outline: for layers whose
-/// stages all map the view direction per pixel (celestial, sun, Quake), which a rasteriser pays
+/// stages all map the view direction per pixel (celestial, sun, Quake, layer), which a rasteriser pays
 /// per triangle. None for billboards and quads.
 pub fn outline_mesh(shape: &Shape) -> Option<MeshData> {
     dome_grid(shape).map(|(top_deg, bottom_deg, _, segments)| sphere_band(top_deg, bottom_deg, 1, segments))

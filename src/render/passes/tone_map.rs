@@ -116,3 +116,33 @@ impl Pass for ToneMapPass {
         1
     }
 }
+
+/// The ACES tone mapper on the CPU, in f64: exposed linear Rec. 709 radiance to linear display
+/// values in [0, 1]. Keep in sync with `tone_map_aces` in shaders/sky_model/tone.wgsl.
+pub fn tone_map_aces(color: [f64; 3]) -> [f64; 3] {
+    const INPUT: [[f64; 3]; 3] = [[0.59719, 0.35458, 0.04823], [0.07600, 0.90834, 0.01566], [0.02840, 0.13383, 0.83777]];
+    const OUTPUT: [[f64; 3]; 3] = [[1.60475, -0.53108, -0.07367], [-0.10208, 1.10813, -0.00605], [-0.00327, -0.07276, 1.07602]];
+    let times = |m: &[[f64; 3]; 3], v: [f64; 3]| m.map(|row| row[0] * v[0] + row[1] * v[1] + row[2] * v[2]);
+    let fitted = times(&INPUT, color).map(|v| (v * (v + 0.0245786) - 0.000090537) / (v * (0.983729 * v + 0.4329510) + 0.238081));
+    times(&OUTPUT, fitted).map(|v| v.clamp(0.0, 1.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_cpu_aces_curve_runs_from_black_to_white_and_rises() {
+        assert_eq!(tone_map_aces([0.0; 3]), [0.0; 3]);
+        assert!(tone_map_aces([1e3; 3]).iter().all(|v| (*v - 1.0).abs() < 1e-3));
+        let mut last = 0.0;
+        for k in 1..200 {
+            let grey = tone_map_aces([k as f64 * 0.05; 3])[1];
+            assert!(grey >= last, "falls at {}", k as f64 * 0.05);
+            last = grey;
+        }
+        // The fit's toe: 0.18 exposed lands about a third lower (0.12 .. 0.14).
+        let mid = tone_map_aces([0.18; 3])[1];
+        assert!((0.10..0.16).contains(&mid), "{mid}");
+    }
+}

@@ -24,6 +24,12 @@ pub(super) fn stage_texels_per_deg(stage: &crate::sky::resolved::Stage, shape: &
         UvSource::Quake { z_scale, z_offset, t_scale, .. } => {
             w.max(h) * quake_uv_per_rad(z_scale.get(), z_offset.get(), t_scale.get(), bottom_deg.min(top_deg), bottom_deg.max(top_deg)).to_radians()
         }
+        // Densest at the horizon, where the fade takes most of the texture's contrast away: the
+        // detail that reaches the image is the density times the fade.
+        UvSource::Layer { .. } => match (layer_params(stage.uv), shape) {
+            (Some(p), Shape::Dome { .. } | Shape::DomeBand { .. }) => w.max(h) * (p.steepest(bottom_deg, top_deg, |e| p.fade_at(e)) as f32).to_radians(),
+            _ => f32::INFINITY,
+        },
     }
 }
 
@@ -83,9 +89,9 @@ impl FrameView {
 pub(super) struct StageMap {
     pub(super) uv: UvSource,
     pub(super) texels: (f32, f32),
-    /// On a dome, under the mesh or the Quake mapping: the peak density over each ring of
-    /// triangles (top first), which does not depend on the view (the Quake mapping's takes a
-    /// dense search: computed once, not every frame).
+    /// On a dome, under the mesh, Quake or layer mapping: the peak density over each ring of
+    /// triangles (top first), which does not depend on the view (the Quake and layer mappings'
+    /// take a dense search: computed once, not every frame).
     pub(super) ring_peaks: Vec<f32>,
 }
 
@@ -99,7 +105,7 @@ impl StageMap {
     /// A texture `texels` across one repeat of mapping `uv` on `shape`.
     pub(super) fn with_texels(uv: UvSource, texels: (f32, f32), shape: &Shape) -> Self {
         let mut map = Self { uv, texels, ring_peaks: Vec::new() };
-        if let (UvSource::Mesh | UvSource::Quake { .. }, Some((top_deg, bottom_deg, rings, _))) = (uv, crate::render::gpu::mesh::dome_grid(shape)) {
+        if let (UvSource::Mesh | UvSource::Quake { .. } | UvSource::Layer { .. }, Some((top_deg, bottom_deg, rings, _))) = (uv, crate::render::gpu::mesh::dome_grid(shape)) {
             map.ring_peaks = (0..rings)
                 .map(|r| {
                     let (a, b) = (top_deg + (bottom_deg - top_deg) * r as f32 / rings as f32, top_deg + (bottom_deg - top_deg) * (r + 1) as f32 / rings as f32);
@@ -191,6 +197,15 @@ impl StageMap {
                     return 0.0;
                 }
                 w.max(h) * quake_uv_per_rad(z_scale.get(), z_offset.get(), t_scale.get(), a, b).to_radians()
+            }
+            // Where texels land on pixels, faded or not.
+            UvSource::Layer { .. } => {
+                let (Some(p), Some((top_deg, bottom_deg, _, _))) = (layer_params(self.uv), crate::render::gpu::mesh::dome_grid(shape)) else { return f32::INFINITY };
+                let (a, b) = (lo.max(bottom_deg.min(top_deg)), hi.min(bottom_deg.max(top_deg)));
+                if a > b {
+                    return 0.0;
+                }
+                w.max(h) * (p.steepest(a, b, |_| 1.0) as f32).to_radians()
             }
         }
     }

@@ -10,7 +10,8 @@ use super::*;
 pub struct StageUniform {
     /// UV scale (xy) and offset (zw), repeats.
     pub scale_offset: [f32; 4],
-    /// Sun: size in radians; Quake: z_scale, z_offset, t_scale, time_scale.
+    /// Sun: size in radians; Quake: z_scale, z_offset, t_scale, time_scale; layer: height and
+    /// radius in repeats, sine of the fade's elevation.
     pub params: [f32; 4],
     /// op (0 add, 1 modulate), uv mode, constant index (4 = none), live (0: its term is black
     /// this frame and is not sampled).
@@ -56,6 +57,10 @@ pub(super) const UV_CELESTIAL: u32 = 2;
 /// shaders/sky_objects/draw.wgsl.
 pub(super) const UV_CELESTIAL_LEVEL0: u32 = 5;
 
+/// UV mode of the cloud-layer mapping. Keep in sync with `UV_LAYER` in
+/// shaders/sky_objects/draw.wgsl.
+pub(super) const UV_LAYER: u32 = 6;
+
 /// UV mode numbers shared with the shader.
 pub(super) fn uv_mode(uv: &UvSource) -> (u32, [f32; 4]) {
     match *uv {
@@ -63,6 +68,7 @@ pub(super) fn uv_mode(uv: &UvSource) -> (u32, [f32; 4]) {
         UvSource::Sun { size_deg } => (1, [size_deg.get().to_radians(), 0.0, 0.0, 0.0]),
         UvSource::Celestial => (UV_CELESTIAL, [0.0; 4]),
         UvSource::Quake { z_scale, z_offset, t_scale, time_scale } => (3, [z_scale.get(), z_offset.get(), t_scale.get(), time_scale.get()]),
+        UvSource::Layer { .. } => (UV_LAYER, layer_params(*uv).map_or([0.0; 4], |p| [p.height as f32, p.radius as f32, p.fade_sin as f32, 0.0])),
     }
 }
 

@@ -13,6 +13,7 @@
 //! what each can be drawn as (its [`Caps`]), and recording one draw.
 
 mod detail;
+pub mod layer_map;
 mod material;
 mod pairs;
 pub mod stage_fold;
@@ -22,7 +23,7 @@ mod upload;
 mod variants;
 
 #[allow(unused_imports)]
-use self::{detail::*, material::*, texels::*, upload::*, variants::*};
+use self::{detail::*, layer_map::*, material::*, texels::*, upload::*, variants::*};
 pub use detail::{texture_oversampling, DETAIL_TOLERANCE};
 pub use material::{DrawUniform, StageUniform};
 pub use upload::SkyObjectDraws;
