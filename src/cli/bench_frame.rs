@@ -286,8 +286,9 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     let _ = writeln!(md, "- adapter: {adapter}");
     let _ = writeln!(
         md,
-        "- machine: {} logical CPUs; release build; {w}x{h}; {} measured frames per case after 2 warm-up frames; dome layers at {} resolution (`--dome-resolution`); fill strategies {} (`--strategy`), the adapter's own `{adapter_strategy}`",
+        "- machine: {} logical CPUs; {}; {w}x{h}; {} measured frames per case after 2 warm-up frames; dome layers at {} resolution (`--dome-resolution`); fill strategies {} (`--strategy`), the adapter's own `{adapter_strategy}`",
         std::thread::available_parallelism().map_or(1, |n| n.get()),
+        skytune::build_line(),
         frames,
         args.dome_resolution.map_or("the strategy's", |r| r.name()),
         strategies.iter().map(|(n, _)| format!("`{n}`")).collect::<Vec<_>>().join(" and ")

@@ -48,16 +48,21 @@ impl SkySpec {
         }
     }
 
-    /// Loads and validates the sky (blocking; call off the render path for reloads).
+    /// Loads and validates the sky (blocking; call off the render path for reloads); its
+    /// warnings go to the log.
     pub fn load(&self) -> Result<Sky, SkyErrors> {
-        match self {
+        let sky = match self {
             SkySpec::Builtin => Ok(builtin::default_sky()),
             SkySpec::File(p) => load_sky_file(p),
             SkySpec::Continent { path, season } => {
                 let c = load_continent(path)?;
                 load_sky_file(&c.skies[*season])
             }
+        }?;
+        for w in &sky.warnings {
+            log::warn!("{w}");
         }
+        Ok(sky)
     }
 
     /// The sky file shown (for a continent, its season's), if any.
