@@ -140,19 +140,62 @@ fn bake(args: &cli::BakeArgs) -> anyhow::Result<()> {
 }
 
 /// `skytune radiance`: evaluates a model on every case of a CSV file.
+/// What `radiance` evaluates in: the atmosphere, the (camera altitude km, ground albedo) a sky
+/// file sets, and a line saying where they came from.
+type RadianceSetting = (skytune::atmosphere::Atmosphere, Option<(f64, f64)>, String);
+
+/// The atmosphere `radiance` evaluates (the sky file's at its weather, or the default, with the
+/// `--atmosphere` keys over it), the camera altitude and ground albedo the sky file sets, and a
+/// line saying where the atmosphere came from.
+fn radiance_atmosphere(args: &cli::RadianceArgs) -> anyhow::Result<RadianceSetting> {
+    use skytune::atmosphere::Atmosphere;
+    let (mut atm, camera, mut source) = match &args.sky {
+        Some(path) => {
+            anyhow::ensure!((0.0..=1.0).contains(&args.weather), "--weather: expected 0..=1, found {}", args.weather);
+            let sky = skytune::sky::load_sky_file(path).map_err(|e| anyhow!("{e}"))?;
+            let atm = Atmosphere::at_weather(&sky.atmosphere_by_weather, args.weather).unwrap_or(sky.atmosphere);
+            // The values as the file wrote them (the sky holds f32: 0.6 would read 0.6000000238).
+            let decimal = |x: f32| x.to_string().parse::<f64>().unwrap_or(x as f64);
+            let camera = (decimal(sky.model.camera_km), decimal(sky.model.ground_albedo));
+            (atm, Some(camera), format!("atmosphere of {} at weather {}, camera at {} km, ground albedo {}", path.display(), args.weather, camera.0, camera.1))
+        }
+        None => (Atmosphere::default(), None, "default atmosphere (Hillaire 2020)".to_string()),
+    };
+    if !args.atmosphere.is_empty() {
+        // The sky file's own parser and checks: a key is spelled, typed and bounded as there.
+        let mut text = String::new();
+        for kv in &args.atmosphere {
+            let (key, value) = kv.split_once('=').ok_or_else(|| anyhow!("--atmosphere: expected KEY=VALUE, found \"{kv}\""))?;
+            text.push_str(&format!("{} = {}\n", key.trim(), value.trim()));
+        }
+        let def: skytune::sky::model::AtmosphereDef = skytune::sky::load::parse_toml("--atmosphere", &text).map_err(|e| anyhow!("{e}"))?;
+        anyhow::ensure!(def.weather.is_empty(), "--atmosphere: weather steps come from a sky file (--sky and --weather)");
+        atm = def.apply(atm);
+        source.push_str(&format!(", with {}", args.atmosphere.join(", ")));
+    }
+    atm.validate().map_err(|errors| anyhow!("--atmosphere: {}", errors.iter().map(|e| format!("{}: {}", e.field, e.message)).collect::<Vec<_>>().join("; ")))?;
+    Ok((atm, camera, format!("{source}: {atm:?}")))
+}
+
 fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
-    use skytune::atmosphere::{cases, Atmosphere};
+    use skytune::atmosphere::cases;
     anyhow::ensure!(args.max_order >= 1, "--max-order: expected at least 1, found {}", args.max_order);
     anyhow::ensure!((1..=4096).contains(&args.view_steps) && (1..=4096).contains(&args.sun_steps), "--view-steps and --sun-steps: expected 1..=4096");
-    let atm = Atmosphere::default();
-    let all = cases::read_cases(&args.cases, atm.thickness_km())?;
+    let (atm, camera, atmosphere_line) = radiance_atmosphere(args)?;
+    let mut all = cases::read_cases(&args.cases, atm.thickness_km())?;
+    if let Some((camera_km, albedo)) = camera {
+        anyhow::ensure!(camera_km < atm.thickness_km(), "--sky: the camera ({camera_km} km) is above the top of its atmosphere");
+        for c in &mut all {
+            (c.camera_km, c.albedo) = (camera_km, albedo);
+        }
+    }
     let shard = args.shard.unwrap_or(Shard::WHOLE);
     let list = shard.take(&all);
     // Everything a shard's rows depend on: its arguments but where it writes, and its cases.
     let inputs = {
         let mut a = args.clone();
         (a.out, a.shard) = (Default::default(), None);
-        shard::inputs_key(&[format!("{a:?}").as_bytes(), &std::fs::read(&args.cases).unwrap_or_default()])
+        shard::inputs_key(&[format!("{a:?}").as_bytes(), &std::fs::read(&args.cases).unwrap_or_default(), atmosphere_line.as_bytes()])
     };
     if !shard.is_whole() && std::fs::read_to_string(&args.out).is_ok_and(|t| shard.is_complete(&t, all.len(), 1, inputs)) {
         println!("{}: shard {shard} is complete already (the same inputs); skipped", args.out.display());
@@ -160,7 +203,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     }
     let started = std::time::Instant::now();
     let units: std::borrow::Cow<str> =
-        "sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); default atmosphere (Hillaire 2020); sun disc and ground surface excluded"
+        format!("sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); {}; sun disc and ground surface excluded", atmosphere_line)
             .into();
     // The reference's standard errors and paths, written beside its radiance.
     let mut estimates = None;

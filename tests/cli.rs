@@ -171,6 +171,50 @@ fn every_committed_sky_is_valid() {
 }
 
 #[test]
+fn radiance_takes_the_atmosphere_camera_and_albedo_of_a_sky_file() {
+    // A sky whose storm step has more aerosol, a camera 1.5 km up and a bright ground; the same
+    // atmosphere written out as keys, and the same camera and ground in the cases, give the
+    // same numbers.
+    let (dir, sky) = common::default_sky_folder();
+    let mut text = std::fs::read_to_string(&sky).unwrap();
+    text.push_str(
+        "\n[sky_model]\ncamera_km = 1.5\nground_albedo = 0.6\n\n[atmosphere]\nmie_scattering_per_km = 0.012\nmie_extinction_per_km = 0.0133\n\n\
+         [[atmosphere.weather]]\n\n[[atmosphere.weather]]\nmie_scattering_per_km = 0.03\nmie_extinction_per_km = 0.0333\n",
+    );
+    std::fs::write(&sky, text).unwrap();
+    let header = "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg\n";
+    let rows = "30,90,0\n12,5,0\n12,20,180\n";
+    let (ground, written) = (dir.path().join("ground.csv"), dir.path().join("written.csv"));
+    std::fs::write(&ground, format!("{header}{}", rows.lines().map(|r| format!("0,0.3,{r}\n")).collect::<String>())).unwrap();
+    std::fs::write(&written, format!("{header}{}", rows.lines().map(|r| format!("1.5,0.6,{r}\n")).collect::<String>())).unwrap();
+    let run = |extra: &[&str], cases: &std::path::Path, out: &str| {
+        let out = dir.path().join(out);
+        let o = skytune().args(["radiance", "--model", "lut", "--cpu", "--cases"]).arg(cases).arg("--out").arg(&out).args(extra).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = std::fs::read_to_string(&out).unwrap();
+        let values: Vec<Vec<f64>> = text.lines().filter(|l| !l.starts_with('#')).skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+        (text, values)
+    };
+    let sky_arg = sky.to_str().unwrap();
+    let (from_sky, a) = run(&["--sky", sky_arg, "--weather", "1"], &ground, "a.csv");
+    let (_, b) = run(&["--atmosphere", "mie_scattering_per_km=0.03", "--atmosphere", "mie_extinction_per_km = 0.0333"], &written, "b.csv");
+    assert_eq!(a, b);
+    assert!(a.iter().all(|r| r[0] == 1.5 && r[1] == 0.6), "the sky's camera and ground replace the cases': {a:?}");
+    assert!(
+        from_sky.starts_with("# ") && from_sky.contains("sky.toml at weather 1") && from_sky.contains("mie_scattering_per_km: 0.0299"),
+        "the header names the atmosphere: {from_sky}"
+    );
+    // Clear weather is the base atmosphere; the aerosol whitens the low sky.
+    let (_, clear) = run(&["--sky", sky_arg, "--weather", "0"], &ground, "c.csv");
+    let blue_over_red = |r: &Vec<f64>| r[7] / r[5];
+    assert!(blue_over_red(&clear[2]) > blue_over_red(&a[2]), "{clear:?} {a:?}");
+    // A bad key is a located error.
+    let o = skytune().args(["radiance", "--cases"]).arg(&ground).arg("--out").arg(dir.path().join("d.csv")).args(["--atmosphere", "mie_g=2"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("mie_g") && stderr.contains("between -1 and 1"), "{stderr}");
+}
+
+#[test]
 fn radiance_answers_every_case_and_locates_bad_rows() {
     let dir = tempfile::tempdir().unwrap();
     let cases = dir.path().join("cases.csv");

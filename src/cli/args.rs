@@ -201,6 +201,17 @@ pub struct RadianceArgs {
     /// Output CSV: the input columns plus r,g,b in sr^-1 per unit of solar irradiance.
     #[arg(long)]
     pub out: PathBuf,
+    /// Take the atmosphere, the camera's altitude and the ground albedo from this sky file (its
+    /// atmosphere at `--weather`): they replace the cases' camera_km and albedo columns.
+    #[arg(long)]
+    pub sky: Option<PathBuf>,
+    /// With `--sky`: the weather, 0 (clear) .. 1 (storm).
+    #[arg(long, default_value_t = 0.0, requires = "sky")]
+    pub weather: f64,
+    /// One key of the atmosphere as a sky file's `[atmosphere]` writes it, over the sky's (or
+    /// the default) atmosphere; repeatable: `--atmosphere mie_scattering_per_km=0.02`.
+    #[arg(long = "atmosphere", value_name = "KEY=VALUE")]
+    pub atmosphere: Vec<String>,
     /// Highest order of scattering (1: single scattering).
     #[arg(long, default_value_t = 24)]
     pub max_order: u32,
