@@ -47,7 +47,9 @@ fn auto_pick_meets_its_budget_against_the_reference_on_every_committed_sky() {
         for (w, atm) in auto_model::sky_atmospheres(&sky).iter().enumerate() {
             let reference = Reference::new(*atm, ReferenceSettings { paths: 2048, seed: 0xbeef + w as u64, ..Default::default() });
             let prepared = match pick.chosen.method {
-                Method::Preetham | Method::Hosek => Prepared::Analytic(pick.chosen.method, skytune::measure::model_points::Fit { turbidity: model.turbidity as f64, scale: 1.0 }),
+                Method::Preetham | Method::Hosek => {
+                    Prepared::Analytic(pick.chosen.method, skytune::measure::model_points::Fit { turbidity: model.turbidity as f64, scale: 1.0, units: model.analytic_units })
+                }
                 m => ev.prepare(&m, atm, &[]).expect("prepared"),
             };
             for &hour in &hours {
@@ -113,4 +115,23 @@ fn sky_file_keys_of_auto() {
     assert!(e.contains("automatic") && e.contains("expected auto"), "{e}");
     let e = load("\n[sky_model]\nkind = \"auto\"\nbudget = { de2000 = -1 }\n").expect_err("negative budget");
     assert!(e.contains("de2000"), "{e}");
+}
+
+/// `auto` measures where the sky's camera is: at 5 km, against a reference computed there (the
+/// committed one is seen from the ground), so the errors it reports are not the ground's.
+#[test]
+fn auto_measures_at_the_skys_camera_altitude() {
+    let ctx = GpuContext::headless(AdapterChoice::Cpu).expect("lavapipe");
+    let ev = Evaluator::new(&ctx).expect("probe");
+    let ground = skytune::sky::builtin::default_sky();
+    let mut high = ground.clone();
+    high.model.camera_km = 5.0;
+    assert_ne!(auto_model::scores_key(&ground), auto_model::scores_key(&high), "the altitude is part of the scores' key");
+    let job = skytune::support::progress::Job::new();
+    let (low_scores, high_scores) = (auto_model::score(&ground, &ev, &job).expect("scored"), auto_model::score(&high, &ev, &job).expect("scored"));
+    for (a, b) in low_scores.iter().zip(&high_scores) {
+        eprintln!("{}: dE2000 {:.2} on the ground, {:.2} at 5 km", a.id, a.de2000, b.de2000);
+    }
+    let moved = low_scores.iter().zip(&high_scores).filter(|(a, b)| (a.de2000 - b.de2000).abs() > 0.05).count();
+    assert!(moved * 2 >= low_scores.len(), "at most half the candidates' errors moved with the camera: {low_scores:?} {high_scores:?}");
 }

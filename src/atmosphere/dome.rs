@@ -103,9 +103,28 @@ impl Haze {
     }
 }
 
-/// The radiance cases of one sun elevation over `dirs`.
+/// Where a dome is seen from: the camera's altitude and the ground's albedo.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ground {
+    /// Camera altitude, km.
+    pub camera_km: f64,
+    /// Ground albedo, 0..1.
+    pub albedo: f64,
+}
+
+impl Ground {
+    /// The benchmark's: on the ground ([`CAMERA_KM`]), albedo [`ALBEDO`].
+    pub const BENCH: Ground = Ground { camera_km: CAMERA_KM, albedo: ALBEDO };
+}
+
+/// The radiance cases of one sun elevation over `dirs`, seen from the benchmark's ground.
 pub fn cases(sun_elev_deg: f64, dirs: &[DomeDir]) -> Vec<Case> {
-    dirs.iter().map(|d| Case { camera_km: CAMERA_KM, albedo: ALBEDO, sun_elev_deg, view_elev_deg: d.elev_deg, rel_azimuth_deg: d.rel_az_deg }).collect()
+    cases_from(Ground::BENCH, sun_elev_deg, dirs)
+}
+
+/// The radiance cases of one sun elevation over `dirs`, seen from `ground`.
+pub fn cases_from(ground: Ground, sun_elev_deg: f64, dirs: &[DomeDir]) -> Vec<Case> {
+    dirs.iter().map(|d| Case { camera_km: ground.camera_km, albedo: ground.albedo, sun_elev_deg, view_elev_deg: d.elev_deg, rel_azimuth_deg: d.rel_az_deg }).collect()
 }
 
 /// Fixed exposure of the error figures, stops: the sky file's default `exposure_ev`.
@@ -352,8 +371,20 @@ pub fn compute_domes(
     settings: ReferenceSettings,
     progress: &(dyn Fn(usize, usize) -> Result<(), Cancelled> + Sync),
 ) -> Result<Vec<DomeEstimate>, Cancelled> {
+    compute_domes_from(Ground::BENCH, atmospheres, suns_deg, dome, settings, progress)
+}
+
+/// [`compute_domes`] seen from `ground`.
+pub fn compute_domes_from(
+    ground: Ground,
+    atmospheres: &[Atmosphere],
+    suns_deg: &[f64],
+    dome: (usize, usize),
+    settings: ReferenceSettings,
+    progress: &(dyn Fn(usize, usize) -> Result<(), Cancelled> + Sync),
+) -> Result<Vec<DomeEstimate>, Cancelled> {
     let dirs = dome_directions(dome.0, dome.1);
-    let jobs = dome_jobs(atmospheres.len(), suns_deg, &dirs);
+    let jobs = dome_jobs(ground, atmospheres.len(), suns_deg, &dirs);
     let results = estimate_jobs(atmospheres, &jobs, settings, progress)?;
     Ok(jobs
         .chunks(dirs.len().max(1))
@@ -363,11 +394,11 @@ pub fn compute_domes(
 }
 
 /// Every (atmosphere index, sun elevation, case) of a set of domes, dome after dome.
-fn dome_jobs(atmospheres: usize, suns_deg: &[f64], dirs: &[DomeDir]) -> Vec<(usize, f64, Case)> {
+fn dome_jobs(ground: Ground, atmospheres: usize, suns_deg: &[f64], dirs: &[DomeDir]) -> Vec<(usize, f64, Case)> {
     let mut jobs = Vec::new();
     for k in 0..atmospheres {
         for &s in suns_deg {
-            jobs.extend(cases(s, dirs).into_iter().map(|c| (k, s, c)));
+            jobs.extend(cases_from(ground, s, dirs).into_iter().map(|c| (k, s, c)));
         }
     }
     jobs
@@ -451,7 +482,7 @@ impl ReferenceDome {
     ) -> Result<String, Cancelled> {
         let atmospheres: Vec<Atmosphere> = hazes.iter().map(|h| h.atmosphere()).collect();
         let dirs = dome_directions(dome.0, dome.1);
-        let all = dome_jobs(atmospheres.len(), suns_deg, &dirs);
+        let all = dome_jobs(Ground::BENCH, atmospheres.len(), suns_deg, &dirs);
         let index: Vec<usize> = (0..all.len()).collect();
         let mine = shard.take(&index);
         let jobs: Vec<(usize, f64, Case)> = mine.iter().map(|i| all[*i]).collect();

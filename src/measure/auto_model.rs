@@ -6,11 +6,13 @@
 //!   the same inputs give the same pick on any machine.
 //! - Error: for each weather step's atmosphere and each sun elevation of the benchmark that the
 //!   sky's sun reaches (plus the one on either side of its range), the mean CIE dE2000 over the
-//!   benchmark's dome at its fixed exposure; a candidate's error is the worst of these. Analytic
-//!   models are measured as they render: their own units, the turbidity fitted to the atmosphere.
-//! - Reference: the committed dataset for the benchmark's atmospheres, else computed once (to a
-//!   4% standard error: [`custom_reference_settings`]) and cached on disk per atmosphere, as are
-//!   picks, so loading stays fast.
+//!   benchmark's dome at its fixed exposure, seen from the sky's camera altitude and ground
+//!   albedo; a candidate's error is the worst of these. Analytic models are measured as they
+//!   render: in the sky's `analytic_units`, the turbidity fitted to the atmosphere.
+//! - Reference: the committed dataset for the benchmark's atmospheres seen from its ground (on
+//!   the ground, albedo 0.3), else computed once (to a 4% standard error:
+//!   [`custom_reference_settings`]) and cached on disk per atmosphere and ground, as are picks,
+//!   so loading stays fast.
 
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -115,6 +117,11 @@ pub fn sky_atmospheres(sky: &Sky) -> Vec<Atmosphere> {
     }
 }
 
+/// Where the sky is seen from: its camera's altitude and its ground albedo.
+pub fn sky_ground(sky: &Sky) -> dome::Ground {
+    dome::Ground { camera_km: sky.model.camera_km as f64, albedo: sky.model.ground_albedo as f64 }
+}
+
 /// Where computed references and picks are cached ($XDG_CACHE_HOME/skytune, ~/.cache/skytune).
 fn cache_dir() -> Option<PathBuf> {
     std::env::var_os("XDG_CACHE_HOME").map(PathBuf::from).or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache"))).map(|d| d.join("skytune"))
@@ -143,33 +150,39 @@ pub fn custom_reference_settings() -> ReferenceSettings {
     }
 }
 
-/// The committed or cached reference for `atm` at `suns`, if there is one (no computing).
-fn known_reference(atm: &Atmosphere, suns: &[f64]) -> Option<anyhow::Result<Vec<Vec<Rgb>>>> {
-    if let Some(haze) = Haze::of(atm) {
+/// The committed or cached reference for `atm` at `suns` seen from `ground`, if there is one (no
+/// computing). The committed dataset is seen from the benchmark's ground only.
+fn known_reference(atm: &Atmosphere, suns: &[f64], ground: dome::Ground) -> Option<anyhow::Result<Vec<Vec<Rgb>>>> {
+    if let Some(haze) = Haze::of(atm).filter(|_| ground == dome::Ground::BENCH) {
         let committed = match dome::committed_reference() {
             Ok(c) => c,
             Err(e) => return Some(Err(e.into())),
         };
         return Some(suns.iter().map(|s| committed.sun(haze, *s).map(|r| r.radiance.clone()).ok_or_else(|| anyhow::anyhow!("the committed reference lacks sun {s}"))).collect());
     }
-    let text = reference_file(atm, suns).and_then(|f| std::fs::read_to_string(f).ok())?;
+    let text = reference_file(atm, suns, ground).and_then(|f| std::fs::read_to_string(f).ok())?;
     let rows: Vec<Vec<Rgb>> = text.lines().map(|l| l.split(';').map(|v| parse_rgb(v).unwrap_or([f64::NAN; 3])).collect()).collect();
     (rows.len() == suns.len() && rows.iter().flatten().flatten().all(|v| v.is_finite())).then_some(Ok(rows))
 }
 
-/// Where the reference computed for `atm` at `suns` is cached.
-fn reference_file(atm: &Atmosphere, suns: &[f64]) -> Option<PathBuf> {
-    let key = hash_of(&(atm, suns, dome::ReferenceDome::header(custom_reference_settings(), dome::BENCH_DOME)));
+/// Where the reference computed for `atm` at `suns` seen from `ground` is cached.
+fn reference_file(atm: &Atmosphere, suns: &[f64], ground: dome::Ground) -> Option<PathBuf> {
+    // The benchmark's ground keeps the key files cached before the ground was part of it had.
+    let seen_from = (ground != dome::Ground::BENCH).then_some(ground);
+    let key = match seen_from {
+        None => hash_of(&(atm, suns, dome::ReferenceDome::header(custom_reference_settings(), dome::BENCH_DOME))),
+        Some(g) => hash_of(&(atm, suns, dome::ReferenceDome::header(custom_reference_settings(), dome::BENCH_DOME), g)),
+    };
     cache_dir().map(|d| d.join(format!("reference-{key:016x}.csv")))
 }
 
 /// Computes the reference over the benchmark's dome for an atmosphere no dataset holds (a minute
 /// or more on two cores; reported through `phase`, stopped when its job is cancelled), and caches
 /// it on disk.
-fn compute_reference(atm: &Atmosphere, suns: &[f64], phase: Phase<'_>) -> anyhow::Result<Vec<Vec<Rgb>>> {
-    let file = reference_file(atm, suns);
-    log::info!("auto model: computing the reference for this atmosphere at {} sun elevations (once; cached)", suns.len());
-    let domes = dome::compute_domes(&[*atm], suns, dome::BENCH_DOME, custom_reference_settings(), &|done, total| {
+fn compute_reference(atm: &Atmosphere, suns: &[f64], ground: dome::Ground, phase: Phase<'_>) -> anyhow::Result<Vec<Vec<Rgb>>> {
+    let file = reference_file(atm, suns, ground);
+    log::info!("auto model: computing the reference for this atmosphere at {} sun elevations, camera at {} km (once; cached)", suns.len(), ground.camera_km);
+    let domes = dome::compute_domes_from(ground, &[*atm], suns, dome::BENCH_DOME, custom_reference_settings(), &|done, total| {
         phase.report(done, total);
         phase.job.check()
     })?;
@@ -202,7 +215,8 @@ pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Sco
     let atmospheres = sky_atmospheres(sky);
     let dirs: Vec<DomeDir> = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
     // Read once: the committed dataset is parsed, a cached one read from disk.
-    let known: Vec<_> = atmospheres.iter().map(|a| known_reference(a, &suns)).collect();
+    let ground = sky_ground(sky);
+    let known: Vec<_> = atmospheres.iter().map(|a| known_reference(a, &suns, ground)).collect();
     let to_compute = known.iter().filter(|k| k.is_none()).count();
     let reference_share = if to_compute == 0 { 0.0 } else { REFERENCE_SHARE };
     let share_each = reference_share / to_compute.max(1) as f64;
@@ -214,7 +228,7 @@ pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Sco
             None => {
                 job.set_stage(format!("computing the reference for weather step {} of {}", w + 1, atmospheres.len()));
                 computed += 1;
-                compute_reference(a, &suns, job.phase(share_each * (computed - 1) as f64, share_each))?
+                compute_reference(a, &suns, ground, job.phase(share_each * (computed - 1) as f64, share_each))?
             }
         };
         references.push(reference);
@@ -230,19 +244,20 @@ pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Sco
         let mut turbidity = 0.0;
         for (w, (atm, refs)) in atmospheres.iter().zip(&references).enumerate() {
             let targets: Vec<FitTarget<'_>> = suns.iter().zip(refs).map(|(s, r)| FitTarget { sun_elev_deg: *s, dirs: &dirs, radiance: r }).collect();
-            // Analytic models render in their own units: fit the turbidity only (scale 1).
+            // Analytic models render in the sky's units: fit the turbidity only (scale 1).
+            let units = sky.model.analytic_units;
             let prepared = match point.method {
                 Method::Preetham | Method::Hosek => {
-                    let t = ev.fit_turbidity_unscaled(&point.method, &targets)?;
+                    let t = ev.fit_turbidity_unscaled(&point.method, units, &targets)?;
                     if w == 0 {
                         turbidity = t;
                     }
-                    Prepared::Analytic(point.method, model_points::Fit { turbidity: t, scale: 1.0 })
+                    Prepared::Analytic(point.method, model_points::Fit { turbidity: t, scale: 1.0, units })
                 }
                 m => ev.prepare(&m, atm, &targets)?,
             };
             for (s, r) in suns.iter().zip(refs) {
-                let model = ev.radiance(&prepared, atm, *s, &dome::cases(*s, &dirs))?;
+                let model = ev.radiance(&prepared, atm, *s, &dome::cases_from(ground, *s, &dirs))?;
                 worst = worst.max(dome::dome_error(&dirs, r, &model).de_mean);
             }
         }
@@ -270,10 +285,18 @@ pub fn choose(scored: &[Scored], budget: Budget, suns_deg: Vec<f64>) -> Pick {
 /// Scores already measured in this process, by everything they depend on.
 static SCORES: Mutex<Vec<(u64, Vec<Scored>)>> = Mutex::new(Vec::new());
 
-/// The key of `sky`'s scores: everything they depend on (its atmospheres and sun range, the
-/// committed benchmark), not its budget or anything else in the file.
+/// The key of `sky`'s scores: everything they depend on (its atmospheres, sun range, camera,
+/// ground and analytic units, the committed benchmark), not its budget or anything else in the
+/// file.
 pub fn scores_key(sky: &Sky) -> u64 {
-    hash_of(&(sky_atmospheres(sky), sky_suns(sky), hash_of(&model_points::COMMITTED_CSV), dome::ReferenceDome::header(dome::committed_settings(), dome::BENCH_DOME)))
+    hash_of(&(
+        sky_atmospheres(sky),
+        sky_suns(sky),
+        hash_of(&model_points::COMMITTED_CSV),
+        dome::ReferenceDome::header(dome::committed_settings(), dome::BENCH_DOME),
+        sky_ground(sky),
+        sky.model.analytic_units,
+    ))
 }
 
 /// Where the scores of `key` are cached.

@@ -40,7 +40,7 @@ pub fn bake(ev: &Evaluator<'_>, sky: &Sky, method: Method, rows: usize, weathers
     let prepared: Vec<Prepared> = atmospheres
         .iter()
         .map(|atm| match method {
-            Method::Preetham | Method::Hosek => Ok(Prepared::Analytic(method, Fit { turbidity: sky.model.turbidity as f64, scale: 1.0 })),
+            Method::Preetham | Method::Hosek => Ok(Prepared::Analytic(method, Fit { turbidity: sky.model.turbidity as f64, scale: 1.0, units: sky.model.analytic_units })),
             m => ev.prepare(&m, atm, &[]),
         })
         .collect::<anyhow::Result<_>>()?;

@@ -131,6 +131,9 @@ pub struct Fit {
     pub turbidity: f64,
     /// Factor applied to the model's radiance.
     pub scale: f64,
+    /// The unit the model is evaluated in before the factor (`preetham`, `hosek`): the published
+    /// one where the benchmark fits its own scale, the calibrated one (scale 1) as a sky renders.
+    pub units: AnalyticUnits,
 }
 
 /// Turbidities the fit tries (Preetham's clamp is 1.7; Hosek's data starts at 1).
@@ -186,14 +189,23 @@ impl<'a> Evaluator<'a> {
             Method::Single(s) => widen(self.probe.single(self.ctx, atm, &s, cases)?),
             Method::Lut(s) => widen(self.probe.lut(self.ctx, atm, &s, cases)?),
             // In the published units: the fitted scale is then the factor from those.
-            Method::Preetham => widen(self.probe.analytic(self.ctx, cases, |_| AnalyticModel::Preetham { turbidity, units: AnalyticUnits::Published })?),
-            Method::Hosek => widen(self.probe.analytic(self.ctx, cases, |c| AnalyticModel::Hosek { turbidity, albedo: c.albedo, units: AnalyticUnits::Published })?),
+            Method::Preetham | Method::Hosek => self.analytic(method, turbidity, AnalyticUnits::Published, cases)?,
             Method::Linear => {
                 let v: Vec<Rgb> = widen(self.probe.analytic(self.ctx, cases, |_| AnalyticModel::Linear(LinearParams::default()))?);
                 v.into_iter().map(|c| c.map(dome::srgb_decode)).collect()
             }
             other => anyhow::bail!("{} is not evaluated on the GPU", other.model_name()),
         })
+    }
+
+    /// Radiance of `preetham` or `hosek` at `turbidity` in `units` for `cases`, on the GPU.
+    fn analytic(&self, method: &Method, turbidity: f64, units: AnalyticUnits, cases: &[Case]) -> anyhow::Result<Vec<Rgb>> {
+        let v = match method {
+            Method::Preetham => self.probe.analytic(self.ctx, cases, |_| AnalyticModel::Preetham { turbidity, units })?,
+            Method::Hosek => self.probe.analytic(self.ctx, cases, |c| AnalyticModel::Hosek { turbidity, albedo: c.albedo, units })?,
+            other => anyhow::bail!("{} is not an analytic model with units", other.model_name()),
+        };
+        Ok(v.into_iter().map(|c| c.map(f64::from)).collect())
     }
 
     /// Radiance of `models[i]` for `cases[i]` on the GPU (the models' own units).
@@ -223,16 +235,20 @@ impl<'a> Evaluator<'a> {
     /// The turbidity and scale that bring an analytic model closest to the reference (least
     /// squares of the relative error, every sun elevation of `targets` counting alike).
     pub fn fit(&self, method: &Method, targets: &[FitTarget<'_>]) -> anyhow::Result<Fit> {
-        self.fit_with(method, targets, true)
+        self.fit_with(method, targets, None)
     }
 
     /// The turbidity that brings an analytic model closest to the reference in mean dE2000 as it
-    /// renders (its own units, no scale).
-    pub fn fit_turbidity_unscaled(&self, method: &Method, targets: &[FitTarget<'_>]) -> anyhow::Result<f64> {
-        Ok(self.fit_with(method, targets, false)?.turbidity)
+    /// renders in `units` (no scale).
+    pub fn fit_turbidity_unscaled(&self, method: &Method, units: AnalyticUnits, targets: &[FitTarget<'_>]) -> anyhow::Result<f64> {
+        Ok(self.fit_with(method, targets, Some(units))?.turbidity)
     }
 
-    fn fit_with(&self, method: &Method, targets: &[FitTarget<'_>], scaled: bool) -> anyhow::Result<Fit> {
+    /// The least-squares fit of turbidity and scale from the published unit, or with `unscaled`
+    /// the turbidity alone in those units by mean dE2000.
+    fn fit_with(&self, method: &Method, targets: &[FitTarget<'_>], unscaled: Option<AnalyticUnits>) -> anyhow::Result<Fit> {
+        let scaled = unscaled.is_none();
+        let units = unscaled.unwrap_or(AnalyticUnits::Published);
         let turbidities: Vec<f64> = match method {
             Method::Linear => vec![0.0],
             // Below its clamp Preetham's fit is the clamp's: the same point under another name.
@@ -243,7 +259,11 @@ impl<'a> Evaluator<'a> {
         for turbidity in turbidities {
             let mut values = Vec::new();
             for t in targets {
-                values.push(self.gpu(method, &Atmosphere::default(), turbidity, &dome::cases(t.sun_elev_deg, t.dirs))?);
+                let cases = dome::cases(t.sun_elev_deg, t.dirs);
+                values.push(match method {
+                    Method::Preetham | Method::Hosek => self.analytic(method, turbidity, units, &cases)?,
+                    _ => self.gpu(method, &Atmosphere::default(), turbidity, &cases)?,
+                });
             }
             let (mut num, mut den) = (0.0, 0.0);
             for (t, m) in targets.iter().zip(&values) {
@@ -276,7 +296,7 @@ impl<'a> Evaluator<'a> {
                 })
                 .sum();
             if best.as_ref().is_none_or(|(e, _)| error < *e) {
-                best = Some((error, Fit { turbidity, scale }));
+                best = Some((error, Fit { turbidity, scale, units }));
             }
         }
         best.map(|b| b.1).ok_or_else(|| anyhow::anyhow!("no turbidity to fit"))
@@ -288,6 +308,9 @@ impl<'a> Evaluator<'a> {
         let each = |f: &dyn Fn(&Case) -> Rgb| cases.iter().map(f).collect::<Vec<Rgb>>();
         Ok(match prepared {
             Prepared::Gpu(m) => self.gpu(m, atm, 0.0, cases)?,
+            Prepared::Analytic(m @ (Method::Preetham | Method::Hosek), fit) => {
+                self.analytic(m, fit.turbidity, fit.units, cases)?.into_iter().map(|c| c.map(|x| x * fit.scale)).collect()
+            }
             Prepared::Analytic(m, fit) => self.gpu(m, atm, fit.turbidity, cases)?.into_iter().map(|c| c.map(|x| x * fit.scale)).collect(),
             Prepared::Cells(model) => each(&|c| model.radiance(c)),
             Prepared::DomeMap(t) => each(&|c| t.radiance(sun_elev_deg, c.view_elev_deg, c.rel_azimuth_deg)),
