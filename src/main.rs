@@ -140,9 +140,9 @@ fn bake(args: &cli::BakeArgs) -> anyhow::Result<()> {
 }
 
 /// `skytune radiance`: evaluates a model on every case of a CSV file.
-/// What `radiance` evaluates in: the atmosphere, the (camera altitude km, ground albedo) a sky
-/// file sets, and a line saying where they came from.
-type RadianceSetting = (skytune::atmosphere::Atmosphere, Option<(f64, f64)>, String);
+/// What `radiance` evaluates in: the atmosphere, the camera altitude and ground albedo a sky file
+/// sets, and a line saying where they came from.
+type RadianceSetting = (skytune::atmosphere::Atmosphere, Option<skytune::atmosphere::dome::Ground>, String);
 
 /// The atmosphere `radiance` evaluates (the sky file's at its weather, or the default, with the
 /// `--atmosphere` keys over it), the camera altitude and ground albedo the sky file sets, and a
@@ -154,10 +154,8 @@ fn radiance_atmosphere(args: &cli::RadianceArgs) -> anyhow::Result<RadianceSetti
             anyhow::ensure!((0.0..=1.0).contains(&args.weather), "--weather: expected 0..=1, found {}", args.weather);
             let sky = skytune::sky::load_sky_file(path).map_err(|e| anyhow!("{e}"))?;
             let atm = Atmosphere::at_weather(&sky.atmosphere_by_weather, args.weather).unwrap_or(sky.atmosphere);
-            // The values as the file wrote them (the sky holds f32: 0.6 would read 0.6000000238).
-            let decimal = |x: f32| x.to_string().parse::<f64>().unwrap_or(x as f64);
-            let camera = (decimal(sky.model.camera_km), decimal(sky.model.ground_albedo));
-            (atm, Some(camera), format!("atmosphere of {} at weather {}, camera at {} km, ground albedo {}", path.display(), args.weather, camera.0, camera.1))
+            let ground = sky.model.ground();
+            (atm, Some(ground), format!("atmosphere of {} at weather {}, camera at {} km, ground albedo {}", path.display(), args.weather, ground.camera_km, ground.albedo))
         }
         None => (Atmosphere::default(), None, "default atmosphere (Hillaire 2020)".to_string()),
     };
@@ -181,12 +179,12 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     use skytune::atmosphere::cases;
     anyhow::ensure!(args.max_order >= 1, "--max-order: expected at least 1, found {}", args.max_order);
     anyhow::ensure!((1..=4096).contains(&args.view_steps) && (1..=4096).contains(&args.sun_steps), "--view-steps and --sun-steps: expected 1..=4096");
-    let (atm, camera, atmosphere_line) = radiance_atmosphere(args)?;
+    let (atm, ground, atmosphere_line) = radiance_atmosphere(args)?;
     let mut all = cases::read_cases(&args.cases, atm.thickness_km())?;
-    if let Some((camera_km, albedo)) = camera {
-        anyhow::ensure!(camera_km < atm.thickness_km(), "--sky: the camera ({camera_km} km) is above the top of its atmosphere");
+    if let Some(g) = ground {
+        anyhow::ensure!(g.camera_km < atm.thickness_km(), "--sky: the camera ({} km) is above the top of its atmosphere", g.camera_km);
         for c in &mut all {
-            (c.camera_km, c.albedo) = (camera_km, albedo);
+            (c.camera_km, c.albedo) = (g.camera_km, g.albedo);
         }
     }
     let shard = args.shard.unwrap_or(Shard::WHOLE);

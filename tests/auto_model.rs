@@ -124,6 +124,7 @@ fn auto_measures_at_the_skys_camera_altitude() {
     let ctx = GpuContext::headless(AdapterChoice::Cpu).expect("lavapipe");
     let ev = Evaluator::new(&ctx).expect("probe");
     let ground = skytune::sky::builtin::default_sky();
+    assert_eq!(ground.model.ground(), dome::Ground::BENCH, "the default sky is seen from the benchmark's ground: the committed reference serves it");
     let mut high = ground.clone();
     high.model.camera_km = 5.0;
     assert_ne!(auto_model::scores_key(&ground), auto_model::scores_key(&high), "the altitude is part of the scores' key");

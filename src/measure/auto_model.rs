@@ -117,11 +117,6 @@ pub fn sky_atmospheres(sky: &Sky) -> Vec<Atmosphere> {
     }
 }
 
-/// Where the sky is seen from: its camera's altitude and its ground albedo.
-pub fn sky_ground(sky: &Sky) -> dome::Ground {
-    dome::Ground { camera_km: sky.model.camera_km as f64, albedo: sky.model.ground_albedo as f64 }
-}
-
 /// Where computed references and picks are cached ($XDG_CACHE_HOME/skytune, ~/.cache/skytune).
 fn cache_dir() -> Option<PathBuf> {
     std::env::var_os("XDG_CACHE_HOME").map(PathBuf::from).or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache"))).map(|d| d.join("skytune"))
@@ -215,7 +210,7 @@ pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Sco
     let atmospheres = sky_atmospheres(sky);
     let dirs: Vec<DomeDir> = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
     // Read once: the committed dataset is parsed, a cached one read from disk.
-    let ground = sky_ground(sky);
+    let ground = sky.model.ground();
     let known: Vec<_> = atmospheres.iter().map(|a| known_reference(a, &suns, ground)).collect();
     let to_compute = known.iter().filter(|k| k.is_none()).count();
     let reference_share = if to_compute == 0 { 0.0 } else { REFERENCE_SHARE };
@@ -294,7 +289,7 @@ pub fn scores_key(sky: &Sky) -> u64 {
         sky_suns(sky),
         hash_of(&model_points::COMMITTED_CSV),
         dome::ReferenceDome::header(dome::committed_settings(), dome::BENCH_DOME),
-        sky_ground(sky),
+        sky.model.ground(),
         sky.model.analytic_units,
     ))
 }

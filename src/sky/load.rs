@@ -204,9 +204,15 @@ struct Validator<'a> {
 }
 
 impl Validator<'_> {
-    fn err_at(&mut self, span: std::ops::Range<usize>, field: &str, message: impl Into<String>) {
+    /// A problem at `span` of the sky file, in `field`.
+    fn located(&self, span: std::ops::Range<usize>, field: &str, message: impl Into<String>) -> SkyError {
         let (line, column) = line_col(self.text, span.start);
-        self.errors.push(SkyError { file: self.file.clone(), line, column, field: field.to_string(), message: message.into() });
+        SkyError { file: self.file.clone(), line, column, field: field.to_string(), message: message.into() }
+    }
+
+    fn err_at(&mut self, span: std::ops::Range<usize>, field: &str, message: impl Into<String>) {
+        let e = self.located(span, field, message);
+        self.errors.push(e);
     }
 
     /// Warns when stage `s` of version `v` tiles its texture under the mesh mapping of a dome
@@ -220,19 +226,14 @@ impl Validator<'_> {
         };
         let scale = s.uv_scale.get_ref();
         if reaches_zenith && s.texture.is_some() && s.uv == model::UvSource::Mesh && scale.iter().any(|x| x.get().abs() > 1.0) {
-            let (line, column) = line_col(self.text, s.uv_scale.span().start);
-            self.warnings.push(SkyError {
-                file: self.file.clone(),
-                line,
-                column,
-                field: format!("{sf}.uv_scale"),
-                message: format!(
-                    "\"{name}\": a texture repeated [{}, {}] times under the mesh mapping converges into a star at the zenith; \
-                     use uv = {{ kind = \"layer\" }} for tiled clouds and stars",
-                    scale[0].get(),
-                    scale[1].get()
-                ),
-            });
+            let message = format!(
+                "\"{name}\": a texture repeated [{}, {}] times under the mesh mapping converges into a star at the zenith; \
+                 use uv = {{ kind = \"layer\" }} for tiled clouds and stars",
+                scale[0].get(),
+                scale[1].get()
+            );
+            let w = self.located(s.uv_scale.span(), &format!("{sf}.uv_scale"), message);
+            self.warnings.push(w);
         }
     }
 

@@ -114,6 +114,14 @@ pub struct SkyModel {
 }
 
 impl SkyModel {
+    /// Where the sky is seen from: its camera's altitude and ground albedo, each read as the
+    /// decimal the file wrote (0.3, not the f32's 0.30000001), so that the benchmark's ground
+    /// ([`crate::atmosphere::dome::Ground::BENCH`]) is recognised and its reference used.
+    pub fn ground(&self) -> crate::atmosphere::dome::Ground {
+        let decimal = |x: f32| x.to_string().parse::<f64>().unwrap_or(f64::from(x));
+        crate::atmosphere::dome::Ground { camera_km: decimal(self.camera_km), albedo: decimal(self.ground_albedo) }
+    }
+
     /// The analytic model this is, if it is one.
     pub fn analytic(&self) -> Option<crate::atmosphere::analytic::AnalyticModel> {
         use crate::atmosphere::analytic::AnalyticModel;
