@@ -71,7 +71,7 @@ fn cs_multiscattering(@builtin(global_invocation_id) gid: vec3<u32>) {
                 let p = vec3<f32>(0.0, r, 0.0) + dir * t;
                 let r_p = atmosphere.shape.x + h;
                 let mu_p = dot(p, sun) / max(length(p), 1e-3);
-                let sigma_s = atmosphere.rayleigh.xyz * exp(-h / atmosphere.rayleigh.w) + vec3<f32>(atmosphere.mie.x * exp(-h / atmosphere.mie.z));
+                let sigma_s = atmosphere.rayleigh.xyz * exp(-h / atmosphere.rayleigh.w) + atmosphere.mie_scattering.xyz * exp(-h / atmosphere.mie_scattering.w);
                 let t_view = exp(-tau_mid);
                 l += t_view * sigma_s * sun_transmittance(atmosphere, r_p, mu_p) / (4.0 * PI) * dt;
                 f += t_view * sigma_s * dt;

@@ -168,7 +168,7 @@ fn radiance_atmosphere(args: &cli::RadianceArgs) -> anyhow::Result<RadianceSetti
         }
         let def: skytune::sky::model::AtmosphereDef = skytune::sky::load::parse_toml("--atmosphere", &text).map_err(|e| anyhow!("{e}"))?;
         anyhow::ensure!(def.weather.is_empty(), "--atmosphere: weather steps come from a sky file (--sky and --weather)");
-        atm = def.apply(atm);
+        atm = def.apply(atm, None).map_err(|errors| anyhow!("--atmosphere: {}", errors.iter().map(|e| format!("{}: {}", e.field, e.message)).collect::<Vec<_>>().join("; ")))?;
         source.push_str(&format!(", with {}", args.atmosphere.join(", ")));
     }
     atm.validate().map_err(|errors| anyhow!("--atmosphere: {}", errors.iter().map(|e| format!("{}: {}", e.field, e.message)).collect::<Vec<_>>().join("; ")))?;

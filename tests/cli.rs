@@ -201,7 +201,7 @@ fn radiance_takes_the_atmosphere_camera_and_albedo_of_a_sky_file() {
     assert_eq!(a, b);
     assert!(a.iter().all(|r| r[0] == 1.5 && r[1] == 0.6), "the sky's camera and ground replace the cases': {a:?}");
     assert!(
-        from_sky.starts_with("# ") && from_sky.contains("sky.toml at weather 1") && from_sky.contains("mie_scattering_per_km: 0.0299"),
+        from_sky.starts_with("# ") && from_sky.contains("sky.toml at weather 1") && from_sky.contains("mie_scattering_per_km: [0.0299"),
         "the header names the atmosphere: {from_sky}"
     );
     // Clear weather is the base atmosphere; the aerosol whitens the low sky.
@@ -329,4 +329,48 @@ fn bench_reference_writes_its_table_and_chart() {
     }
     let png = image::open(dir.path().join("reference-convergence.png")).unwrap().to_rgb8();
     assert!(png.pixels().any(|p| p.0 != [255, 255, 255]), "the chart is not blank");
+}
+
+#[test]
+fn more_aerosol_whitens_the_horizon_and_widens_the_aureole() {
+    // Sun 30 degrees up; the almucantar through the sun from 3 to 90 degrees away, and the
+    // horizon opposite the sun.
+    let dir = tempfile::tempdir().unwrap();
+    let cases = dir.path().join("cases.csv");
+    let away = [3.0, 6.0, 10.0, 15.0, 20.0, 30.0, 45.0, 60.0, 90.0];
+    let mut text = "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg\n".to_string();
+    for a in away {
+        text.push_str(&format!("0,0.3,30,30,{a}\n"));
+    }
+    text.push_str("0,0.3,30,2,180\n");
+    std::fs::write(&cases, text).unwrap();
+    let run = |tau: &str| {
+        let out = dir.path().join(format!("{tau}.csv"));
+        let o = skytune()
+            .args(["radiance", "--model", "lut", "--cpu", "--cases"])
+            .arg(&cases)
+            .arg("--out")
+            .arg(&out)
+            .args(["--atmosphere", &format!("aerosol_optical_depth={tau}")])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = std::fs::read_to_string(&out).unwrap();
+        assert!(text.starts_with("# ") && text.contains(&format!("with aerosol_optical_depth={tau}")), "{text}");
+        let rows: Vec<Vec<f64>> = text.lines().filter(|l| !l.starts_with('#')).skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+        rows
+    };
+    let (clean, hazy) = (run("0.05"), run("0.5"));
+    // The aureole: the angle from the sun at which the sky falls to twice its brightness 90
+    // degrees away (green channel, interpolated in log radiance).
+    let width = |rows: &[Vec<f64>]| {
+        let far = rows[away.len() - 1][6];
+        let k = (1..away.len()).find(|&k| rows[k][6] <= 2.0 * far).unwrap();
+        let (l0, l1) = ((rows[k - 1][6] / far).ln(), (rows[k][6] / far).ln());
+        away[k - 1] + (away[k] - away[k - 1]) * (l0 - 2f64.ln()) / (l0 - l1)
+    };
+    assert!(width(&hazy) > width(&clean), "aureole {} vs {} degrees", width(&hazy), width(&clean));
+    let blue_over_red = |rows: &[Vec<f64>]| rows[away.len()][7] / rows[away.len()][5];
+    let (b_clean, b_hazy) = (blue_over_red(&clean), blue_over_red(&hazy));
+    assert!(b_hazy < b_clean && (b_hazy - 1.0).abs() < (b_clean - 1.0).abs(), "horizon blue/red {b_hazy} vs {b_clean}");
 }

@@ -226,7 +226,7 @@ fn sky_model_and_atmosphere_sections_load() {
     assert_eq!(sky.model.kind, skytune::sky::resolved::SkyModelKind::Single);
     assert_eq!((sky.model.exposure_ev, sky.model.single.view_steps), (4.5, 48));
     assert_eq!(sky.model.single.optical_depth, skytune::atmosphere::OpticalDepth::Numerical);
-    assert!((sky.atmosphere.mie_scattering_per_km - 0.02).abs() < 1e-9 && sky.atmosphere.rayleigh_scale_height_km == 8.0);
+    assert!((sky.atmosphere.mie_scattering_per_km[2] - 0.02).abs() < 1e-9 && sky.atmosphere.rayleigh_scale_height_km == 8.0);
     // Without the sections: the NeL bitmaps and Earth.
     assert_eq!(default_sky().model, skytune::sky::resolved::SkyModel::default());
 }
@@ -264,7 +264,13 @@ fn bad_sky_model_and_atmosphere_values_are_located() {
             "ramps of 4 h overlap",
         ),
         ("[atmosphere]\nrayleigh_scale_height_km = nan\n", "rayleigh_scale_height_km = nan", "atmosphere.rayleigh_scale_height_km", "expected a finite number > 0"),
-        ("[atmosphere]\nmie_scattering_per_km = -1\n", "mie_scattering_per_km = -1", "atmosphere.mie_scattering_per_km", "expected a finite number >= 0"),
+        (
+            "[atmosphere]\nmie_scattering_per_km = -1\n",
+            "mie_scattering_per_km = -1",
+            "atmosphere.mie_scattering_per_km",
+            "expected one number >= 0 (grey) or three, [r, g, b], found -1",
+        ),
+        ("[atmosphere]\nmie_scattering_per_km = [0.01, 0.02]\n", "mie_scattering_per_km = [0.01, 0.02]", "atmosphere.mie_scattering_per_km", "found [0.01, 0.02]"),
         ("[atmosphere]\ntop_radius_km = 6000\n", "top_radius_km = 6000", "atmosphere.top_radius_km", "expected more than ground_radius_km"),
         ("[atmosphere]\nmie_extinction_per_km = 0.001\n", "mie_extinction_per_km = 0.001", "atmosphere.mie_extinction_per_km", "expected at least mie_scattering_per_km"),
         ("[sky_model]\nkind = \"lut\"\nmultiscattering_size = 1000\n", "multiscattering_size = 1000", "sky_model.multiscattering_size", "expected 2..=64 texels, found 1000"),
@@ -284,13 +290,69 @@ fn the_atmosphere_follows_the_weather() {
     let sky = sky.unwrap();
     assert_eq!(sky.atmosphere_by_weather.len(), 2);
     let at = |w: f32| sky.evaluate(&skytune::sky::FrameInput::new(12.0, w)).atmosphere;
-    assert!((at(0.0).mie_scattering_per_km - 0.004).abs() < 1e-9);
-    assert!((at(0.5).mie_scattering_per_km - 0.012).abs() < 1e-6, "{}", at(0.5).mie_scattering_per_km);
-    assert!((at(1.0).mie_scattering_per_km - 0.02).abs() < 1e-9);
+    assert!((at(0.0).mie_scattering_per_km[0] - 0.004).abs() < 1e-9);
+    assert!((at(0.5).mie_scattering_per_km[1] - 0.012).abs() < 1e-6, "{:?}", at(0.5).mie_scattering_per_km);
+    assert!((at(1.0).mie_scattering_per_km[2] - 0.02).abs() < 1e-9);
     // The base section applies to every step.
     assert!((at(0.7).rayleigh_scale_height_km - 8.5).abs() < 1e-6);
     // A step breaking a cross-field rule names its step.
     let (bad, _, _) = with_sections("[atmosphere]\n[[atmosphere.weather]]\nmie_scattering_per_km = 0.02\n");
     let errors = bad.expect_err("Mie extinction below scattering");
     assert!(errors.0.iter().any(|e| e.field == "atmosphere.weather[0].mie_extinction_per_km"), "{errors}");
+}
+
+#[test]
+fn aerosol_knobs_become_mie_coefficients() {
+    use skytune::atmosphere::aerosol::{Aerosol, AerosolPreset};
+    use skytune::atmosphere::Atmosphere;
+    let close = |a: [f64; 3], b: [f64; 3]| (0..3).all(|c| (a[c] - b[c]).abs() <= 1e-6 * b[c].abs().max(1e-6));
+    // A preset is a documented set of the existing coefficients.
+    let (sky, _, _) = with_sections("[atmosphere]\naerosol = \"hazy\"\n");
+    let hazy = AerosolPreset::Hazy.aerosol().apply(Atmosphere::default());
+    let atm = sky.unwrap().atmosphere;
+    assert!(close(atm.mie_extinction_per_km, hazy.mie_extinction_per_km) && close(atm.mie_scattering_per_km, hazy.mie_scattering_per_km), "{atm:?}");
+    assert_eq!(atm.mie_g, hazy.mie_g);
+    // An optical depth with an exponent, by hand: tau 0.2, exponent 1, scale height 1 km.
+    let (sky, _, _) = with_sections("[atmosphere]\naerosol_optical_depth = 0.2\nangstrom_exponent = 1\nmie_scale_height_km = 1\naerosol_albedo = 0.9\n");
+    let atm = sky.unwrap().atmosphere;
+    assert!(close(atm.mie_extinction_per_km, [0.2 * 550.0 / 680.0, 0.2, 0.2 * 550.0 / 440.0]), "{atm:?}");
+    assert!(close(atm.mie_scattering_per_km, [0.18 * 550.0 / 680.0, 0.18, 0.18 * 550.0 / 440.0]), "{atm:?}");
+    // Alone, an optical depth takes the default exponent; turbidity and visibility say the same.
+    let (sky, _, _) = with_sections("[atmosphere]\naerosol_optical_depth = 0.1\n");
+    let tau = Aerosol::of(&sky.unwrap().atmosphere);
+    assert!((tau.optical_depth_550 - 0.1).abs() < 1e-7 && (tau.angstrom_exponent - 1.3).abs() < 1e-6, "{tau:?}");
+    let (sky, _, _) = with_sections("[sky_model]\nkind = \"hosek\"\n\n[atmosphere]\nturbidity = 3\n");
+    let sky = sky.unwrap();
+    let t = Atmosphere::default().rayleigh_optical_depth_550();
+    assert!((Aerosol::of(&sky.atmosphere).optical_depth_550 - 2.0 * t).abs() < 1e-6);
+    // ... and the analytic models take the atmosphere's turbidity.
+    assert!((sky.model.turbidity - 3.0).abs() < 1e-5, "{}", sky.model.turbidity);
+    let (sky, _, _) = with_sections("[sky_model]\nkind = \"preetham\"\n\n[atmosphere]\naerosol = \"urban\"\n");
+    let sky = sky.unwrap();
+    assert!((sky.model.turbidity as f64 - sky.atmosphere.turbidity()).abs() < 1e-4 && sky.model.turbidity > 5.0, "{}", sky.model.turbidity);
+    let (sky, _, _) = with_sections("[sky_model]\nkind = \"preetham\"\nturbidity = 2\n\n[atmosphere]\naerosol = \"urban\"\n");
+    assert_eq!(sky.unwrap().model.turbidity, 2.0, "a stated turbidity wins");
+    // A weather step changes the amount and keeps the preset's slope and albedo.
+    let (sky, _, _) = with_sections("[atmosphere]\naerosol = \"desert_dust\"\n[[atmosphere.weather]]\n[[atmosphere.weather]]\naerosol_optical_depth = 1.0\n");
+    let sky = sky.unwrap();
+    let (clear, storm) = (Aerosol::of(&sky.atmosphere_by_weather[0]), Aerosol::of(&sky.atmosphere_by_weather[1]));
+    let dust = AerosolPreset::DesertDust.aerosol();
+    assert!((clear.optical_depth_550 - dust.optical_depth_550).abs() < 1e-6 && (storm.optical_depth_550 - 1.0).abs() < 1e-6);
+    assert!((storm.angstrom_exponent - dust.angstrom_exponent).abs() < 1e-4 && (storm.single_scattering_albedo - dust.single_scattering_albedo).abs() < 1e-6, "{storm:?}");
+}
+
+#[test]
+fn conflicting_or_impossible_aerosol_is_a_located_error() {
+    for (extra, needle, field, message) in [
+        ("[atmosphere]\nmie_scattering_per_km = 0.01\naerosol_optical_depth = 0.2\n", "mie_scattering_per_km = 0.01", "atmosphere.mie_scattering_per_km", "not both"),
+        ("[atmosphere]\naerosol_optical_depth = 0.2\nvisibility_km = 20\n", "visibility_km = 20", "atmosphere.visibility_km", "give the aerosol amount one way"),
+        ("[atmosphere]\nvisibility_km = 500\n", "visibility_km = 500", "atmosphere.visibility_km", "expected a visibility in (0, 289] km"),
+        ("[atmosphere]\nturbidity = 0.5\n", "turbidity = 0.5", "atmosphere.turbidity", "expected a turbidity >= 1"),
+        ("[atmosphere]\naerosol = \"smog\"\n", "aerosol = \"smog\"", "atmosphere.aerosol", "desert_dust"),
+        ("[atmosphere]\nangstrom_exponent = 7\n", "angstrom_exponent = 7", "atmosphere.angstrom_exponent", "expected an Angstrom exponent in [-1, 4]"),
+    ] {
+        let (result, file, text) = with_sections(extra);
+        let errors = result.expect_err(extra);
+        assert_error(&errors, &file, line_of(&text, needle), field, message);
+    }
 }

@@ -53,7 +53,7 @@ fn optically_thin_limit_matches_analytic_single_scattering() {
         let column = |h: f64| h * (1.0 - (-top / h).exp());
         for (c, (l, beta)) in l.iter().zip(atm.rayleigh_scattering_per_km).enumerate() {
             let expected = beta * rayleigh_phase(cos) * column(atm.rayleigh_scale_height_km)
-                + atm.mie_scattering_per_km * cornette_shanks_phase(cos, atm.mie_g) * column(atm.mie_scale_height_km);
+                + atm.mie_scattering_per_km[c] * cornette_shanks_phase(cos, atm.mie_g) * column(atm.mie_scale_height_km);
             assert!(rel(l / k, expected) < 1e-4, "sun {sun_elev}, channel {c}: {} vs {expected}", l / k);
         }
     }
@@ -244,7 +244,7 @@ fn the_tabulated_sunlight_of_orders_two_and_up_matches_the_quadrature() {
     // far below the paths' noise), from the ground to the top, overhead to below the horizon.
     use glam::DVec3;
     use skytune::atmosphere::reference::SunlightBy;
-    for atm in [Atmosphere::default(), Atmosphere { mie_scattering_per_km: 0.016, mie_extinction_per_km: 0.0178, ..Atmosphere::default() }] {
+    for atm in [Atmosphere::default(), Atmosphere { mie_scattering_per_km: [0.016; 3], mie_extinction_per_km: [0.0178; 3], ..Atmosphere::default() }] {
         let r = Reference::new(atm, ReferenceSettings::default());
         let mut worst: (f64, f64, f64) = (0.0, 0.0, 0.0);
         for altitude in [0.0, 0.05, 0.7, 2.3, 8.0, 17.0, 33.0, 61.0, 99.9] {

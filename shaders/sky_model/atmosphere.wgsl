@@ -3,7 +3,8 @@
 // src/render/passes/sky_model.rs.
 struct Atmosphere {
     rayleigh: vec4<f32>, // scattering rgb (km^-1), scale height (km)
-    mie: vec4<f32>,      // scattering, extinction (km^-1), scale height (km), g
+    mie_scattering: vec4<f32>, // scattering rgb (km^-1), scale height (km)
+    mie_extinction: vec4<f32>, // extinction rgb (km^-1), Cornette-Shanks g
     ozone: vec4<f32>,    // absorption rgb (km^-1), tent centre (km)
     shape: vec4<f32>,    // ground radius, top radius (km), ozone tent half width (km), sun angular radius (rad)
 };
@@ -25,7 +26,7 @@ fn ozone_density(atm: Atmosphere, altitude_km: f32) -> f32 {
 // Extinction at an altitude, km^-1.
 fn extinction_at(atm: Atmosphere, altitude_km: f32) -> vec3<f32> {
     let h = max(altitude_km, 0.0);
-    return atm.rayleigh.xyz * exp(-h / atm.rayleigh.w) + vec3<f32>(atm.mie.y * exp(-h / atm.mie.z)) + atm.ozone.xyz * ozone_density(atm, h);
+    return atm.rayleigh.xyz * exp(-h / atm.rayleigh.w) + atm.mie_extinction.xyz * exp(-h / atm.mie_scattering.w) + atm.ozone.xyz * ozone_density(atm, h);
 }
 
 // Altitude of p + t d for a point at radius r with direction cosine mu (to the local vertical),
@@ -124,7 +125,7 @@ fn erf_optical_depth(atm: Atmosphere, r: f32, h: f32, mu: f32) -> vec3<f32> {
     if (lr < 0.0) {
         return vec3<f32>(-1.0);
     }
-    let lm = erf_optical_length(atm, r, h, mu, atm.mie.z);
+    let lm = erf_optical_length(atm, r, h, mu, atm.mie_scattering.w);
     let rc = atm.shape.x + atm.ozone.w;
     let s = clamp(r / rc, 0.0, 1.0) * sqrt(max(1.0 - mu * mu, 0.0));
     let slant = 1.0 / sqrt(max(1.0 - s * s, 1e-4));
@@ -134,7 +135,7 @@ fn erf_optical_depth(atm: Atmosphere, r: f32, h: f32, mu: f32) -> vec3<f32> {
         let h_min = r * sqrt(max(1.0 - mu * mu, 0.0)) - atm.shape.x;
         column = 2.0 * ozone_column_above(atm, h_min) - column;
     }
-    return atm.rayleigh.xyz * lr + vec3<f32>(atm.mie.y * lm) + atm.ozone.xyz * column * slant;
+    return atm.rayleigh.xyz * lr + atm.mie_extinction.xyz * lm + atm.ozone.xyz * column * slant;
 }
 
 // Optical depth to the top of the atmosphere by the midpoint rule with `steps` samples;
@@ -172,7 +173,7 @@ fn view_ray(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>) ->
         distance_km = ground;
     }
     let nu = dot(view, sun);
-    return ViewRay(r, mu, distance_km, rayleigh_phase(nu), cornette_shanks_phase(nu, atm.mie.w));
+    return ViewRay(r, mu, distance_km, rayleigh_phase(nu), cornette_shanks_phase(nu, atm.mie_extinction.w));
 }
 
 // Sample i of n along a ray of `distance_km`, crowded near its start where the air is densest

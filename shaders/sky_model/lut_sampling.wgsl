@@ -96,9 +96,9 @@ fn lut_radiance(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>
         let r_p = atm.shape.x + h;
         let mu_s = dot(p, sun) / max(length(p), 1e-3);
         let sigma_r = atm.rayleigh.xyz * exp(-h / atm.rayleigh.w);
-        let sigma_m = atm.mie.x * exp(-h / atm.mie.z);
-        let single = (sigma_r * ray.phase_r + vec3<f32>(sigma_m * ray.phase_m)) * sun_transmittance(atm, r_p, mu_s);
-        let multiple = (sigma_r + vec3<f32>(sigma_m)) * sample_multiscattering(atm, r_p, mu_s);
+        let sigma_m = atm.mie_scattering.xyz * exp(-h / atm.mie_scattering.w);
+        let single = (sigma_r * ray.phase_r + sigma_m * ray.phase_m) * sun_transmittance(atm, r_p, mu_s);
+        let multiple = (sigma_r + sigma_m) * sample_multiscattering(atm, r_p, mu_s);
         sum += (single + multiple) * exp(-tau_mid) * dt;
     }
     return sum;

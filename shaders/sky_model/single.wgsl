@@ -41,7 +41,7 @@ fn single_scattering(atm: Atmosphere, s: SingleSettings, camera_km: f32, view: v
             let tau_sun = sun_optical_depth(atm, s, r_p, h, max(mu_s, horizon_mu(atm, r_p) + 1e-4));
             if (tau_sun.x >= 0.0) {
                 let hh = max(h, 0.0);
-                let scattering = atm.rayleigh.xyz * exp(-hh / atm.rayleigh.w) * ray.phase_r + vec3<f32>(atm.mie.x * exp(-hh / atm.mie.z) * ray.phase_m);
+                let scattering = atm.rayleigh.xyz * exp(-hh / atm.rayleigh.w) * ray.phase_r + atm.mie_scattering.xyz * exp(-hh / atm.mie_scattering.w) * ray.phase_m;
                 sum += visible * scattering * exp(-(tau_mid + tau_sun)) * dt;
             }
         }

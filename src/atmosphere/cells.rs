@@ -187,7 +187,7 @@ impl CellModel {
         let cos = -sun.dot(e);
         let (pr, pm) = (rayleigh_phase(cos), cornette_shanks_phase(cos, self.atm.mie_g));
         let t_sun = self.sun_transmittance(p, sun);
-        let mut j: Rgb = std::array::from_fn(|c| (m.rayleigh[c] * pr + m.mie * pm) * t_sun[c]);
+        let mut j: Rgb = std::array::from_fn(|c| (m.rayleigh[c] * pr + m.mie[c] * pm) * t_sun[c]);
         if with_indirect {
             let coeffs = self.indirect_at(p, sun);
             let y = sh9(Self::local(&Self::frame(p, sun), e));
@@ -259,7 +259,7 @@ impl CellModel {
                         let cos = -d.dot(*e);
                         let (pr, pm) = (rayleigh_phase(cos), cornette_shanks_phase(cos, self.atm.mie_g));
                         for c in 0..3 {
-                            out[c] += l[c] * (m.rayleigh[c] * pr + m.mie * pm) * weight;
+                            out[c] += l[c] * (m.rayleigh[c] * pr + m.mie[c] * pm) * weight;
                         }
                     }
                     let y = sh9(Self::local(&frame, *e));

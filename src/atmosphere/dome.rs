@@ -83,7 +83,7 @@ impl Haze {
     pub fn atmosphere(self) -> Atmosphere {
         let aerosols = |k: f64| {
             let a = Atmosphere::default();
-            Atmosphere { mie_scattering_per_km: a.mie_scattering_per_km * k, mie_extinction_per_km: a.mie_extinction_per_km * k, ..a }
+            Atmosphere { mie_scattering_per_km: a.mie_scattering_per_km.map(|b| b * k), mie_extinction_per_km: a.mie_extinction_per_km.map(|b| b * k), ..a }
         };
         match self {
             Haze::Default => Atmosphere::default(),

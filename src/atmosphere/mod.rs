@@ -5,6 +5,7 @@
 //! Units: lengths in km, coefficients in km^-1, angles in radians unless a name says `_deg`.
 //! Radiance is in sr^-1 relative to a solar irradiance of 1 per channel at the top of the atmosphere.
 
+pub mod aerosol;
 pub mod analytic;
 pub mod cases;
 pub mod cells;
@@ -32,10 +33,11 @@ pub struct Atmosphere {
     pub rayleigh_scattering_per_km: Rgb,
     /// Rayleigh density falls as exp(-altitude / this), km.
     pub rayleigh_scale_height_km: f64,
-    /// Mie scattering at sea level, km^-1 (grey).
-    pub mie_scattering_per_km: f64,
-    /// Mie extinction at sea level, km^-1 (scattering + absorption, grey).
-    pub mie_extinction_per_km: f64,
+    /// Mie (aerosol) scattering at sea level, km^-1, per channel (680, 550, 440 nm): grey when
+    /// the three are equal, falling towards red when the aerosol has an Angstrom exponent.
+    pub mie_scattering_per_km: Rgb,
+    /// Mie extinction at sea level, km^-1 (scattering + absorption), per channel.
+    pub mie_extinction_per_km: Rgb,
     /// Mie density falls as exp(-altitude / this), km.
     pub mie_scale_height_km: f64,
     /// Asymmetry of the Cornette-Shanks Mie phase function.
@@ -57,8 +59,8 @@ impl Default for Atmosphere {
             top_radius_km: 6460.0,
             rayleigh_scattering_per_km: [5.802e-3, 13.558e-3, 33.1e-3],
             rayleigh_scale_height_km: 8.0,
-            mie_scattering_per_km: 3.996e-3,
-            mie_extinction_per_km: 4.440e-3,
+            mie_scattering_per_km: [3.996e-3; 3],
+            mie_extinction_per_km: [4.440e-3; 3],
             mie_scale_height_km: 1.2,
             mie_g: 0.8,
             ozone_absorption_per_km: [0.650e-3, 1.881e-3, 0.085e-3],
@@ -85,7 +87,7 @@ pub struct Medium {
     /// Rayleigh scattering, km^-1.
     pub rayleigh: Rgb,
     /// Mie scattering, km^-1.
-    pub mie: f64,
+    pub mie: Rgb,
     /// Total extinction (scattering + absorption), km^-1.
     pub extinction: Rgb,
 }
@@ -110,11 +112,15 @@ impl Atmosphere {
         for (field, v) in [("rayleigh_scattering_per_km", self.rayleigh_scattering_per_km), ("ozone_absorption_per_km", self.ozone_absorption_per_km)] {
             check(field, v.iter().all(|c| non_negative(*c)), format!("expected three coefficients >= 0 km^-1, found {v:?}"));
         }
-        check("mie_scattering_per_km", non_negative(self.mie_scattering_per_km), format!("expected >= 0 km^-1, found {}", self.mie_scattering_per_km));
+        check(
+            "mie_scattering_per_km",
+            self.mie_scattering_per_km.iter().all(|c| non_negative(*c)),
+            format!("expected coefficients >= 0 km^-1, found {:?}", self.mie_scattering_per_km),
+        );
         check(
             "mie_extinction_per_km",
-            self.mie_extinction_per_km.is_finite() && self.mie_extinction_per_km >= self.mie_scattering_per_km,
-            format!("expected at least mie_scattering_per_km ({}) km^-1, found {}", self.mie_scattering_per_km, self.mie_extinction_per_km),
+            (0..3).all(|c| self.mie_extinction_per_km[c].is_finite() && self.mie_extinction_per_km[c] >= self.mie_scattering_per_km[c]),
+            format!("expected at least mie_scattering_per_km ({:?}) km^-1 in every channel, found {:?}", self.mie_scattering_per_km, self.mie_extinction_per_km),
         );
         for (field, v) in
             [("rayleigh_scale_height_km", self.rayleigh_scale_height_km), ("mie_scale_height_km", self.mie_scale_height_km), ("ozone_half_width_km", self.ozone_half_width_km)]
@@ -151,9 +157,8 @@ impl Atmosphere {
     pub fn medium(&self, altitude_km: f64) -> Medium {
         let (r, m, o) = self.densities(altitude_km);
         let rayleigh = self.rayleigh_scattering_per_km.map(|b| b * r);
-        let mie = self.mie_scattering_per_km * m;
-        let mie_ext = self.mie_extinction_per_km * m;
-        let extinction = std::array::from_fn(|c| rayleigh[c] + mie_ext + self.ozone_absorption_per_km[c] * o);
+        let mie = self.mie_scattering_per_km.map(|b| b * m);
+        let extinction = std::array::from_fn(|c| rayleigh[c] + self.mie_extinction_per_km[c] * m + self.ozone_absorption_per_km[c] * o);
         Medium { rayleigh, mie, extinction }
     }
 
@@ -161,8 +166,8 @@ impl Atmosphere {
     pub fn scaled(&self, k: f64) -> Self {
         Self {
             rayleigh_scattering_per_km: self.rayleigh_scattering_per_km.map(|b| b * k),
-            mie_scattering_per_km: self.mie_scattering_per_km * k,
-            mie_extinction_per_km: self.mie_extinction_per_km * k,
+            mie_scattering_per_km: self.mie_scattering_per_km.map(|b| b * k),
+            mie_extinction_per_km: self.mie_extinction_per_km.map(|b| b * k),
             ozone_absorption_per_km: self.ozone_absorption_per_km.map(|b| b * k),
             ..*self
         }
@@ -177,8 +182,8 @@ impl Atmosphere {
             top_radius_km: l(self.top_radius_km, other.top_radius_km),
             rayleigh_scattering_per_km: l3(self.rayleigh_scattering_per_km, other.rayleigh_scattering_per_km),
             rayleigh_scale_height_km: l(self.rayleigh_scale_height_km, other.rayleigh_scale_height_km),
-            mie_scattering_per_km: l(self.mie_scattering_per_km, other.mie_scattering_per_km),
-            mie_extinction_per_km: l(self.mie_extinction_per_km, other.mie_extinction_per_km),
+            mie_scattering_per_km: l3(self.mie_scattering_per_km, other.mie_scattering_per_km),
+            mie_extinction_per_km: l3(self.mie_extinction_per_km, other.mie_extinction_per_km),
             mie_scale_height_km: l(self.mie_scale_height_km, other.mie_scale_height_km),
             mie_g: l(self.mie_g, other.mie_g),
             ozone_absorption_per_km: l3(self.ozone_absorption_per_km, other.ozone_absorption_per_km),
@@ -217,7 +222,7 @@ impl Atmosphere {
             w * if u < 0.0 { 0.5 * (1.0 + u) * (1.0 + u) } else { 1.0 - 0.5 * (1.0 - u) * (1.0 - u) }
         };
         let o = tent(top) - tent(h);
-        std::array::from_fn(|c| self.rayleigh_scattering_per_km[c] * r + self.mie_extinction_per_km * m + self.ozone_absorption_per_km[c] * o)
+        std::array::from_fn(|c| self.rayleigh_scattering_per_km[c] * r + self.mie_extinction_per_km[c] * m + self.ozone_absorption_per_km[c] * o)
     }
 }
 

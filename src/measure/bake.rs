@@ -24,7 +24,11 @@ pub fn weather_atmosphere(sky: &Sky, i: usize, n: usize) -> Atmosphere {
         return Atmosphere::at_weather(&sky.atmosphere_by_weather, w).unwrap_or(sky.atmosphere);
     }
     let k = 1.0 + 3.0 * w;
-    Atmosphere { mie_scattering_per_km: sky.atmosphere.mie_scattering_per_km * k, mie_extinction_per_km: sky.atmosphere.mie_extinction_per_km * k, ..sky.atmosphere }
+    Atmosphere {
+        mie_scattering_per_km: sky.atmosphere.mie_scattering_per_km.map(|b| b * k),
+        mie_extinction_per_km: sky.atmosphere.mie_extinction_per_km.map(|b| b * k),
+        ..sky.atmosphere
+    }
 }
 
 /// The sun's elevation at each baked hour (column i at hour i x hours_per_day / 24), degrees.

@@ -144,7 +144,7 @@ impl Worst {
             a.ground_radius_km,
             a.thickness_km(),
             a.rayleigh_scattering_per_km[2],
-            a.mie_scattering_per_km
+            a.mie_scattering_per_km[1]
         )
     }
 }
@@ -240,8 +240,8 @@ fn random_atmosphere(rng: &mut Rng) -> Atmosphere {
     Atmosphere {
         ground_radius_km,
         top_radius_km: ground_radius_km + thickness,
-        mie_scattering_per_km: base.mie_scattering_per_km * aerosols,
-        mie_extinction_per_km: base.mie_extinction_per_km * aerosols,
+        mie_scattering_per_km: base.mie_scattering_per_km.map(|b| b * aerosols),
+        mie_extinction_per_km: base.mie_extinction_per_km.map(|b| b * aerosols),
         mie_g: rng.range(-0.95, 0.95),
         ..base.scaled(k)
     }

@@ -386,7 +386,7 @@ impl Validator<'_> {
             })
         });
         let glare = f.glare.as_ref().and_then(|g| self.glare(g));
-        let model = f.sky_model.as_ref().map_or_else(SkyModel::default, |m| {
+        let mut model = f.sky_model.as_ref().map_or_else(SkyModel::default, |m| {
             let d = crate::atmosphere::LutSettings::default();
             let lut = crate::atmosphere::LutSettings {
                 transmittance_size: m.transmittance_size.map_or(d.transmittance_size, |[w, h]| [w.0, h.0]),
@@ -434,25 +434,37 @@ impl Validator<'_> {
         if let Err(e) = model.lut.validate() {
             self.err_in("[sky_model]", e.field, &format!("sky_model.{}", e.field), e.message);
         }
-        let atmosphere = f.atmosphere.as_ref().map_or_else(crate::atmosphere::Atmosphere::default, |a| a.apply(crate::atmosphere::Atmosphere::default()));
-        if let Err(errors) = atmosphere.validate() {
+        let atmosphere = match f.atmosphere.as_ref().map(|a| a.apply(crate::atmosphere::Atmosphere::default(), None)) {
+            None => Ok(crate::atmosphere::Atmosphere::default()),
+            Some(Ok(a)) => a.validate().map(|()| a),
+            Some(Err(e)) => Err(e),
+        };
+        let atmosphere = atmosphere.unwrap_or_else(|errors| {
             for e in errors {
                 self.err_in("[atmosphere]", e.field, &format!("atmosphere.{}", e.field), e.message);
             }
-        }
+            crate::atmosphere::Atmosphere::default()
+        });
         let weather_defs = f.atmosphere.as_ref().map_or(&[][..], |a| &a.weather[..]);
         let mut atmosphere_by_weather = Vec::new();
         for (k, def) in weather_defs.iter().enumerate() {
             if !def.weather.is_empty() {
                 self.err_near("[[atmosphere.weather.weather]]", &format!("atmosphere.weather[{k}].weather"), "weather steps cannot have weather steps of their own");
             }
-            let step = def.apply(atmosphere);
-            if let Err(errors) = step.validate() {
-                for e in errors {
-                    self.err_in("[[atmosphere.weather]]", e.field, &format!("atmosphere.weather[{k}].{}", e.field), e.message);
+            match def.apply(atmosphere, f.atmosphere.as_ref()).and_then(|step| step.validate().map(|()| step)) {
+                Ok(step) => atmosphere_by_weather.push(step),
+                Err(errors) => {
+                    for e in errors {
+                        self.err_in("[[atmosphere.weather]]", e.field, &format!("atmosphere.weather[{k}].{}", e.field), e.message);
+                    }
                 }
             }
-            atmosphere_by_weather.push(step);
+        }
+        // The analytic models describe the same sky as the physical ones: an atmosphere whose
+        // aerosol is written out sets their turbidity unless [sky_model] states one.
+        let stated_turbidity = f.sky_model.as_ref().is_some_and(|m| m.turbidity.is_some());
+        if !stated_turbidity && f.atmosphere.as_ref().is_some_and(|a| a.states_aerosol()) {
+            model.turbidity = atmosphere.turbidity().clamp(1.0, 10.0) as f32;
         }
         if model.camera_km as f64 >= atmosphere.thickness_km() {
             self.err_in("[sky_model]", "camera_km", "sky_model.camera_km", format!("expected an altitude below the top of the atmosphere ({} km)", atmosphere.thickness_km()));

@@ -381,7 +381,8 @@ pub struct SkyModelDef {
     /// it instead of the bitmaps.
     #[serde(default)]
     pub drive_scene: bool,
-    /// `preetham`, `hosek`: atmospheric turbidity, 1..=10 (default 2.5; Preetham clamps below 1.7).
+    /// `preetham`, `hosek`: atmospheric turbidity, 1..=10 (default: the turbidity of the
+    /// `[atmosphere]` when it states its aerosol, else 2.5; Preetham clamps below 1.7).
     #[serde(default)]
     pub turbidity: Option<Turbidity>,
     /// `preetham`, `hosek`: `calibrated` (default: the physical models' unit, so one exposure
@@ -496,10 +497,10 @@ pub struct AtmosphereDef {
     pub rayleigh_scattering_per_km: Option<[NonNegative; 3]>,
     /// Rayleigh scale height, km.
     pub rayleigh_scale_height_km: Option<Positive>,
-    /// Mie scattering at sea level, km^-1.
-    pub mie_scattering_per_km: Option<NonNegative>,
-    /// Mie extinction at sea level, km^-1.
-    pub mie_extinction_per_km: Option<NonNegative>,
+    /// Mie scattering at sea level, km^-1: one grey number or (r, g, b).
+    pub mie_scattering_per_km: Option<Coefficients>,
+    /// Mie extinction at sea level, km^-1: one grey number or (r, g, b).
+    pub mie_extinction_per_km: Option<Coefficients>,
     /// Mie scale height, km.
     pub mie_scale_height_km: Option<Positive>,
     /// Mie asymmetry, (-1, 1).
@@ -512,6 +513,20 @@ pub struct AtmosphereDef {
     pub ozone_half_width_km: Option<Positive>,
     /// Sun's angular radius, rad.
     pub sun_angular_radius_rad: Option<Positive>,
+    /// A named aerosol (`clean`, `continental`, `hazy`, `urban`, `desert_dust`, `maritime`,
+    /// `high_altitude`): its optical depth, Angstrom exponent, albedo, g and scale height.
+    pub aerosol: Option<crate::atmosphere::aerosol::AerosolPreset>,
+    /// Vertical aerosol optical depth at 550 nm (instead of Mie coefficients).
+    pub aerosol_optical_depth: Option<NonNegative>,
+    /// Preetham's turbidity, total over Rayleigh optical depth at 550 nm, >= 1 (instead of
+    /// `aerosol_optical_depth`).
+    pub turbidity: Option<Finite>,
+    /// Visibility at the ground, km (Koschmieder; instead of `aerosol_optical_depth`).
+    pub visibility_km: Option<Positive>,
+    /// How the aerosol optical depth falls with wavelength (default 1.3, or the preset's).
+    pub angstrom_exponent: Option<Finite>,
+    /// Aerosol single-scattering albedo, (0, 1] (default the atmosphere's, or the preset's).
+    pub aerosol_albedo: Option<Unit>,
     /// Per weather step, from weather 0 to weather 1, overrides on top of these (e.g. aerosols
     /// rising with the storm); the atmosphere is interpolated between steps like a NeL bitmap.
     #[serde(default)]
@@ -519,18 +534,91 @@ pub struct AtmosphereDef {
 }
 
 impl AtmosphereDef {
-    /// The default atmosphere with these overrides.
-    pub fn apply(&self, base: crate::atmosphere::Atmosphere) -> crate::atmosphere::Atmosphere {
+    /// The ways this definition states an aerosol amount.
+    fn amounts(&self) -> Vec<crate::atmosphere::aerosol::AerosolAmount> {
+        use crate::atmosphere::aerosol::AerosolAmount as A;
+        let tau = self.aerosol_optical_depth.map(|v| A::OpticalDepth(v.get() as f64));
+        let t = self.turbidity.map(|v| A::Turbidity(v.get() as f64));
+        let v = self.visibility_km.map(|v| A::VisibilityKm(v.get() as f64));
+        [tau, t, v].into_iter().flatten().collect()
+    }
+
+    /// Whether this definition says anything about the aerosol (coefficients, amount, preset,
+    /// slope or albedo).
+    pub fn states_aerosol(&self) -> bool {
+        self.has_coefficients() || self.aerosol.is_some() || !self.amounts().is_empty() || self.angstrom_exponent.is_some() || self.aerosol_albedo.is_some()
+    }
+
+    /// Whether this definition gives Mie coefficients by hand.
+    fn has_coefficients(&self) -> bool {
+        self.mie_scattering_per_km.is_some() || self.mie_extinction_per_km.is_some()
+    }
+
+    /// `base` with these overrides. `parent` is the `[atmosphere]` a weather step sits in (and
+    /// `base` its atmosphere). Errors name the keys.
+    pub fn apply(&self, base: crate::atmosphere::Atmosphere, parent: Option<&AtmosphereDef>) -> Result<crate::atmosphere::Atmosphere, Vec<crate::atmosphere::AtmosphereError>> {
+        use crate::atmosphere::aerosol::{Aerosol, DEFAULT_ANGSTROM_EXPONENT};
+        use crate::atmosphere::AtmosphereError;
+        let raw = self.apply_coefficients(base);
+        let amounts = self.amounts();
+        let mut errors = Vec::new();
+        if amounts.len() > 1 {
+            let keys: Vec<&str> = amounts.iter().map(|a| a.key()).collect();
+            errors.push(AtmosphereError { field: amounts[1].key(), message: format!("give the aerosol amount one way, found {}", keys.join(" and ")) });
+        }
+        if self.has_coefficients() && (self.aerosol.is_some() || !amounts.is_empty()) {
+            let field = if self.mie_scattering_per_km.is_some() { "mie_scattering_per_km" } else { "mie_extinction_per_km" };
+            errors.push(AtmosphereError {
+                field,
+                message: "give the aerosol either as Mie coefficients or by aerosol, aerosol_optical_depth, turbidity or visibility_km, not both".into(),
+            });
+        }
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        let stated = |d: &AtmosphereDef| d.aerosol.is_some() || !d.amounts().is_empty() || d.angstrom_exponent.is_some() || d.aerosol_albedo.is_some();
+        if !stated(self) {
+            return Ok(raw);
+        }
+        // `base` already holds the parent's aerosol: a step changes what it states and keeps
+        // the rest, its spectral slope included once the parent gave one or the coefficients
+        // have one; grey coefficients given an amount get the default slope.
+        let mut aerosol = match self.aerosol {
+            Some(p) => p.aerosol(),
+            None if parent.is_some_and(stated) || raw.mie_extinction_per_km[0] != raw.mie_extinction_per_km[2] => Aerosol::of(&raw),
+            None => Aerosol { angstrom_exponent: DEFAULT_ANGSTROM_EXPONENT, ..Aerosol::of(&raw) },
+        };
+        // Keys written beside a preset refine it.
+        if let Some(g) = self.mie_g {
+            aerosol.g = g.get() as f64;
+        }
+        if let Some(h) = self.mie_scale_height_km {
+            aerosol.scale_height_km = h.get() as f64;
+        }
+        if let Some(a) = self.angstrom_exponent {
+            aerosol.angstrom_exponent = a.get() as f64;
+        }
+        if let Some(w) = self.aerosol_albedo {
+            aerosol.single_scattering_albedo = w.get() as f64;
+        }
+        if let Some(amount) = amounts.first().copied() {
+            aerosol.optical_depth_550 = amount.optical_depth_550(&raw, aerosol.scale_height_km).map_err(|e| vec![e])?;
+        }
+        aerosol.validate()?;
+        Ok(aerosol.apply(raw))
+    }
+
+    /// `base` with the coefficients written here.
+    fn apply_coefficients(&self, base: crate::atmosphere::Atmosphere) -> crate::atmosphere::Atmosphere {
         let f = |v: Option<Positive>, d: f64| v.map_or(d, |x| x.get() as f64);
-        let n = |v: Option<NonNegative>, d: f64| v.map_or(d, |x| x.get() as f64);
         let rgb = |v: Option<[NonNegative; 3]>, d: [f64; 3]| v.map_or(d, |x| x.map(|c| c.get() as f64));
         crate::atmosphere::Atmosphere {
             ground_radius_km: f(self.ground_radius_km, base.ground_radius_km),
             top_radius_km: f(self.top_radius_km, base.top_radius_km),
             rayleigh_scattering_per_km: rgb(self.rayleigh_scattering_per_km, base.rayleigh_scattering_per_km),
             rayleigh_scale_height_km: f(self.rayleigh_scale_height_km, base.rayleigh_scale_height_km),
-            mie_scattering_per_km: n(self.mie_scattering_per_km, base.mie_scattering_per_km),
-            mie_extinction_per_km: n(self.mie_extinction_per_km, base.mie_extinction_per_km),
+            mie_scattering_per_km: self.mie_scattering_per_km.map_or(base.mie_scattering_per_km, Coefficients::rgb),
+            mie_extinction_per_km: self.mie_extinction_per_km.map_or(base.mie_extinction_per_km, Coefficients::rgb),
             mie_scale_height_km: f(self.mie_scale_height_km, base.mie_scale_height_km),
             mie_g: self.mie_g.map_or(base.mie_g, |g| g.get() as f64),
             ozone_absorption_per_km: rgb(self.ozone_absorption_per_km, base.ozone_absorption_per_km),
@@ -1114,6 +1202,37 @@ checked_f32!(
 checked_f32!(
     /// An elevation in degrees, [-90, 90].
     Elevation, |v| (-90.0..=90.0).contains(&v), "an elevation in degrees within [-90, 90]");
+
+/// Per-channel coefficients >= 0 (km^-1): one number for all three channels (grey), or three.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coefficients(pub [NonNegative; 3]);
+
+impl Coefficients {
+    /// The coefficients as f64, r g b.
+    pub fn rgb(self) -> [f64; 3] {
+        self.0.map(|c| c.get() as f64)
+    }
+}
+
+impl<'de> Deserialize<'de> for Coefficients {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Form {
+            Grey(f64),
+            Rgb(Vec<f64>),
+        }
+        let expect = "one number >= 0 (grey) or three, [r, g, b]";
+        let (values, found) = match Form::deserialize(d).map_err(|_| serde::de::Error::custom(format!("expected {expect}")))? {
+            Form::Grey(v) => (vec![v; 3], v.to_string()),
+            Form::Rgb(v) => (v.clone(), format!("{v:?}")),
+        };
+        match values[..] {
+            [r, g, b] if values.iter().all(|v| v.is_finite() && *v >= 0.0) => Ok(Coefficients([r, g, b].map(|v| NonNegative(v as f32)))),
+            _ => Err(serde::de::Error::custom(format!("expected {expect}, found {found}"))),
+        }
+    }
+}
 
 /// Transparency priority, 0..=63.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord)]

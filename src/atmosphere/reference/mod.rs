@@ -506,7 +506,7 @@ impl Reference {
     fn scattering(&self, y: DVec3, cos_theta: f64) -> Rgb {
         let m = self.atm.medium(self.altitude(y));
         let (pr, pm) = (rayleigh_phase(cos_theta), cornette_shanks_phase(cos_theta, self.atm.mie_g));
-        std::array::from_fn(|c| m.rayleigh[c] * pr + m.mie * pm)
+        std::array::from_fn(|c| m.rayleigh[c] * pr + m.mie[c] * pm)
     }
 
     /// Single-scattered radiance arriving at `p` from direction `d`, sr^-1.
@@ -544,7 +544,8 @@ impl Reference {
         let g = self.atm.mie_g;
         let m = self.atm.medium(self.altitude(pos));
         let rayleigh = m.rayleigh.iter().sum::<f64>() / 3.0;
-        let p_rayleigh = if rayleigh + m.mie > 0.0 { rayleigh / (rayleigh + m.mie) } else { 1.0 };
+        let mie = m.mie.iter().sum::<f64>() / 3.0;
+        let p_rayleigh = if rayleigh + mie > 0.0 { rayleigh / (rayleigh + mie) } else { 1.0 };
         let u = rng.f64();
         let out = if u < 0.25 {
             around(towards_sun, sample_hg_cos(SUN_LOBE_G, rng), rng)

@@ -11,22 +11,27 @@ use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, SingleSettings};
 pub struct AtmosphereUniform {
     /// Rayleigh scattering rgb, km^-1; scale height, km.
     pub rayleigh: [f32; 4],
-    /// Mie scattering, extinction (km^-1), scale height (km), g.
-    pub mie: [f32; 4],
+    /// Mie scattering rgb (km^-1), scale height (km).
+    pub mie_scattering: [f32; 4],
+    /// Mie extinction rgb (km^-1), Cornette-Shanks g.
+    pub mie_extinction: [f32; 4],
     /// Ozone absorption rgb (km^-1), tent centre (km).
     pub ozone: [f32; 4],
     /// Ground radius, top radius (km), ozone half width (km), sun angular radius (rad).
     pub shape: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<AtmosphereUniform>() == 64);
+const _: () = assert!(std::mem::size_of::<AtmosphereUniform>() == 80);
 
 impl From<&Atmosphere> for AtmosphereUniform {
     fn from(a: &Atmosphere) -> Self {
         let [r, g, b] = a.rayleigh_scattering_per_km.map(|x| x as f32);
         let [or, og, ob] = a.ozone_absorption_per_km.map(|x| x as f32);
+        let [sr, sg, sb] = a.mie_scattering_per_km.map(|x| x as f32);
+        let [er, eg, eb] = a.mie_extinction_per_km.map(|x| x as f32);
         Self {
             rayleigh: [r, g, b, a.rayleigh_scale_height_km as f32],
-            mie: [a.mie_scattering_per_km as f32, a.mie_extinction_per_km as f32, a.mie_scale_height_km as f32, a.mie_g as f32],
+            mie_scattering: [sr, sg, sb, a.mie_scale_height_km as f32],
+            mie_extinction: [er, eg, eb, a.mie_g as f32],
             ozone: [or, og, ob, a.ozone_center_km as f32],
             shape: [a.ground_radius_km as f32, a.top_radius_km as f32, a.ozone_half_width_km as f32, a.sun_angular_radius_rad as f32],
         }
