@@ -57,6 +57,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Reference(args)), .. })) => cli::bench_reference::run(&args),
         Some(Command::Bench(cmd)) => bench_passes::run(&cmd.args),
         Some(Command::Radiance(args)) => radiance(&args),
+        Some(Command::ExportEnv(args)) => cli::export_env::run(&args),
+        Some(Command::Validate(args)) => cli::validate::run(&args, adapter(args.cpu)),
         Some(Command::Compare(args)) => compare(&args),
         Some(Command::Soak(args)) => soak(&args),
         Some(Command::Sweep(args)) => stability_report::run(&args),
@@ -427,7 +429,11 @@ fn adapter(cpu: bool) -> AdapterChoice {
 /// Renders `sky` as `args` says into `args.out`.
 fn render_to_file(headless: &mut Headless, sky: &Sky, args: &RenderArgs) -> anyhow::Result<()> {
     let (input, camera) = frame_from_args(&args.frame)?;
-    let options = RenderOptions { scene: !args.frame.no_scene, strategy: strategy_from_args(&args.frame, &headless.ctx)?, ..Default::default() };
+    anyhow::ensure!(!args.frame.with_scene || args.frame.env_map, "--with-scene: only with --env-map (a view shows the scene unless --no-scene)");
+    let mut options = RenderOptions { scene: !args.frame.no_scene, strategy: strategy_from_args(&args.frame, &headless.ctx)?, ..Default::default() };
+    if args.frame.env_map {
+        options = options.for_environment_map(args.frame.with_scene && !args.frame.no_scene);
+    }
     let mut input = input;
     input.sky_model = model_override(sky, &args.frame)?;
     let frame = sky.evaluate(&input);

@@ -374,3 +374,37 @@ fn more_aerosol_whitens_the_horizon_and_widens_the_aureole() {
     let (b_clean, b_hazy) = (blue_over_red(&clean), blue_over_red(&hazy));
     assert!(b_hazy < b_clean && (b_hazy - 1.0).abs() < (b_clean - 1.0).abs(), "horizon blue/red {b_hazy} vs {b_clean}");
 }
+
+#[test]
+fn validation_on_a_committed_scan_matches_the_committed_table() {
+    // One held-out scan of Kider et al. 2014 (data/measured/kider2014/), the GPU and analytic
+    // models (the reference's figures take minutes): the fitted parameter and both errors as
+    // docs/validation.csv records them.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scan = root.join("data/measured/kider2014/2013-09-24_13-10.csv");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("v.csv");
+    let o = skytune().args(["validate", "--models", "preetham,hosek,single,lut", "--cpu", "--out"]).arg(&out).arg(&scan).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let read = |p: &std::path::Path| -> Vec<std::collections::HashMap<String, String>> {
+        let text = std::fs::read_to_string(p).unwrap();
+        let mut r = csv::Reader::from_reader(text.as_bytes());
+        let headers = r.headers().unwrap().clone();
+        r.records().map(|rec| headers.iter().zip(rec.unwrap().iter()).map(|(h, v)| (h.to_string(), v.to_string())).collect()).collect()
+    };
+    let committed = read(&root.join("docs/validation.csv"));
+    let ours = read(&out);
+    assert_eq!(ours.len(), 4);
+    let f = |row: &std::collections::HashMap<String, String>, k: &str| row[k].parse::<f64>().unwrap();
+    for row in &ours {
+        let table = committed
+            .iter()
+            .find(|c| c["scan"] == row["scan"] && c["model"] == row["model"])
+            .unwrap_or_else(|| panic!("{} {} not in docs/validation.csv", row["scan"], row["model"]));
+        let (v, t) = (f(row, "value"), f(table, "value"));
+        assert!((v / t - 1.0).abs() < 0.05, "{}: fitted {v} vs the table's {t}", row["model"]);
+        for k in ["luminance_median", "blue_red_median"] {
+            assert!((f(row, k) - f(table, k)).abs() < 0.01, "{} {k}: {} vs the table's {}", row["model"], f(row, k), f(table, k));
+        }
+    }
+}

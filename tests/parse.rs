@@ -332,6 +332,12 @@ fn aerosol_knobs_become_mie_coefficients() {
     assert!((sky.model.turbidity as f64 - sky.atmosphere.turbidity()).abs() < 1e-4 && sky.model.turbidity > 5.0, "{}", sky.model.turbidity);
     let (sky, _, _) = with_sections("[sky_model]\nkind = \"preetham\"\nturbidity = 2\n\n[atmosphere]\naerosol = \"urban\"\n");
     assert_eq!(sky.unwrap().model.turbidity, 2.0, "a stated turbidity wins");
+    // The analytic models follow the weather steps' aerosol too.
+    let (sky, _, _) = with_sections("[sky_model]\nkind = \"hosek\"\n\n[atmosphere]\naerosol = \"clean\"\n[[atmosphere.weather]]\n[[atmosphere.weather]]\naerosol = \"urban\"\n");
+    let sky = sky.unwrap();
+    let turbidity = |w: f32| sky.evaluate(&skytune::sky::FrameInput::new(12.0, w)).sky_model.turbidity as f64;
+    let (clean, urban) = (AerosolPreset::Clean.aerosol().apply(Atmosphere::default()), AerosolPreset::Urban.aerosol().apply(Atmosphere::default()));
+    assert!((turbidity(0.0) - clean.turbidity()).abs() < 1e-4 && (turbidity(1.0) - urban.turbidity()).abs() < 1e-4, "{} {}", turbidity(0.0), turbidity(1.0));
     // A weather step changes the amount and keeps the preset's slope and albedo.
     let (sky, _, _) = with_sections("[atmosphere]\naerosol = \"desert_dust\"\n[[atmosphere.weather]]\n[[atmosphere.weather]]\naerosol_optical_depth = 1.0\n");
     let sky = sky.unwrap();

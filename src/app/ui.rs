@@ -617,7 +617,9 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
             });
         }
         if matches!(model.kind, SkyModelKind::Preetham | SkyModelKind::Hosek) {
-            ui.add(egui::Slider::new(&mut model.turbidity, 1.0..=10.0).text("turbidity"));
+            if ui.add(egui::Slider::new(&mut model.turbidity, 1.0..=10.0).text("turbidity")).changed() {
+                model.turbidity_from_atmosphere = false;
+            }
             if model.kind == SkyModelKind::Hosek {
                 ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
             } else if (model.turbidity as f64) < crate::atmosphere::analytic::PREETHAM_MIN_TURBIDITY {

@@ -63,6 +63,12 @@ pub enum Command {
     Bake(BakeArgs),
     /// Sky radiance of a list of cases (CSV in, CSV out) from a physical sky model.
     Radiance(RadianceArgs),
+    /// Environment lighting for engines at one hour or every hour: unfiltered EXR, GGX-prefiltered
+    /// specular and diffuse irradiance cube maps (KTX2), spherical harmonics and the sun (JSON).
+    ExportEnv(ExportEnvArgs),
+    /// Compare the sky models with measured skies (data/measured/): fit each one's aerosol or
+    /// turbidity per scan, report its luminance-shape and colour errors (docs/validation.md).
+    Validate(ValidateArgs),
     /// Render the same view twice (two skies, models, tiers or times), print the difference
     /// (FLIP and channel figures) and write A, B and the heat map; exit status 1 above a threshold.
     Compare(CompareArgs),
@@ -189,6 +195,107 @@ pub enum OpticalDepthArg {
     Numerical,
 }
 
+/// A sky model `validate` compares with measured skies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, clap::ValueEnum)]
+pub enum ValidateModel {
+    /// Preetham, Shirley and Smits 1999 (turbidity fitted).
+    Preetham,
+    /// Hosek and Wilkie 2012 (turbidity fitted).
+    Hosek,
+    /// Single scattering (aerosol optical depth fitted).
+    Single,
+    /// Hillaire 2020's tables (aerosol optical depth fitted).
+    Lut,
+    /// The double-precision reference (aerosol optical depth fitted near `lut`'s).
+    Reference,
+}
+
+/// `export-env` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct ExportEnvArgs {
+    /// Sky or continent file (default: the built-in sky).
+    pub sky: Option<PathBuf>,
+    /// The moment (`--hour`, `--weather`), the model, the adapter and `--with-scene` (keep the
+    /// main scene's stand-in in the maps); the view settings do not apply.
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    /// One set per hour, FROM:TO:STEP game hours (TO excluded; `0:24:1` is a day), each in
+    /// OUT/hour-HH.HH/.
+    #[arg(long)]
+    pub hours: Option<String>,
+    /// Only every N-th hour from the K-th (K/N, or `auto` from a Slurm job array or a Kubernetes
+    /// indexed Job: docs/batch.md).
+    #[arg(long)]
+    pub shard: Option<Shard>,
+    /// Face size of the unfiltered map and the specular level 0, texels (a power of two).
+    #[arg(long, default_value_t = 128)]
+    pub size: u32,
+    /// Specular mip levels (default: down to 4 texels a side).
+    #[arg(long)]
+    pub levels: Option<usize>,
+    /// GGX samples per specular texel.
+    #[arg(long, default_value_t = 256)]
+    pub samples: u32,
+    /// Face size of the diffuse irradiance map, texels.
+    #[arg(long, default_value_t = 32)]
+    pub irradiance_size: u32,
+    /// Layout of the unfiltered EXR: six faces or one equirectangular image.
+    #[arg(long, value_enum, default_value = "cube")]
+    pub projection: Projection,
+    /// Output folder.
+    #[arg(long, short)]
+    pub out: PathBuf,
+}
+
+/// `validate` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct ValidateArgs {
+    /// Scan files (data/measured/kider2014/*.csv) or folders of them.
+    #[arg(required = true)]
+    pub scans: Vec<PathBuf>,
+    /// Models to compare, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "preetham,hosek,single,lut,reference")]
+    pub models: Vec<ValidateModel>,
+    /// The aerosol the physical models assume while its optical depth is fitted (a preset of
+    /// `[atmosphere] aerosol`).
+    #[arg(long, default_value = "continental", value_parser = parse_aerosol)]
+    pub aerosol: skytune::atmosphere::aerosol::AerosolPreset,
+    /// Fit the Angstrom exponent too (from 0 to 2.5 in steps of 0.5), not only the optical depth.
+    #[arg(long)]
+    pub fit_angstrom: bool,
+    /// Ground albedo of the models.
+    #[arg(long, default_value_t = 0.2)]
+    pub albedo: f64,
+    /// Leave out samples closer to the sun than this, degrees.
+    #[arg(long, default_value_t = skytune::measure::validation::DEFAULT_SUN_EXCLUSION_DEG)]
+    pub sun_exclusion_deg: f64,
+    /// `reference`: most Monte Carlo paths per direction (it stops at a 2% standard error).
+    #[arg(long, default_value_t = 2048)]
+    pub reference_paths: u32,
+    /// Results CSV: rows of other scans or models already there are kept, these replace theirs
+    /// (so a long validation runs a few scans at a time).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Write the Markdown report of every row in `--out` (between its validate markers; the
+    /// rest of the file is kept).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Write the chart of every row in `--out`: STEM.svg and STEM.png.
+    #[arg(long)]
+    pub chart: Option<PathBuf>,
+    /// Write each scan's samples, measured and fitted (scaled), to DIR/SCAN.csv.
+    #[arg(long)]
+    pub samples: Option<PathBuf>,
+    /// Use the CPU (software) adapter.
+    #[arg(long)]
+    pub cpu: bool,
+}
+
+fn parse_aerosol(s: &str) -> Result<skytune::atmosphere::aerosol::AerosolPreset, String> {
+    use skytune::atmosphere::aerosol::AerosolPreset;
+    AerosolPreset::ALL.into_iter().find(|p| p.name() == s).ok_or_else(|| format!("expected one of {}", AerosolPreset::ALL.map(|p| p.name()).join(", ")))
+}
+
 /// `radiance` arguments.
 #[derive(Debug, Args, Clone)]
 pub struct RadianceArgs {
@@ -311,9 +418,13 @@ pub struct FrameArgs {
     /// full resolution, drawn one by one). Default: the adapter's (software on a CPU adapter).
     #[arg(long)]
     pub strategy: Option<String>,
-    /// Render what the environment map sees (objects with visible_in_env_map).
+    /// Render what the environment map sees (objects with visible_in_env_map): light from the sky
+    /// only, without the glare and the main scene's stand-in.
     #[arg(long)]
     pub env_map: bool,
+    /// With --env-map: keep the main scene's stand-in (its horizon).
+    #[arg(long)]
+    pub with_scene: bool,
     /// Colour source of the skydome instead of the sky file's: bitmap, linear, preetham, hosek, single, lut, cells, reference.
     #[arg(long)]
     pub sky_model: Option<String>,

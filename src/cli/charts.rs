@@ -53,7 +53,8 @@ pub fn both_at(
     Ok(())
 }
 
-fn colour(model: &str) -> RGBColor {
+/// The colour of a model in every chart.
+pub fn colour(model: &str) -> RGBColor {
     match model {
         "single" => RGBColor(31, 119, 180),
         "lut" => RGBColor(214, 39, 40),
@@ -64,6 +65,7 @@ fn colour(model: &str) -> RGBColor {
         "dome-map" => RGBColor(227, 119, 194),
         "regression" => RGBColor(23, 190, 207),
         "baked" => RGBColor(127, 127, 127),
+        "reference" => RGBColor(30, 30, 30),
         _ => RGBColor(0, 0, 0),
     }
 }

@@ -8,6 +8,8 @@ pub mod bench_models;
 pub mod bench_passes;
 pub mod bench_reference;
 pub mod charts;
+pub mod export_env;
 pub mod stability_report;
+pub mod validate;
 
 pub use args::*;

@@ -79,8 +79,8 @@ impl Pick {
             Method::Single(s) => SkyModel { kind: SkyModelKind::Single, single: s, ..*base },
             Method::Lut(s) => SkyModel { kind: SkyModelKind::Lut, lut: s, ..*base },
             Method::Cells(i) => SkyModel { kind: SkyModelKind::Cells, cell_iterations: i as u32, ..*base },
-            Method::Preetham => SkyModel { kind: SkyModelKind::Preetham, turbidity: c.turbidity as f32, ..*base },
-            Method::Hosek => SkyModel { kind: SkyModelKind::Hosek, turbidity: c.turbidity as f32, ..*base },
+            Method::Preetham => SkyModel { kind: SkyModelKind::Preetham, turbidity: c.turbidity as f32, turbidity_from_atmosphere: false, ..*base },
+            Method::Hosek => SkyModel { kind: SkyModelKind::Hosek, turbidity: c.turbidity as f32, turbidity_from_atmosphere: false, ..*base },
             _ => *base,
         }
     }

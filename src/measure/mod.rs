@@ -8,3 +8,4 @@ pub mod image_diff;
 pub mod model_points;
 pub mod soak;
 pub mod stability;
+pub mod validation;

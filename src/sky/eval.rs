@@ -350,7 +350,11 @@ impl Sky {
             VersionFrame { version, diffuse: color(&v.diffuse), constants, uv_offsets, gradient }
         };
 
-        let sky_model = input.sky_model.unwrap_or(self.model);
+        let mut sky_model = input.sky_model.unwrap_or(self.model);
+        let atmosphere = crate::atmosphere::Atmosphere::at_weather(&self.atmosphere_by_weather, weather as f64).unwrap_or(self.atmosphere);
+        if sky_model.turbidity_from_atmosphere {
+            sky_model.turbidity = atmosphere.turbidity().clamp(1.0, 10.0) as f32;
+        }
         // Braun and Cohen's layers: alpha from the light factor (equations 3 and 4).
         let layer_alpha = |layer: Option<super::model::LayerKind>| -> f32 {
             match (sky_model.kind, layer) {
@@ -415,7 +419,7 @@ impl Sky {
             tier: input.tier,
             env_map: input.env_map,
             sky_model,
-            atmosphere: crate::atmosphere::Atmosphere::at_weather(&self.atmosphere_by_weather, weather as f64).unwrap_or(self.atmosphere),
+            atmosphere,
             fog_color: fog,
             sun_ambient: self.sun_ambient.sample(hour, hpd, weather),
             sun_diffuse: self.sun_diffuse.sample(hour, hpd, weather),

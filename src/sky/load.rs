@@ -414,6 +414,7 @@ impl Validator<'_> {
                 reference_grid: m.reference_grid.map_or([48, 27], |[a, b]| [a.0.max(2), b.0.max(2)]),
                 drive_scene: m.drive_scene,
                 turbidity: m.turbidity.map_or(crate::atmosphere::analytic::DEFAULT_TURBIDITY as f32, |t| t.get()),
+                turbidity_from_atmosphere: false,
                 analytic_units: m.analytic_units,
                 linear: crate::atmosphere::analytic::LinearParams { hours_per_day: hours as f64, ..m.linear.as_ref().map_or_else(Default::default, |l| self.linear(l)) },
             }
@@ -465,6 +466,7 @@ impl Validator<'_> {
         let stated_turbidity = f.sky_model.as_ref().is_some_and(|m| m.turbidity.is_some());
         if !stated_turbidity && f.atmosphere.as_ref().is_some_and(|a| a.states_aerosol()) {
             model.turbidity = atmosphere.turbidity().clamp(1.0, 10.0) as f32;
+            model.turbidity_from_atmosphere = true;
         }
         if model.camera_km as f64 >= atmosphere.thickness_km() {
             self.err_in("[sky_model]", "camera_km", "sky_model.camera_km", format!("expected an altitude below the top of the atmosphere ({} km)", atmosphere.thickness_km()));

@@ -106,6 +106,10 @@ pub struct SkyModel {
     pub drive_scene: bool,
     /// `preetham`, `hosek`: turbidity.
     pub turbidity: f32,
+    /// `preetham`, `hosek`: the turbidity is the atmosphere's at the frame's weather (its
+    /// `[atmosphere]` states the aerosol and `[sky_model]` no turbidity); moving the window's
+    /// turbidity slider ends it.
+    pub turbidity_from_atmosphere: bool,
     /// `preetham`, `hosek`: the unit of their radiance (calibrated to the physical models'
     /// by default).
     pub analytic_units: crate::atmosphere::analytic::AnalyticUnits,
@@ -150,6 +154,7 @@ impl Default for SkyModel {
             reference_grid: [48, 27],
             drive_scene: false,
             turbidity: crate::atmosphere::analytic::DEFAULT_TURBIDITY as f32,
+            turbidity_from_atmosphere: false,
             analytic_units: Default::default(),
             linear: Default::default(),
         }

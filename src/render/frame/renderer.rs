@@ -52,6 +52,13 @@ impl RenderOptions {
     pub fn with_strategy(self, strategy: FillStrategy) -> Self {
         Self { strategy, ..self }
     }
+
+    /// These options for an environment map: light from the sky only. No glare (an effect of
+    /// the viewing camera, which the glare pass also leaves out of any frame marked `env_map`),
+    /// and the main scene's stand-in only `with_scene`.
+    pub fn for_environment_map(self, with_scene: bool) -> Self {
+        Self { glare: false, scene: with_scene, ..self }
+    }
 }
 
 /// The renderer's skips of work that contributes nothing to the frame.

@@ -333,7 +333,9 @@ impl Pass for GlarePass {
 
     fn prepare(&mut self, cx: &FrameContext<'_>) {
         self.settled = true;
-        let color = cx.frame.glare.filter(|_| cx.options.glare);
+        // Glare and flares belong to the camera that looks, not to the light an environment map
+        // holds.
+        let color = cx.frame.glare.filter(|_| cx.options.glare && !cx.frame.env_map);
         self.active = false;
         let Some(g) = self.resources.current.as_mut() else { return };
         match color {
