@@ -224,3 +224,33 @@ fn environment_maps_hold_no_glare() {
     let worst = a.pixels().zip(b.pixels()).flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs() / q[c].abs().max(1e-6))).fold(0.0, f32::max);
     assert!(worst < 1e-3, "the glare reaches the environment map: {worst}");
 }
+
+#[test]
+fn sun_json_lists_the_moons_that_are_up() {
+    let dir = tempfile::tempdir().unwrap();
+    run(&["--hour", "22", "--size", "16", "--samples", "16"], dir.path());
+    let sun = std::fs::read_to_string(dir.path().join("sun.json")).unwrap();
+    assert!(sun.contains("\"above_horizon\": false"), "{sun}");
+    let sky = skytune::sky::builtin::default_sky();
+    let path = sky.paths.iter().position(|p| p.name == "moon").unwrap();
+    let (expected, _) = sky.path_at(path, 22.0);
+    let line = sun.lines().find(|l| l.contains("\"name\": \"moon\"")).unwrap_or_else(|| panic!("no moon in {sun}"));
+    let towards: Vec<f32> = line[line.find("\"towards\": [").unwrap() + 12..].split(']').next().unwrap().split(',').map(|v| v.trim().parse().unwrap()).collect();
+    let angle = Vec3::from_slice(&towards).normalize().dot(expected.normalize()).clamp(-1.0, 1.0).acos().to_degrees();
+    assert!(angle < 0.01 && expected.y > 0.0, "moon at {towards:?}, its path at {expected}");
+}
+
+#[test]
+fn mirror_z_serves_engines_that_sample_at_minus_z() {
+    let (plain, mirrored) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    run(&["--sky-model", "hosek", "--hour", "9", "--size", "16", "--samples", "16"], plain.path());
+    run(&["--sky-model", "hosek", "--hour", "9", "--size", "16", "--samples", "16", "--mirror-z"], mirrored.path());
+    let (a, b) = (read_ktx2(&plain.path().join("specular.ktx2"), 16, 3), read_ktx2(&mirrored.path().join("specular.ktx2"), 16, 3));
+    for d in [Vec3::new(0.3, 0.4, 0.86), Vec3::new(-0.7, 0.1, -0.7), Vec3::new(0.5, 0.8, -0.33)] {
+        let d = d.normalize();
+        let (p, q) = (vulkan_lookup(&a[0], d), vulkan_lookup(&b[0], Vec3::new(d.x, d.y, -d.z)));
+        assert_eq!(p, q, "{d}");
+    }
+    // And the sky is not symmetric in z, so the files differ.
+    assert_ne!(std::fs::read(plain.path().join("specular.ktx2")).unwrap(), std::fs::read(mirrored.path().join("specular.ktx2")).unwrap());
+}

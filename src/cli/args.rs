@@ -239,6 +239,10 @@ pub struct ExportEnvArgs {
     /// Face size of the diffuse irradiance map, texels.
     #[arg(long, default_value_t = 32)]
     pub irradiance_size: u32,
+    /// KTX2 cube maps for engines that sample cube maps at (x, y, -z) of the world direction
+    /// (Bevy): each texel holds the sky mirrored in z (docs/export.md).
+    #[arg(long)]
+    pub mirror_z: bool,
     /// Layout of the unfiltered EXR: six faces or one equirectangular image.
     #[arg(long, value_enum, default_value = "cube")]
     pub projection: Projection,

@@ -77,11 +77,11 @@ fn export_one(headless: &mut Headless, sky: &Sky, args: &ExportEnvArgs, hour: f3
         }
     }
     let writer = format!("skytune {}", env!("CARGO_PKG_VERSION"));
-    let chain: Vec<Vec<LinearImage>> = env_light::prefilter_ggx(&faces, levels, args.samples).iter().map(|l| skytune::files::ktx2::to_vulkan_faces(l)).collect();
+    let chain: Vec<Vec<LinearImage>> = env_light::prefilter_ggx(&faces, levels, args.samples).iter().map(|l| skytune::files::ktx2::to_vulkan_faces(l, args.mirror_z)).collect();
     let specular = dir.join("specular.ktx2");
     write_atomic(&specular, &skytune::files::ktx2::cube_map_rgba16f(&chain, &writer))?;
     written.push(specular);
-    let irradiance = skytune::files::ktx2::to_vulkan_faces(&env_light::irradiance_cube(&faces, args.irradiance_size));
+    let irradiance = skytune::files::ktx2::to_vulkan_faces(&env_light::irradiance_cube(&faces, args.irradiance_size), args.mirror_z);
     let diffuse = dir.join("diffuse.ktx2");
     write_atomic(&diffuse, &skytune::files::ktx2::cube_map_rgba16f(&[irradiance], &writer))?;
     written.push(diffuse);
@@ -95,6 +95,42 @@ fn export_one(headless: &mut Headless, sky: &Sky, args: &ExportEnvArgs, hour: f3
     let names: Vec<String> = written.iter().map(|p| p.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned())).collect();
     println!("hour {hour}: wrote {} in {} ({:.1} s): {}", names.len(), dir.display(), started.elapsed().as_secs_f64(), names.join(", "));
     Ok(())
+}
+
+/// The sky's moons above the horizon (objects with `lighting = "moon"` seen in environment
+/// maps): direction, angular radius and display colour. The bitmap sky gives them no physical
+/// brightness.
+fn moons_json(sky: &Sky, frame: &skytune::sky::FrameSky) -> String {
+    let mut out = Vec::new();
+    for o in &frame.objects {
+        let object = &sky.objects[o.index];
+        let v = &object.standard;
+        let (Some((towards, _)), Ok(versions)) = (o.placement, &o.versions) else { continue };
+        let size_deg = match v.shape {
+            skytune::sky::model::Shape::Billboard { size_deg } | skytune::sky::model::Shape::Quad { size_deg } => f64::from(size_deg.get()),
+            _ => continue,
+        };
+        if v.lighting != skytune::sky::model::Lighting::Moon || !object.visible_in_env_map || towards.y <= 0.0 {
+            continue;
+        }
+        let d = towards.normalize();
+        let c = versions.first().map_or([1.0; 4], |f| f.diffuse);
+        out.push(format!(
+            "\n    {{\"name\": \"{}\", \"towards\": [{:.6}, {:.6}, {:.6}], \"elevation_deg\": {:.4}, \"angular_radius_rad\": {:.6}, \"color\": {}}}",
+            object.name.replace('"', "'"),
+            d.x,
+            d.y,
+            d.z,
+            d.y.asin().to_degrees(),
+            (size_deg / 2.0).to_radians(),
+            json_rgb([c[0], c[1], c[2]].map(|v| skytune::atmosphere::dome::srgb_decode(f64::from(v.clamp(0.0, 1.0)))))
+        ));
+    }
+    if out.is_empty() {
+        String::new()
+    } else {
+        format!("{}\n  ", out.join(","))
+    }
 }
 
 fn json_rgb(c: [f64; 3]) -> String {
@@ -131,11 +167,12 @@ fn sun_json(sky: &Sky, input: &skytune::sky::FrameInput) -> String {
             "display-linear: the sky's sun diffuse colour (the NeL bitmap model has no physical unit)",
         )
     };
+    let moons = moons_json(sky, &frame);
     let peak = irradiance.iter().cloned().fold(0.0, f64::max);
     let colour = if peak > 0.0 { irradiance.map(|c| c / peak) } else { [0.0; 3] };
     let illuminance = 0.2126 * irradiance[0] + 0.7152 * irradiance[1] + 0.0722 * irradiance[2];
     format!(
-        "{{\n  \"hour\": {},\n  \"weather\": {},\n  \"towards_sun\": [{:.6}, {:.6}, {:.6}],\n  \"axes\": \"x east, y up, z south (north is -z)\",\n  \"elevation_deg\": {elevation:.4},\n  \"azimuth_deg\": {azimuth:.4},\n  \"above_horizon\": {},\n  \"angular_radius_rad\": {},\n  \"color\": {},\n  \"irradiance\": {},\n  \"illuminance\": {illuminance:.6e},\n  \"units\": \"{units}\"\n}}\n",
+        "{{\n  \"hour\": {},\n  \"weather\": {},\n  \"towards_sun\": [{:.6}, {:.6}, {:.6}],\n  \"axes\": \"x east, y up, z south (north is -z)\",\n  \"elevation_deg\": {elevation:.4},\n  \"azimuth_deg\": {azimuth:.4},\n  \"above_horizon\": {},\n  \"angular_radius_rad\": {},\n  \"color\": {},\n  \"irradiance\": {},\n  \"illuminance\": {illuminance:.6e},\n  \"units\": \"{units}\",\n  \"moons\": [{moons}]\n}}\n",
         input.hour,
         input.weather,
         d.x,

@@ -102,46 +102,49 @@ pub fn prefilter_ggx(faces: &[LinearImage], levels: usize, samples: u32) -> Vec<
         let size = (base_size >> level).max(1);
         let alpha = roughness_of_level(level, levels).powi(2).max(1e-4);
         let a2 = alpha * alpha;
-        let out = (0..6)
-            .map(|f| {
-                LinearImage::from_fn(size, size, |x, y| {
-                    let n = texel_direction(f, x, y, size);
-                    let (t, b) = basis(n);
-                    let mut sum = [0.0f32; 3];
-                    let mut weight = 0.0;
-                    // Each texel's points shifted by its own offset (Cranley-Patterson rotation):
-                    // one pattern everywhere would err the same way in every texel and move the
-                    // level's mean.
-                    let (du, dv) = hammersley((f as u32 * size + y) * size + x, 6 * size * size);
-                    let shift = (du * 0.618_034 + dv).fract();
-                    for i in 0..samples {
-                        let (u, v) = hammersley(i, samples);
-                        let (u, v) = ((u + shift).fract(), (v + dv).fract());
-                        // GGX half vector around n.
-                        let cos_h = ((1.0 - u) / (1.0 + (a2 - 1.0) * u)).sqrt();
-                        let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
-                        let phi = std::f32::consts::TAU * v;
-                        let h = t * (sin_h * phi.cos()) + b * (sin_h * phi.sin()) + n * cos_h;
-                        let l = 2.0 * n.dot(h) * h - n;
-                        let n_l = n.dot(l);
-                        if n_l <= 0.0 {
-                            continue;
-                        }
-                        // pdf of l with n = v: D(h) / 4; the texel footprint picks the pyramid level.
-                        let d = a2 / (std::f32::consts::PI * (cos_h * cos_h * (a2 - 1.0) + 1.0).powi(2));
-                        let sample_sr = 4.0 / (samples as f32 * d.max(1e-8));
-                        let lod = (0.5 * (sample_sr / texel_sr).log2()).clamp(0.0, (pyramid.len() - 1) as f32);
-                        let c = trilinear(&pyramid, lod, l);
-                        for k in 0..3 {
-                            sum[k] += c[k] * n_l;
-                        }
-                        weight += n_l;
+        let face = |f: usize| {
+            LinearImage::from_fn(size, size, |x, y| {
+                let n = texel_direction(f, x, y, size);
+                let (t, b) = basis(n);
+                let mut sum = [0.0f32; 3];
+                let mut weight = 0.0;
+                // Each texel's points shifted by its own offset (Cranley-Patterson rotation):
+                // one pattern everywhere would err the same way in every texel and move the
+                // level's mean.
+                let (du, dv) = hammersley((f as u32 * size + y) * size + x, 6 * size * size);
+                let shift = (du * 0.618_034 + dv).fract();
+                for i in 0..samples {
+                    let (u, v) = hammersley(i, samples);
+                    let (u, v) = ((u + shift).fract(), (v + dv).fract());
+                    // GGX half vector around n.
+                    let cos_h = ((1.0 - u) / (1.0 + (a2 - 1.0) * u)).sqrt();
+                    let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
+                    let phi = std::f32::consts::TAU * v;
+                    let h = t * (sin_h * phi.cos()) + b * (sin_h * phi.sin()) + n * cos_h;
+                    let l = 2.0 * n.dot(h) * h - n;
+                    let n_l = n.dot(l);
+                    if n_l <= 0.0 {
+                        continue;
                     }
-                    let w = weight.max(1e-12);
-                    image::Rgba([sum[0] / w, sum[1] / w, sum[2] / w, 1.0])
-                })
+                    // pdf of l with n = v: D(h) / 4; the texel footprint picks the pyramid level.
+                    let d = a2 / (std::f32::consts::PI * (cos_h * cos_h * (a2 - 1.0) + 1.0).powi(2));
+                    let sample_sr = 4.0 / (samples as f32 * d.max(1e-8));
+                    let lod = (0.5 * (sample_sr / texel_sr).log2()).clamp(0.0, (pyramid.len() - 1) as f32);
+                    let c = trilinear(&pyramid, lod, l);
+                    for k in 0..3 {
+                        sum[k] += c[k] * n_l;
+                    }
+                    weight += n_l;
+                }
+                let w = weight.max(1e-12);
+                image::Rgba([sum[0] / w, sum[1] / w, sum[2] / w, 1.0])
             })
-            .collect();
+        };
+        // One thread per face: the faces are independent and this is most of an export's time.
+        let out: Vec<LinearImage> = std::thread::scope(|s| {
+            let handles: Vec<_> = (0..6).map(|f| s.spawn(move || face(f))).collect();
+            handles.into_iter().map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect()
+        });
         chain.push(out);
     }
     chain

@@ -89,13 +89,17 @@ pub fn vulkan_texel_direction(face: usize, x: u32, y: u32, size: u32) -> glam::V
 }
 
 /// Six faces of [`super::export::CUBE_FACES`] (images as a camera inside sees them) laid out as
-/// the Vulkan cube map faces: the same texels, mirrored or turned.
-pub fn to_vulkan_faces(faces: &[LinearImage]) -> Vec<LinearImage> {
+/// the Vulkan cube map faces: the same texels, mirrored or turned. With `mirror_z` the texel a
+/// direction (x, y, z) samples holds the sky towards (x, y, -z), for engines that sample cube maps
+/// so (Bevy looks up `vec3(R.xy, -R.z)`).
+pub fn to_vulkan_faces(faces: &[LinearImage], mirror_z: bool) -> Vec<LinearImage> {
     let size = faces[0].width();
     (0..6)
         .map(|f| {
             LinearImage::from_fn(size, size, |x, y| {
-                let (i, fx, fy) = super::export::cube_texel(vulkan_texel_direction(f, x, y, size), size);
+                let d = vulkan_texel_direction(f, x, y, size);
+                let d = if mirror_z { glam::Vec3::new(d.x, d.y, -d.z) } else { d };
+                let (i, fx, fy) = super::export::cube_texel(d, size);
                 *faces[i].get_pixel((fx as u32).min(size - 1), (fy as u32).min(size - 1))
             })
         })
