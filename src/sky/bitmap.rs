@@ -13,6 +13,9 @@ pub struct ColorBitmap {
     pub height: u32,
     /// Row-major texels, `width * height` of them.
     pub texels: Vec<Rgba>,
+    /// The sky file's name for the file it came from (None for built-in or generated ones): how
+    /// an edit in the window finds every slot that shows it.
+    pub source: Option<String>,
 }
 
 impl ColorBitmap {
@@ -20,7 +23,12 @@ impl ColorBitmap {
     pub fn from_rgba8(width: u32, height: u32, bytes: &[u8]) -> Self {
         assert_eq!(bytes.len(), (width * height * 4) as usize, "RGBA8 size mismatch");
         let texels = bytes.chunks_exact(4).map(|c| [c[0] as f32 / 255.0, c[1] as f32 / 255.0, c[2] as f32 / 255.0, c[3] as f32 / 255.0]).collect();
-        Self { width, height, texels }
+        Self { width, height, texels, source: None }
+    }
+
+    /// The same bitmap, marked as coming from the file the sky names `key`.
+    pub fn with_source(self, key: &str) -> Self {
+        Self { source: Some(key.to_string()), ..self }
     }
 
     /// Builds a bitmap from a function of (x, y) texel indices.
@@ -31,7 +39,7 @@ impl ColorBitmap {
                 texels.push(f(x, y));
             }
         }
-        Self { width, height, texels }
+        Self { width, height, texels, source: None }
     }
 
     /// Converts to 8-bit RGBA (rounded), for textures and PNG files.

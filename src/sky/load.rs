@@ -330,7 +330,7 @@ impl Validator<'_> {
             return Some(b.clone());
         }
         let tex = self.image(r, field)?;
-        let b = Arc::new(ColorBitmap::from_rgba8(tex.width, tex.height, &tex.rgba8));
+        let b = Arc::new(ColorBitmap::from_rgba8(tex.width, tex.height, &tex.rgba8).with_source(r.get_ref()));
         self.bitmaps.insert(r.get_ref().clone(), b.clone());
         Some(b)
     }

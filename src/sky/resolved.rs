@@ -408,3 +408,47 @@ pub struct Flare {
     /// Tint.
     pub tint: Rgba,
 }
+
+impl Sky {
+    /// Every colour-bitmap slot of the sky: scene colours, objects' colours, constants,
+    /// gradients and UV offsets, emitters' emission and parameters, the stars' and the glare's
+    /// colours.
+    pub fn color_bitmaps_mut(&mut self) -> Vec<&mut Arc<ColorBitmap>> {
+        let mut out: Vec<&mut Arc<ColorBitmap>> = vec![&mut self.fog_color, &mut self.sun_ambient, &mut self.sun_diffuse];
+        for o in &mut self.objects {
+            for v in std::iter::once(&mut o.standard).chain(o.fallback.iter_mut()) {
+                out.extend(v.diffuse.bitmap.as_mut());
+                out.extend(v.constants.iter_mut().filter_map(|c| c.bitmap.as_mut()));
+                if let Some(g) = v.gradients.as_mut() {
+                    out.extend(g.bitmaps.iter_mut());
+                }
+                out.extend(v.stages.iter_mut().filter_map(|s| s.uv_offset.as_mut().map(|u| &mut u.0)));
+            }
+        }
+        for e in &mut self.emitters {
+            out.extend(e.emission.bitmap.as_mut());
+            out.extend(e.params.iter_mut().map(|p| &mut p.0));
+        }
+        if let Some(s) = self.stars.as_mut() {
+            out.extend(s.color.bitmap.as_mut());
+        }
+        if let Some(g) = self.glare.as_mut() {
+            out.extend(g.color.bitmap.as_mut());
+        }
+        out
+    }
+
+    /// Shows `bitmap` wherever the sky uses the file the sky names `source`, from the next
+    /// frame; returns how many slots changed.
+    pub fn replace_bitmap(&mut self, source: &str, bitmap: ColorBitmap) -> usize {
+        let new = Arc::new(bitmap.with_source(source));
+        let mut n = 0;
+        for slot in self.color_bitmaps_mut() {
+            if slot.source.as_deref() == Some(source) {
+                *slot = new.clone();
+                n += 1;
+            }
+        }
+        n
+    }
+}
