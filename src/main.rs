@@ -42,6 +42,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             weather: cli.app.weather,
             view: cli.app.view,
             strategy: cli.app.strategy,
+            edit: cli.app.edit,
         }),
         Some(Command::Render(args)) => render(&args),
         Some(Command::Check { sky }) => check(&sky),

@@ -92,7 +92,7 @@ impl App {
             self.sheet = None;
             self.gpu_error = Some(format!("contact sheet failed: {e:#}"));
         }
-        let sky = self.live.sky().clone();
+        let sky = self.shown_sky();
         let input = self.advance_clock(&sky);
         if self.controls.compare.open {
             self.step_compare();
@@ -159,6 +159,13 @@ impl App {
     /// Swaps in a sky the loader finished, and rebuilds pipelines after a shader edit.
     fn apply_reloads(&mut self) {
         if let Some(ReloadEvent::Reloaded) = self.live.poll() {
+            // A reload while the curve editor holds unsaved edits of a file that changed: say so,
+            // keep showing the edits, and let the artist choose.
+            if let Some(ed) = self.controls.curves.as_mut() {
+                if ed.editor.is_dirty() && ed.editor.changed_on_disk() {
+                    ed.conflict = true;
+                }
+            }
             if let Some(gpu) = self.gpu.as_mut() {
                 match gpu.renderer.set_sky(&gpu.ctx, self.live.sky()) {
                     Ok(()) => self.gpu_error = None,
@@ -298,6 +305,8 @@ impl App {
             UiAction::Screenshot => self.take_screenshot(),
             UiAction::Snapshot => self.save_snapshot(),
             UiAction::RecreateDevice => self.recreate_device = true,
+            // The next frame's sky carries the edit (`shown_sky`).
+            UiAction::CurvesEdited => {}
             UiAction::RefreshSnapshots => self.refresh_snapshots(),
             UiAction::ContactSheet => {
                 let (cols, rows) = self.controls.sheet_grid;

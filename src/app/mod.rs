@@ -13,6 +13,7 @@
 pub mod auto_pick;
 pub mod capture;
 pub mod compare;
+pub mod curve_editor;
 pub mod diagnostics;
 pub mod frame;
 pub mod layout;
@@ -71,6 +72,8 @@ pub struct AppConfig {
     pub view: Option<String>,
     /// Fill strategy preset (`software`, `plain`; None: the adapter's, [`FillStrategy::for_device`]).
     pub strategy: Option<String>,
+    /// Open the curve editor on this bitmap of the sky (a path, or a name next to the sky file).
+    pub edit: Option<PathBuf>,
 }
 
 /// Whether a display server is reachable (X11 or Wayland).
@@ -125,6 +128,22 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
     if let SkySpec::Continent { season, .. } = spec {
         controls.season = season;
     }
+    if let Some(edit) = &config.edit {
+        let sky = live.sky();
+        let dir = std::path::Path::new(&sky.source_name).parent().map(std::path::Path::to_path_buf).unwrap_or_default();
+        let key = edit.strip_prefix(&dir).unwrap_or(edit).to_string_lossy().replace('\\', "/");
+        let gradient = sky.objects.iter().any(|o| o.standard.gradients.as_ref().is_some_and(|g| g.bitmaps.iter().any(|b| b.source.as_deref() == Some(key.as_str()))));
+        anyhow::ensure!(
+            crate::sky::Sky::clone(sky).color_bitmaps_mut().iter().any(|b| b.source.as_deref() == Some(key.as_str())),
+            "--edit: {} is not a colour bitmap of {}",
+            edit.display(),
+            sky.source_name
+        );
+        ui::open_curves(&mut controls, sky, &key, key.clone(), gradient);
+        if let Some(e) = controls.curves_error.take() {
+            anyhow::bail!("--edit: {e}");
+        }
+    }
     if let Some(b) = &config.compare {
         let file = live.sky_file();
         controls.compare.b = compare::CompareB::parse(b, file.as_deref()).map_err(|e| anyhow!("--compare: {e}"))?;
@@ -156,6 +175,7 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         title: String::new(),
         strategy: Some(strategy),
         adapter_strategy: FillStrategy::default(),
+        edited_sky: None,
     };
     event_loop.run_app(&mut app).context("running the window")?;
     app.settings.panels = app.controls.layout.clone();
@@ -219,9 +239,31 @@ pub struct App {
     strategy: Option<Option<FillStrategy>>,
     /// The strategy the current device's adapter defaults to.
     adapter_strategy: FillStrategy,
+    /// The sky shown while the curve editor holds a bitmap: the loaded sky with the editor's
+    /// version of it, for (the loaded sky's generation, the editor's revision).
+    edited_sky: Option<(u64, u64, Arc<crate::sky::Sky>)>,
 }
 
 impl App {
+    /// The sky to show: the loaded one, with the curve editor's bitmap in place of its file's.
+    fn shown_sky(&mut self) -> Arc<crate::sky::Sky> {
+        let Some(ed) = self.controls.curves.as_ref() else {
+            self.edited_sky = None;
+            return self.live.sky().clone();
+        };
+        let key = (self.live.generation, ed.editor.revision());
+        match &self.edited_sky {
+            Some((g, r, sky)) if (*g, *r) == key => sky.clone(),
+            _ => {
+                let mut sky = (**self.live.sky()).clone();
+                sky.replace_bitmap(ed.editor.key(), ed.editor.color_bitmap());
+                let sky = Arc::new(sky);
+                self.edited_sky = Some((key.0, key.1, sky.clone()));
+                sky
+            }
+        }
+    }
+
     pub(crate) fn shader_library(&self) -> ShaderLibrary {
         match &self.config.shader_dir {
             Some(d) => ShaderLibrary { dir: Some(d.clone()) },

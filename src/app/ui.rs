@@ -66,6 +66,10 @@ pub struct Controls {
     pub bursts: Vec<crate::sky::particles::Burst>,
     /// Panel widths, which panels and sections are open (kept with the window state).
     pub layout: PanelLayout,
+    /// The curve editor, when a bitmap is open in it.
+    pub curves: Option<Box<super::curve_editor::CurveEditor>>,
+    /// Why a bitmap could not be opened in the curve editor.
+    pub curves_error: Option<String>,
 }
 
 impl Controls {
@@ -105,6 +109,8 @@ impl Default for Controls {
             bursts: Vec::new(),
             skips_baseline_ms: None,
             layout: PanelLayout::default(),
+            curves: None,
+            curves_error: None,
         }
     }
 }
@@ -141,6 +147,8 @@ pub enum UiAction {
     RefreshSnapshots,
     /// Build a new GPU device (after the old one was lost).
     RecreateDevice,
+    /// The curve editor changed its bitmap: show it from the next frame.
+    CurvesEdited,
 }
 
 /// What the compare window shows.
@@ -206,6 +214,30 @@ pub struct UiInfo<'a> {
     pub auto_progress: Option<(f32, String)>,
     /// `kind = "auto"`: the picked point's id on the benchmark chart.
     pub auto_point: Option<String>,
+}
+
+/// The most of the window's height the curve editor takes: the sky keeps the rest.
+const CURVES_MAX_FRACTION: f32 = 0.4;
+
+/// Opens the file the sky names `key` (next to the sky file) in the curve editor.
+pub fn open_curves(c: &mut Controls, sky: &Sky, key: &str, label: String, gradient: bool) {
+    let dir = std::path::Path::new(&sky.source_name).parent().map(std::path::Path::to_path_buf).unwrap_or_default();
+    match crate::files::bitmap_edit::BitmapEditor::open(&dir.join(key), key) {
+        Ok(editor) => {
+            c.curves = Some(Box::new(super::curve_editor::CurveEditor::new(editor, label, gradient, c.weather)));
+            c.curves_error = None;
+        }
+        Err(e) => c.curves_error = Some(format!("cannot edit {label}: {e}")),
+    }
+}
+
+/// An "edit" button for a bitmap slot the sky loaded from a file.
+fn edit_button(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky, bitmap: &ColorBitmap, label: String, gradient: bool) {
+    if let Some(key) = bitmap.source.clone() {
+        if ui.small_button("edit").on_hover_text(format!("edit {label} ({key}) as curves over the day")).clicked() {
+            open_curves(c, sky, &key, label, gradient);
+        }
+    }
 }
 
 /// Keyboard shortcuts, shown in the help overlay.
@@ -492,6 +524,24 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
         });
     }
 
+    if c.curves.is_some() {
+        let hour = c.hour;
+        let mut close = false;
+        egui::Panel::bottom("curves").max_size(screen.height() * CURVES_MAX_FRACTION).show(ui, |ui| {
+            if let Some(ed) = c.curves.as_mut() {
+                for a in super::curve_editor::show(ui, ed, hour, sky.hours_per_day).actions {
+                    match a {
+                        super::curve_editor::CurveAction::Edited => actions.push(UiAction::CurvesEdited),
+                        super::curve_editor::CurveAction::Close => close = true,
+                    }
+                }
+            }
+        });
+        if close {
+            c.curves = None;
+        }
+    }
+
     // What the panels leave is the sky's, on whole pixels so the sky's copy and the paint around
     // it meet without a gap.
     let ppp = ui.ctx().pixels_per_point();
@@ -503,7 +553,10 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
     if let (Some(target), Some(tex)) = (c.inspect.clone(), inspector_texture) {
         let mut open = true;
         egui::Window::new("Bitmap inspector").open(&mut open).show(ui.ctx(), |ui| {
-            ui.label(&target.label);
+            ui.horizontal(|ui| {
+                ui.label(&target.label);
+                edit_button(ui, c, sky, &target.bitmap, target.label.clone(), false);
+            });
             let b = &target.bitmap;
             let scale = (360.0 / b.width as f32).min(120.0 / b.height as f32).max(1.0);
             let size = egui::vec2(b.width as f32 * scale, b.height as f32 * scale);
@@ -761,10 +814,23 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
                 let version = if p.version == 0 { &o.standard } else { &o.fallback[p.version - 1] };
                 ui.horizontal_wrapped(|ui| {
                     swatch(ui, p.diffuse);
-                    inspect_button(ui, c, &version.diffuse, format!("{}.{}diffuse", o.name, version_label(p.version)));
+                    let label = format!("{}.{}diffuse", o.name, version_label(p.version));
+                    inspect_button(ui, c, &version.diffuse, label.clone());
+                    if let Some(b) = &version.diffuse.bitmap {
+                        edit_button(ui, c, sky, b, label, false);
+                    }
                     for (k, col) in version.constants.iter().enumerate() {
                         swatch(ui, p.constants[k]);
-                        inspect_button(ui, c, col, format!("{}.{}constants[{k}]", o.name, version_label(p.version)));
+                        let label = format!("{}.{}constants[{k}]", o.name, version_label(p.version));
+                        inspect_button(ui, c, col, label.clone());
+                        if let Some(b) = &col.bitmap {
+                            edit_button(ui, c, sky, b, label, false);
+                        }
+                    }
+                    if let Some(g) = &version.gradients {
+                        for (k, b) in g.bitmaps.iter().enumerate() {
+                            edit_button(ui, c, sky, b, format!("{}.{}gradient[{k}]", o.name, version_label(p.version)), true);
+                        }
                     }
                 });
             }
@@ -775,11 +841,15 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     ui.label("Sky bitmaps:");
     ui.horizontal_wrapped(|ui| {
         for (name, b) in [("fog_color", &sky.fog_color), ("sun_ambient", &sky.sun_ambient), ("sun_diffuse", &sky.sun_diffuse)] {
-            if ui.small_button(name).clicked() {
+            if ui.small_button(name).on_hover_text(format!("inspect {name}")).clicked() {
                 c.inspect = Some(InspectTarget { label: name.to_string(), bitmap: b.clone() });
             }
+            edit_button(ui, c, sky, b, name.to_string(), false);
         }
     });
+    if let Some(e) = &c.curves_error {
+        ui.colored_label(Color32::from_rgb(255, 170, 90), e);
+    }
 }
 
 fn version_label(v: usize) -> String {

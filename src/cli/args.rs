@@ -492,6 +492,10 @@ pub enum Projection {
 /// Window options.
 #[derive(Debug, Args, Clone, Default)]
 pub struct AppArgs {
+    /// Open the curve editor on this colour bitmap of the sky (its path, or its name next to the
+    /// sky file).
+    #[arg(long)]
+    pub edit: Option<PathBuf>,
     /// Exit after rendering this many frames.
     #[arg(long)]
     pub frames: Option<u64>,

@@ -135,7 +135,7 @@ pub enum Edit {
 }
 
 /// A colour bitmap open for editing.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct BitmapEditor {
     path: PathBuf,
     /// Key of the bitmap in the sky (as its file names it), for live updates.
@@ -150,6 +150,8 @@ pub struct BitmapEditor {
     current: DynamicImage,
     undo: Vec<DynamicImage>,
     redo: Vec<DynamicImage>,
+    /// Counts changes to the current image (edits, undo, redo, taking the file's version).
+    revision: u64,
 }
 
 /// Colour type 3 in a PNG's header: indexed colour.
@@ -184,6 +186,7 @@ impl BitmapEditor {
             current: image,
             undo: Vec::new(),
             redo: Vec::new(),
+            revision: 0,
         })
     }
 
@@ -216,6 +219,16 @@ impl BitmapEditor {
     pub fn column_of_hour(&self, hour: f32, hours_per_day: f32) -> u32 {
         let w = self.current.width();
         (((hour / hours_per_day).rem_euclid(1.0) * w as f32).round() as u32) % w
+    }
+
+    /// Changes so far to what the editor holds (a new value means the sky must show it anew).
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// Whether there are edits to undo, or undone edits to redo.
+    pub fn can_undo_redo(&self) -> (bool, bool) {
+        (!self.undo.is_empty(), !self.redo.is_empty())
     }
 
     /// Whether there are edits not saved.
@@ -302,6 +315,7 @@ impl BitmapEditor {
             self.undo.push(before);
         }
         self.redo.clear();
+        self.revision += 1;
     }
 
     fn all_texels(&self) -> Vec<Rgba> {
@@ -326,6 +340,7 @@ impl BitmapEditor {
         match self.undo.pop() {
             Some(prev) => {
                 self.redo.push(std::mem::replace(&mut self.current, prev));
+                self.revision += 1;
                 true
             }
             None => false,
@@ -337,6 +352,7 @@ impl BitmapEditor {
         match self.redo.pop() {
             Some(next) => {
                 self.undo.push(std::mem::replace(&mut self.current, next));
+                self.revision += 1;
                 true
             }
             None => false,
@@ -367,6 +383,7 @@ impl BitmapEditor {
         let image = decode(&bytes, &self.path)?;
         self.undo.push(std::mem::replace(&mut self.current, image.clone()));
         self.redo.clear();
+        self.revision += 1;
         self.baseline = bytes;
         self.saved = image;
         Ok(())
