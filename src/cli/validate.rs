@@ -16,7 +16,7 @@ use skytune::atmosphere::analytic::PREETHAM_MIN_TURBIDITY;
 use skytune::atmosphere::reference::{estimate_many, Case, Reference, ReferenceSettings};
 use skytune::atmosphere::{Atmosphere, LutSettings, Rgb, SingleSettings};
 use skytune::measure::model_points::{Evaluator, Method};
-use skytune::measure::validation::{agreement, minimise_log, Agreement, Scan, Split};
+use skytune::measure::validation::{agreement, median, minimise_log, Agreement, Scan, Split};
 use skytune::render::{AdapterChoice, GpuContext};
 
 /// The search range of the aerosol optical depth at 550 nm.
@@ -274,15 +274,6 @@ fn reference(atm: Atmosphere, settings: ReferenceSettings, cases: &[Case]) -> an
     let model = Reference::new(atm, settings);
     let jobs: Vec<_> = cases.iter().map(|c| (&model, *c)).collect();
     Ok(estimate_many(&jobs, &|_, _| Ok(()))?.into_iter().map(|e| e.all).collect())
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    match v.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-    }
 }
 
 const BEGIN: &str = "<!-- skytune validate: begin (generated; edits between the markers are replaced) -->";
