@@ -165,3 +165,22 @@ fn an_edit_shows_in_the_next_frame() {
     // Nothing was written.
     assert!(!e.changed_on_disk() && e.is_dirty());
 }
+
+#[test]
+fn after_a_save_the_reload_shows_what_was_on_screen() {
+    let (_dir, sky_path) = common::default_sky_folder();
+    let mut sky = skytune::sky::load_sky_file(&sky_path).unwrap();
+    let mut e = BitmapEditor::open(&sky_path.parent().unwrap().join("sun_diffuse.png"), "sun_diffuse.png").unwrap();
+    e.apply(&Edit::SetColor { x: 17, y: 0, rgba: [0.9, 0.4, 0.1, 1.0] }, false);
+    e.apply(&Edit::Smooth { y: 0, from: 14, to: 20, passes: 2 }, false);
+    sky.replace_bitmap(e.key(), e.color_bitmap());
+    e.save(false).unwrap();
+    // What hot reload reads from disk is what the window showed.
+    let reloaded = skytune::sky::load_sky_file(&sky_path).unwrap();
+    assert_eq!(reloaded.sun_diffuse.texels, sky.sun_diffuse.texels);
+    for hour in [16.0, 17.0, 17.5, 19.0] {
+        let (a, b) = (reloaded.evaluate(&skytune::sky::FrameInput::new(hour, 0.2)), sky.evaluate(&skytune::sky::FrameInput::new(hour, 0.2)));
+        assert_eq!(a.sun_diffuse, b.sun_diffuse, "{hour}");
+    }
+    assert!(!e.changed_on_disk() && !e.is_dirty());
+}

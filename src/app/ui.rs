@@ -231,13 +231,18 @@ pub fn open_curves(c: &mut Controls, sky: &Sky, key: &str, label: String, gradie
     }
 }
 
-/// An "edit" button for a bitmap slot the sky loaded from a file.
-fn edit_button(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky, bitmap: &ColorBitmap, label: String, gradient: bool) {
+/// An "edit" button (captioned `caption`) for a bitmap slot the sky loaded from a file.
+fn edit_button_as(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky, bitmap: &ColorBitmap, label: String, gradient: bool, caption: &str) {
     if let Some(key) = bitmap.source.clone() {
-        if ui.small_button("edit").on_hover_text(format!("edit {label} ({key}) as curves over the day")).clicked() {
+        if ui.small_button(caption).on_hover_text(format!("edit {label} ({key}) as curves over the day")).clicked() {
             open_curves(c, sky, &key, label, gradient);
         }
     }
+}
+
+/// An "edit" button for a bitmap slot the sky loaded from a file.
+fn edit_button(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky, bitmap: &ColorBitmap, label: String, gradient: bool) {
+    edit_button_as(ui, c, sky, bitmap, label, gradient, "edit");
 }
 
 /// Keyboard shortcuts, shown in the help overlay.
@@ -829,7 +834,7 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
                     }
                     if let Some(g) = &version.gradients {
                         for (k, b) in g.bitmaps.iter().enumerate() {
-                            edit_button(ui, c, sky, b, format!("{}.{}gradient[{k}]", o.name, version_label(p.version)), true);
+                            edit_button_as(ui, c, sky, b, format!("{}.{}gradient[{k}]", o.name, version_label(p.version)), true, &format!("gradient {k}"));
                         }
                     }
                 });
