@@ -184,3 +184,50 @@ fn after_a_save_the_reload_shows_what_was_on_screen() {
     }
     assert!(!e.changed_on_disk() && !e.is_dirty());
 }
+
+#[test]
+fn a_bake_fills_a_span_of_hours_as_one_edit() {
+    use skytune::measure::bake::{self, BakeTarget};
+    let (_dir, sky_path) = common::default_sky_folder();
+    let mut sky = skytune::sky::load_sky_file(&sky_path).unwrap();
+    sky.model.kind = skytune::sky::model::SkyModelKind::Hosek;
+    let sky = std::sync::Arc::new(sky);
+    assert_eq!(bake::bake_target(&sky, "fog.png"), Some(BakeTarget::Fog));
+    assert_eq!(bake::bake_target(&sky, "gradient_cloudy.png"), Some(BakeTarget::Gradient { step: 1, steps: 3 }));
+    assert_eq!(bake::bake_target(&sky, "moon.png"), None);
+    let mut e = BitmapEditor::open(&sky_path.parent().unwrap().join("fog.png"), "fog.png").unwrap();
+    let ctx = skytune::render::GpuContext::headless(skytune::render::AdapterChoice::Cpu).unwrap();
+    // 22:00 to 01:00 across midnight, on the window's worker.
+    let job = skytune::app::curve_bake::CurveBake::start(&sky, &sky.model, "fog.png", e.size(), (22, 1), &ctx).unwrap();
+    let started = std::time::Instant::now();
+    let edit = loop {
+        if let Some(r) = job.poll() {
+            break r.unwrap();
+        }
+        assert!(started.elapsed().as_secs() < 120, "the bake did not finish");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let before: Vec<_> = (0..e.size().1).flat_map(|y| (0..e.size().0).map(move |x| (x, y))).map(|(x, y)| e.texel(x, y)).collect();
+    e.apply(&edit, false);
+    let (w, h) = e.size();
+    let baked = {
+        let ev = skytune::measure::model_points::Evaluator::new(&ctx).unwrap();
+        let (rows, weathers) = bake::bake_shape(BakeTarget::Fog, h);
+        bake::bake(&ev, &sky, skytune::measure::model_points::Method::Hosek, rows, weathers).unwrap()
+    };
+    for y in 0..h {
+        for x in 0..w {
+            let t = e.texel(x, y);
+            if [22, 23, 0, 1].contains(&x) {
+                let c = bake::scene_colour(&baked, BakeTarget::Fog, y as usize, (x as usize * 24 / w as usize) % 24);
+                assert_eq!(t[..3].iter().map(|v| (v * 255.0).round() as u8).collect::<Vec<_>>(), c, "({x}, {y})");
+            } else {
+                assert_eq!(t, before[(y * w + x) as usize], "({x}, {y}) is outside the span");
+            }
+        }
+    }
+    assert!(e.undo() && !e.is_dirty());
+    // The bitmap model has nothing to bake from.
+    let bitmap_model = skytune::sky::resolved::SkyModel { kind: skytune::sky::model::SkyModelKind::Bitmap, ..sky.model };
+    assert!(skytune::app::curve_bake::CurveBake::start(&sky, &bitmap_model, "fog.png", e.size(), (0, 3), &ctx).is_err());
+}

@@ -43,6 +43,13 @@ pub enum CurveAction {
     Edited,
     /// The editor was closed.
     Close,
+    /// Bake the sky's model into columns `from ..= to` (wrapping).
+    Bake {
+        /// First column.
+        from: u32,
+        /// Last column.
+        to: u32,
+    },
 }
 
 /// What one frame of the editor produced.
@@ -222,6 +229,9 @@ pub fn show(ui: &mut egui::Ui, ed: &mut CurveEditor, hour: f32, hours_per_day: f
         ui.add(egui::DragValue::new(&mut ed.shift).range(-(w as i32)..=w as i32).suffix(" columns"));
         if ui.button("shift").clicked() {
             edited(ed, Edit::Shift { y: row, from, to, by: ed.shift }, false, &mut actions);
+        }
+        if ui.button("bake model").on_hover_text("the sky model's colours over these hours (skytune bake's), as one edit").clicked() {
+            actions.push(CurveAction::Bake { from, to });
         }
         ui.add(egui::DragValue::new(&mut ed.stretch_to).range(0.0..=hours_per_day).speed(0.1).prefix("end at "));
         if ui.button("stretch").clicked() {

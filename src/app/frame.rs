@@ -84,6 +84,7 @@ impl App {
             let _ = gpu.ctx.device.poll(wgpu::PollType::Poll);
         }
         self.apply_reloads();
+        self.poll_curve_bake();
         let last_frame = Duration::from_secs_f32(self.frame_times.back().copied().unwrap_or(0.0) / 1000.0);
         self.auto.poll(last_frame, self.live.generation);
         self.update_title();
@@ -153,6 +154,33 @@ impl App {
                 gpu.window.set_title(&title);
             }
             self.title = title;
+        }
+    }
+
+    /// Starts baking the model shown into the curve editor's bitmap (columns `from ..= to`).
+    fn start_curve_bake(&mut self, from: u32, to: u32) {
+        let (Some(ed), Some(gpu)) = (self.controls.curves.as_mut(), self.gpu.as_ref()) else { return };
+        let model = self.controls.sky_model.or(self.auto.model(&self.live.sky().model)).unwrap_or(self.live.sky().model);
+        match super::curve_bake::CurveBake::start(self.live.sky(), &model, ed.editor.key(), ed.editor.size(), (from, to), &gpu.ctx) {
+            Ok(bake) => {
+                ed.message = Some("baking the model on a worker...".into());
+                self.curve_bake = Some(bake);
+            }
+            Err(e) => ed.message = Some(e),
+        }
+    }
+
+    /// Applies a finished bake to the curve editor, if it still holds that bitmap.
+    fn poll_curve_bake(&mut self) {
+        let Some(result) = self.curve_bake.as_ref().and_then(|b| b.poll()) else { return };
+        let key = self.curve_bake.take().map(|b| b.key).unwrap_or_default();
+        let Some(ed) = self.controls.curves.as_mut().filter(|ed| ed.editor.key() == key) else { return };
+        match result {
+            Ok(edit) => {
+                ed.editor.apply(&edit, false);
+                ed.message = Some("baked the model into the span (Undo takes it back)".into());
+            }
+            Err(e) => ed.message = Some(e),
         }
     }
 
@@ -307,6 +335,7 @@ impl App {
             UiAction::RecreateDevice => self.recreate_device = true,
             // The next frame's sky carries the edit (`shown_sky`).
             UiAction::CurvesEdited => {}
+            UiAction::CurvesBake { from, to } => self.start_curve_bake(from, to),
             UiAction::RefreshSnapshots => self.refresh_snapshots(),
             UiAction::ContactSheet => {
                 let (cols, rows) = self.controls.sheet_grid;

@@ -13,6 +13,7 @@
 pub mod auto_pick;
 pub mod capture;
 pub mod compare;
+pub mod curve_bake;
 pub mod curve_editor;
 pub mod diagnostics;
 pub mod frame;
@@ -176,6 +177,7 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
         strategy: Some(strategy),
         adapter_strategy: FillStrategy::default(),
         edited_sky: None,
+        curve_bake: None,
     };
     event_loop.run_app(&mut app).context("running the window")?;
     app.settings.panels = app.controls.layout.clone();
@@ -242,6 +244,8 @@ pub struct App {
     /// The sky shown while the curve editor holds a bitmap: the loaded sky with the editor's
     /// version of it, for (the loaded sky's generation, the editor's revision).
     edited_sky: Option<(u64, u64, Arc<crate::sky::Sky>)>,
+    /// A bake into the curve editor's bitmap running on a worker.
+    curve_bake: Option<curve_bake::CurveBake>,
 }
 
 impl App {

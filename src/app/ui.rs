@@ -149,6 +149,13 @@ pub enum UiAction {
     RecreateDevice,
     /// The curve editor changed its bitmap: show it from the next frame.
     CurvesEdited,
+    /// Bake the sky's model into columns `from ..= to` of the curve editor's bitmap.
+    CurvesBake {
+        /// First column.
+        from: u32,
+        /// Last column.
+        to: u32,
+    },
 }
 
 /// What the compare window shows.
@@ -538,6 +545,7 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
                     match a {
                         super::curve_editor::CurveAction::Edited => actions.push(UiAction::CurvesEdited),
                         super::curve_editor::CurveAction::Close => close = true,
+                        super::curve_editor::CurveAction::Bake { from, to } => actions.push(UiAction::CurvesBake { from, to }),
                     }
                 }
             }

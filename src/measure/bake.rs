@@ -57,6 +57,104 @@ pub fn bake(ev: &Evaluator<'_>, sky: &Sky, method: Method, rows: usize, weathers
     Baked::build(rows, &sun_elevations(sky), &mut refs)
 }
 
+/// A sky bitmap a bake can fill, and what its texels mean.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BakeTarget {
+    /// Weather step `step` of a dome's `weather_gradients`: rows from the zenith down.
+    Gradient {
+        /// Which step.
+        step: usize,
+        /// Of how many.
+        steps: usize,
+    },
+    /// `fog_color`: the horizon row.
+    Fog,
+    /// `sun_ambient`: the mean of the rows above the horizon.
+    Ambient,
+    /// `sun_diffuse`: the sun-side glow.
+    Diffuse,
+}
+
+/// The scene's light at weather step `w` and baked hour `h`, approximated from the sky as
+/// `skytune bake` writes it: fog the horizon row, ambient the mean of the rows above the horizon,
+/// diffuse the sun-side glow. sRGB-encoded.
+pub fn scene_colour(baked: &Baked, target: BakeTarget, w: usize, h: usize) -> [u8; 3] {
+    let rows = baked.rows;
+    let horizon_row = ((90.0 / (90.0 - represent::BAKED_BOTTOM_DEG)) * rows as f64).floor().min(rows as f64 - 1.0) as usize;
+    match target {
+        BakeTarget::Fog => baked.gradient[w][horizon_row * BAKED_HOURS + h],
+        BakeTarget::Ambient => {
+            let n = horizon_row.max(1);
+            std::array::from_fn(|c| ((0..n).map(|r| baked.gradient[w][r * BAKED_HOURS + h][c] as u32).sum::<u32>() / n as u32) as u8)
+        }
+        BakeTarget::Diffuse => baked.halo_color[w][h],
+        BakeTarget::Gradient { step, .. } => baked.gradient[step][h],
+    }
+}
+
+/// The rows and weather steps to bake for `target` in a bitmap `height` rows tall.
+pub fn bake_shape(target: BakeTarget, height: u32) -> (usize, usize) {
+    match target {
+        BakeTarget::Gradient { steps, .. } => (height.max(2) as usize, steps.max(1)),
+        _ => (32, height.max(1) as usize),
+    }
+}
+
+/// The texels of `columns` of a `width` x `height` bitmap for `target` from `baked` (made with
+/// [`bake_shape`]), 0..1 as stored (sRGB); a column between two baked hours blends them.
+pub fn bitmap_texels(baked: &Baked, target: BakeTarget, width: u32, height: u32, columns: &[u32]) -> Vec<(u32, u32, [f32; 4])> {
+    let mut out = Vec::new();
+    for &x in columns.iter().filter(|x| **x < width) {
+        let f = x as f64 * BAKED_HOURS as f64 / width as f64;
+        let (h0, t) = (f.floor() as usize % BAKED_HOURS, f.fract() as f32);
+        let h1 = (h0 + 1) % BAKED_HOURS;
+        for y in 0..height {
+            let at = |h: usize| -> [u8; 3] {
+                match target {
+                    BakeTarget::Gradient { step, .. } => baked.gradient[step][y as usize * BAKED_HOURS + h],
+                    scene => scene_colour(baked, scene, y as usize, h),
+                }
+            };
+            let (a, b) = (at(h0), at(h1));
+            let c = |k: usize| (a[k] as f32 * (1.0 - t) + b[k] as f32 * t) / 255.0;
+            out.push((x, y, [c(0), c(1), c(2), 1.0]));
+        }
+    }
+    out
+}
+
+/// Which [`BakeTarget`] the sky's bitmap named `key` is, if a bake can fill it.
+pub fn bake_target(sky: &Sky, key: &str) -> Option<BakeTarget> {
+    let is = |b: &crate::sky::bitmap::ColorBitmap| b.source.as_deref() == Some(key);
+    if is(&sky.fog_color) {
+        return Some(BakeTarget::Fog);
+    }
+    if is(&sky.sun_ambient) {
+        return Some(BakeTarget::Ambient);
+    }
+    if is(&sky.sun_diffuse) {
+        return Some(BakeTarget::Diffuse);
+    }
+    sky.objects
+        .iter()
+        .flat_map(|o| o.standard.gradients.iter())
+        .find_map(|g| g.bitmaps.iter().position(|b| is(b)).map(|step| BakeTarget::Gradient { step, steps: g.bitmaps.len() }))
+}
+
+/// The benchmark method that renders `model` (None for the bitmap model and the reference,
+/// which is too slow to bake from in the window).
+pub fn method_of(model: &crate::sky::resolved::SkyModel) -> Option<Method> {
+    use crate::sky::model::SkyModelKind as K;
+    match model.kind {
+        K::Single => Some(Method::Single(model.single)),
+        K::Lut => Some(Method::Lut(model.lut)),
+        K::Cells => Some(Method::Cells(model.cell_iterations as usize)),
+        K::Preetham => Some(Method::Preetham),
+        K::Hosek => Some(Method::Hosek),
+        _ => None,
+    }
+}
+
 fn png(path: &Path, width: u32, height: u32, rgba: Vec<u8>) -> anyhow::Result<()> {
     let image = image::RgbaImage::from_raw(width, height, rgba).ok_or_else(|| anyhow::anyhow!("{}: wrong pixel count", path.display()))?;
     let mut bytes = Vec::new();
@@ -106,13 +204,9 @@ pub fn write_folder(dir: &Path, sky: &Sky, baked: &Baked, source: &str) -> anyho
     colour_bitmap(&dir.join("halo_color.png"), weathers, |w, h| baked.halo_color[w][h])?;
     // The scene's light, approximated from the sky: fog = the horizon row, ambient = the mean of
     // the rows above the horizon, diffuse = the sun-side glow.
-    let horizon_row = ((90.0 / (90.0 - represent::BAKED_BOTTOM_DEG)) * rows as f64).floor().min(rows as f64 - 1.0) as usize;
-    colour_bitmap(&dir.join("fog.png"), weathers, |w, h| baked.gradient[w][horizon_row * BAKED_HOURS + h])?;
-    colour_bitmap(&dir.join("sun_ambient.png"), weathers, |w, h| {
-        let n = horizon_row.max(1);
-        std::array::from_fn(|c| ((0..n).map(|r| baked.gradient[w][r * BAKED_HOURS + h][c] as u32).sum::<u32>() / n as u32) as u8)
-    })?;
-    colour_bitmap(&dir.join("sun_diffuse.png"), weathers, |w, h| baked.halo_color[w][h])?;
+    colour_bitmap(&dir.join("fog.png"), weathers, |w, h| scene_colour(baked, BakeTarget::Fog, w, h))?;
+    colour_bitmap(&dir.join("sun_ambient.png"), weathers, |w, h| scene_colour(baked, BakeTarget::Ambient, w, h))?;
+    colour_bitmap(&dir.join("sun_diffuse.png"), weathers, |w, h| scene_colour(baked, BakeTarget::Diffuse, w, h))?;
 
     let mut toml = String::new();
     let _ = writeln!(toml, "# Baked by `skytune bake` from the {source} model of \"{}\": NeL gradient and halo bitmaps,", sky.name);
