@@ -117,3 +117,19 @@ fn the_window_opens_with_the_editor_and_keeps_half_for_the_sky() {
     assert!(h < 720.0, "the editor takes some of the height: {view}");
     assert!(w * h >= 0.5 * 1280.0 * 720.0, "the sky keeps {:.2} of the window: {view}", w * h / (1280.0 * 720.0));
 }
+
+#[test]
+fn reopening_a_bitmap_brings_its_history_back() {
+    let (_dir, sky_path) = common::default_sky_folder();
+    let sky = skytune::sky::load_sky_file(&sky_path).unwrap();
+    let mut c = skytune::app::ui::Controls::default();
+    skytune::app::ui::open_curves(&mut c, &sky, "fog.png", "fog_color".into(), false);
+    c.curves.as_mut().unwrap().editor.apply(&Edit::SetColor { x: 3, y: 0, rgba: [1.0, 0.0, 0.0, 1.0] }, false);
+    // Another bitmap, then back: the edit and its undo are still there.
+    skytune::app::ui::open_curves(&mut c, &sky, "sun_diffuse.png", "sun_diffuse".into(), false);
+    assert_eq!(c.curves.as_ref().unwrap().editor.key(), "sun_diffuse.png");
+    skytune::app::ui::open_curves(&mut c, &sky, "fog.png", "fog_color".into(), false);
+    let ed = &mut c.curves.as_mut().unwrap().editor;
+    assert_eq!(ed.texel(3, 0), [1.0, 0.0, 0.0, 1.0]);
+    assert!(ed.is_dirty() && ed.undo() && !ed.is_dirty());
+}

@@ -70,6 +70,9 @@ pub struct Controls {
     pub curves: Option<Box<super::curve_editor::CurveEditor>>,
     /// Why a bitmap could not be opened in the curve editor.
     pub curves_error: Option<String>,
+    /// Bitmaps edited earlier in this window and closed or switched away from: reopening one
+    /// brings its undo history back.
+    pub curves_closed: Vec<Box<super::curve_editor::CurveEditor>>,
 }
 
 impl Controls {
@@ -111,6 +114,7 @@ impl Default for Controls {
             layout: PanelLayout::default(),
             curves: None,
             curves_error: None,
+            curves_closed: Vec::new(),
         }
     }
 }
@@ -229,7 +233,19 @@ const CURVES_MAX_FRACTION: f32 = 0.4;
 /// Opens the file the sky names `key` (next to the sky file) in the curve editor.
 pub fn open_curves(c: &mut Controls, sky: &Sky, key: &str, label: String, gradient: bool) {
     let dir = std::path::Path::new(&sky.source_name).parent().map(std::path::Path::to_path_buf).unwrap_or_default();
-    match crate::files::bitmap_edit::BitmapEditor::open(&dir.join(key), key) {
+    let path = dir.join(key);
+    c.curves_closed.extend(c.curves.take());
+    // The same file edited before in this window: its editor, history and all.
+    if let Some(i) = c.curves_closed.iter().position(|ed| ed.editor.path() == path) {
+        let mut ed = c.curves_closed.remove(i);
+        if ed.editor.is_dirty() && ed.editor.changed_on_disk() {
+            ed.conflict = true;
+        }
+        c.curves = Some(ed);
+        c.curves_error = None;
+        return;
+    }
+    match crate::files::bitmap_edit::BitmapEditor::open(&path, key) {
         Ok(editor) => {
             c.curves = Some(Box::new(super::curve_editor::CurveEditor::new(editor, label, gradient, c.weather)));
             c.curves_error = None;
@@ -551,7 +567,7 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
             }
         });
         if close {
-            c.curves = None;
+            c.curves_closed.extend(c.curves.take());
         }
     }
 
