@@ -879,6 +879,20 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     if let Some(e) = &c.curves_error {
         ui.colored_label(Color32::from_rgb(255, 170, 90), e);
     }
+    // Every colour bitmap the sky reads from a file (glare, stars, emitters, UV offsets too).
+    section(ui, c, "all_bitmaps", "All colour bitmaps", |ui, c| {
+        let mut keys: Vec<String> = Sky::clone(sky).color_bitmaps_mut().iter().filter_map(|b| b.source.clone()).collect();
+        keys.sort();
+        keys.dedup();
+        ui.horizontal_wrapped(|ui| {
+            for key in keys {
+                if ui.small_button(&key).on_hover_text(format!("edit {key} as curves over the day")).clicked() {
+                    let gradient = matches!(crate::measure::bake::bake_target(sky, &key), Some(crate::measure::bake::BakeTarget::Gradient { .. }));
+                    open_curves(c, sky, &key, key.clone(), gradient);
+                }
+            }
+        });
+    });
 }
 
 fn version_label(v: usize) -> String {
