@@ -1,4 +1,4 @@
-//! requires: sky_model/single, sky_model/lut_sampling, sky_model/analytic
+//! requires: sky_model/single, sky_model/lut_sampling, sky_model/analytic, sky_model/precomputed_sampling
 // Evaluates a sky model for a list of radiance cases (`skytune radiance`, tests, benchmarks).
 // Keep in sync with src/render/passes/radiance_probe.rs.
 @group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
@@ -12,6 +12,8 @@
 @group(1) @binding(6) var<storage, read> multiscattering_lut: array<vec4<f32>>;
 // The analytic models' coefficients, 12 vectors per case (src/atmosphere/analytic.rs).
 @group(1) @binding(7) var<storage, read> analytic: array<vec4<f32>>;
+// The `precomputed` model's tables, built by precomputed_tables.wgsl before cs_precomputed runs.
+@group(1) @binding(8) var<storage, read> precomputed_tables: array<vec4<f32>>;
 
 fn direction(elevation_deg: f32, azimuth_deg: f32) -> vec3<f32> {
     let e = radians(elevation_deg);
@@ -52,4 +54,13 @@ fn cs_analytic(@builtin(global_invocation_id) id: vec3<u32>) {
         coefficients[k] = analytic[12u * id.x + k];
     }
     radiance[id.x] = vec4<f32>(analytic_radiance(coefficients, direction(c.z, c.w)), 1.0);
+}
+
+@compute @workgroup_size(64)
+fn cs_precomputed(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= arrayLength(&cases)) {
+        return;
+    }
+    let c = cases[id.x];
+    radiance[id.x] = vec4<f32>(precomputed_radiance(atmosphere, c.x, direction(c.z, c.w), direction(c.y, 0.0)), 1.0);
 }

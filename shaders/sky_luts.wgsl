@@ -15,16 +15,7 @@ fn cs_transmittance(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let id = vec2<u32>(gid.x % size.x, gid.x / size.x);
     let uv = vec2<f32>(id) / vec2<f32>(size - vec2<u32>(1u));
-    let r_mu = transmittance_r_mu(atmosphere, uv);
-    // Rays of this table never meet the ground (mu is above the horizon by construction).
-    let length_km = distance_to_top(atmosphere, r_mu.x, r_mu.y);
-    let steps = max(lut_params.steps.x, 1u);
-    let dt = length_km / f32(steps);
-    var tau = vec3<f32>(0.0);
-    for (var i = 0u; i < steps; i++) {
-        tau += extinction_at(atmosphere, altitude_along(atmosphere, r_mu.x, r_mu.y, (f32(i) + 0.5) * dt)) * dt;
-    }
-    transmittance_lut[gid.x] = vec4<f32>(exp(-tau), 1.0);
+    transmittance_lut[gid.x] = vec4<f32>(transmittance_texel(atmosphere, uv, lut_params.steps.x), 1.0);
 }
 
 // One texel per invocation: Psi_ms = L_2nd / (1 - f_ms), both averaged over a stratified sphere

@@ -1,4 +1,4 @@
-//! requires: sky_model/single, sky_model/lut_sampling, sky_model/tone, sky_model/sky_view_map, sky_model/analytic
+//! requires: sky_model/single, sky_model/lut_sampling, sky_model/precomputed_sampling, sky_model/tone, sky_model/sky_view_map, sky_model/analytic
 // Sky-view pass (compute phase): the current physical model rendered into the sky-view map as
 // exposed linear radiance, for the skydome's gradient stage to sample into the HDR target (the
 // display phase, tone_map.wgsl, tone-maps the frame).
@@ -6,7 +6,7 @@
 struct SkyViewParams {
     towards_sun: vec4<f32>, // xyz unit vector, w: camera altitude (km)
     exposure: vec4<f32>,    // x: radiance scale (2^EV), y: tone mapper as f32 (0 ACES, 1 neutral) for the scene's light, zw: map size (texels)
-    model: vec4<f32>,       // x: 0 single, 1 lut, 2 radiance computed on the CPU (cells, reference), 3 analytic; y: 1 automatic exposure
+    model: vec4<f32>,       // x: 0 single, 1 lut, 2 radiance computed on the CPU (cells, reference), 3 analytic, 4 precomputed; y: 1 automatic exposure
 };
 
 @group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
@@ -31,7 +31,9 @@ struct SkyViewParams {
 @group(1) @binding(8) var<storage, read_write> sky_light: array<vec4<f32>, 4>;
 // The analytic models' coefficients for this sun (src/atmosphere/analytic.rs); [11].w the kind
 // (2: Braun-Cohen, whose colour is a display value).
-@group(1) @binding(9) var<storage, read> analytic_coefficients: array<vec4<f32>, 12>;
+@group(1) @binding(9) var<uniform> analytic_coefficients: array<vec4<f32>, 12>;
+// The `precomputed` model's tables (precomputed_tables.wgsl builds them earlier in the phase).
+@group(1) @binding(10) var<storage, read> precomputed_tables: array<vec4<f32>>;
 
 // Braun and Cohen's colour as the exposed radiance the frame's tone mapper takes back to it
 // (its exposure scale is 1).
@@ -45,7 +47,9 @@ fn display_referred_radiance(display: vec3<f32>) -> vec3<f32> {
 
 // Radiance of the frame's model along `dir` (texel `index` of the CPU map for `cells`).
 fn model_radiance(dir: vec3<f32>, index: u32) -> vec3<f32> {
-    if (params.model.x > 2.5) {
+    if (params.model.x > 3.5) {
+        return precomputed_radiance(atmosphere, params.towards_sun.w, dir, params.towards_sun.xyz);
+    } else if (params.model.x > 2.5) {
         let radiance = analytic_radiance(analytic_coefficients, dir);
         if (analytic_coefficients[11].w > 1.5) {
             return display_referred_radiance(radiance);

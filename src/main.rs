@@ -122,6 +122,7 @@ fn bake(args: &cli::BakeArgs) -> anyhow::Result<()> {
         let method = match args.model {
             cli::BakeModel::Single => Method::Single(m.single),
             cli::BakeModel::Lut => Method::Lut(m.lut),
+            cli::BakeModel::Precomputed => Method::Precomputed(m.precomputed),
             cli::BakeModel::Cells => Method::Cells(m.cell_iterations as usize),
             cli::BakeModel::Preetham => Method::Preetham,
             cli::BakeModel::Hosek => Method::Hosek,
@@ -245,6 +246,21 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             let out = probe.lut(&ctx, &atm, &settings, &list)?;
             let out = out.into_iter().map(|c| c.map(f64::from)).collect();
             (out, units, format!("model lut on {}: {settings:?}", ctx.adapter_line()))
+        }
+        cli::RadianceModel::Precomputed => {
+            let d = skytune::atmosphere::PrecomputedSettings::default();
+            let settings = skytune::atmosphere::PrecomputedSettings {
+                orders: args.orders,
+                scattering_size: args.scattering_size.unwrap_or(d.scattering_size),
+                density_directions: args.density_directions,
+                ..d
+            };
+            settings.validate().map_err(|e| anyhow!("--{}: {}", e.field.replace('_', "-"), e.message))?;
+            let ctx = GpuContext::headless(adapter(args.cpu))?;
+            let probe = skytune::render::passes::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
+            let out = probe.precomputed(&ctx, &atm, &settings, &list)?;
+            let out = out.into_iter().map(|c| c.map(f64::from)).collect();
+            (out, units, format!("model precomputed on {}: {settings:?}", ctx.adapter_line()))
         }
         cli::RadianceModel::Cells => {
             use skytune::atmosphere::cells::{CellModel, CellSettings};

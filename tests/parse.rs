@@ -275,6 +275,18 @@ fn bad_sky_model_and_atmosphere_values_are_located() {
         ("[atmosphere]\nmie_extinction_per_km = 0.001\n", "mie_extinction_per_km = 0.001", "atmosphere.mie_extinction_per_km", "expected at least mie_scattering_per_km"),
         ("[sky_model]\nkind = \"lut\"\nmultiscattering_size = 1000\n", "multiscattering_size = 1000", "sky_model.multiscattering_size", "expected 2..=64 texels, found 1000"),
         ("[sky_model]\nkind = \"lut\"\ntransmittance_size = [1000000, 64]\n", "transmittance_size = [1000000, 64]", "sky_model.transmittance_size[0]", "found 1000000"),
+        (
+            "[sky_model]\nkind = \"precomputed\"\n[sky_model.precomputed]\nscattering_size = [8, 32, 127, 32]\n",
+            "scattering_size = [8, 32, 127, 32]",
+            "sky_model.precomputed.scattering_size",
+            "an even count of at least 4 along mu, found 8 x 32 x 127 x 32",
+        ),
+        (
+            "[sky_model]\nkind = \"precomputed\"\n[sky_model.precomputed]\nscattering_size = [16, 64, 256, 64]\n",
+            "scattering_size = [16, 64, 256, 64]",
+            "sky_model.precomputed.scattering_size",
+            "more than the 1048576 a table may hold",
+        ),
     ] {
         let (result, file, text) = with_sections(extra);
         let errors = result.expect_err(extra);
@@ -361,4 +373,14 @@ fn conflicting_or_impossible_aerosol_is_a_located_error() {
         let errors = result.expect_err(extra);
         assert_error(&errors, &file, line_of(&text, needle), field, message);
     }
+}
+
+#[test]
+fn a_precomputed_sky_states_its_tables() {
+    let (sky, _, _) = with_sections("[sky_model]\nkind = \"precomputed\"\n[sky_model.precomputed]\norders = 6\nscattering_size = [8, 16, 64, 16]\n");
+    let model = sky.unwrap().model;
+    assert_eq!(model.kind, skytune::sky::resolved::SkyModelKind::Precomputed);
+    assert_eq!((model.precomputed.orders, model.precomputed.scattering_size), (6, [8, 16, 64, 16]));
+    // Keys left out keep their defaults.
+    assert_eq!(model.precomputed.ray_steps, skytune::atmosphere::PrecomputedSettings::default().ray_steps);
 }

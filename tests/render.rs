@@ -295,6 +295,29 @@ fn lut_model_sunset() {
 }
 
 #[test]
+fn precomputed_model_noon_sunset_twilight() {
+    use skytune::sky::resolved::{SkyModel, SkyModelKind};
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    let model = SkyModel { kind: SkyModelKind::Precomputed, ..sky.model };
+    let builds = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::passes::precomputed_tables::PrecomputedTablesPass>().unwrap().builds;
+    let before = builds(&h);
+    for (name, hour) in [("precomputed_noon", 12.0), ("precomputed_sunset", 18.0), ("precomputed_twilight", 18.6)] {
+        let input = FrameInput { sky_model: Some(model), ..FrameInput::new(hour, 0.0) };
+        let img = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+        common::check_reference(name, &img);
+    }
+    assert_eq!(builds(&h), before + 1, "the sun moved: the tables were built once");
+    let smaller = SkyModel { precomputed: skytune::atmosphere::PrecomputedSettings::SMALL, ..model };
+    h.frame(&sky, &FrameInput { sky_model: Some(smaller), ..FrameInput::new(12.0, 0.0) }, &camera(), &RenderOptions::default(), 0.0);
+    assert_eq!(builds(&h), before + 2, "the settings changed: the tables are rebuilt");
+    h.frame(&sky, &FrameInput { sky_model: Some(smaller), ..FrameInput::new(12.5, 0.0) }, &camera(), &RenderOptions::default(), 0.0);
+    assert_eq!(builds(&h), before + 2, "only the sun moved: the tables stay");
+    h.ctx.wait_idle().unwrap();
+}
+
+#[test]
 fn cells_model_sunset() {
     // Solved on the CPU worker; the still waits for it.
     let sky = default_sky();

@@ -190,3 +190,72 @@ fn switching_models_keeps_the_exposure() {
         assert!(hi / lo < 1.1, "{label}: mean displayed luminance {means:?} differs by {:.0}%", (hi / lo - 1.0) * 100.0);
     }
 }
+
+/// Median and worst of the per-channel relative errors (as in [`worst_errors`]) per regime.
+fn median_and_worst(cases: &[Case], model: &[[f32; 3]], reference: &[[f64; 3]]) -> [(f64, f64); 3] {
+    let mut errors: [Vec<f64>; 3] = Default::default();
+    for (i, c) in cases.iter().enumerate() {
+        let peak = cases.iter().zip(reference).filter(|(d, _)| d.sun_elev_deg == c.sun_elev_deg).flat_map(|(_, r)| r.iter().copied()).fold(0.0, f64::max);
+        let regime = if c.sun_elev_deg >= 10.0 {
+            0
+        } else if c.sun_elev_deg >= 0.0 {
+            1
+        } else {
+            2
+        };
+        for ch in 0..3 {
+            errors[regime].push((model[i][ch] as f64 - reference[i][ch]).abs() / reference[i][ch].max(0.01 * peak).max(1e-30));
+        }
+    }
+    errors.map(|mut e| {
+        e.sort_by(f64::total_cmp);
+        (e[e.len() / 2], e[e.len() - 1])
+    })
+}
+
+#[test]
+fn precomputed_matches_the_reference() {
+    use skytune::atmosphere::PrecomputedSettings;
+    let atm = Atmosphere::default();
+    let ctx = GpuContext::headless(AdapterChoice::Cpu).unwrap();
+    let probe = RadianceProbe::new(&ctx, &ShaderLibrary::embedded()).unwrap();
+    // Order 1 alone against the reference's single scattering: the tables' parametrisation and
+    // interpolation (thresholds day, low sun, twilight: docs/sky-models.md).
+    let cases = grid();
+    let single_reference = Reference::new(atm, ReferenceSettings { max_order: 1, ..Default::default() });
+    let single_exact: Vec<[f64; 3]> = cases.iter().map(|c| single_reference.radiance(c)).collect();
+    let order1 = probe.precomputed(&ctx, &atm, &PrecomputedSettings { orders: 1, ..Default::default() }, &cases).unwrap();
+    assert!(order1.iter().flatten().all(|x| x.is_finite() && *x >= 0.0), "NaN or negative radiance");
+    let errors = median_and_worst(&cases, &order1, &single_exact);
+    eprintln!("precomputed, order 1 against single scattering (median, worst): {errors:.4?}");
+    for (regime, ((median, worst), (median_limit, worst_limit))) in ["day", "low sun", "twilight"].iter().zip(errors.iter().zip([(0.005, 0.04), (0.01, 0.08), (0.05, 0.9)])) {
+        assert!(*median <= median_limit && *worst <= worst_limit, "precomputed order 1, {regime}: median {median:.4}, worst {worst:.4}");
+    }
+    // Every order at the defaults against the reference with every order (its Monte Carlo noise
+    // is part of the error).
+    let mut cases = Vec::new();
+    for sun in [-4.0, 2.0, 8.0, 30.0, 70.0] {
+        for view in [-5.0, 3.0, 20.0, 80.0] {
+            for az in [30.0, 150.0] {
+                cases.push(Case { camera_km: 0.2, albedo: 0.3, sun_elev_deg: sun, view_elev_deg: view, rel_azimuth_deg: az });
+            }
+        }
+    }
+    let reference = Reference::new(atm, ReferenceSettings { paths: 2048, ..Default::default() });
+    let exact: Vec<[f64; 3]> = cases.iter().map(|c| reference.radiance(c)).collect();
+    let all = probe.precomputed(&ctx, &atm, &PrecomputedSettings::default(), &cases).unwrap();
+    assert!(all.iter().flatten().all(|x| x.is_finite() && *x >= 0.0), "NaN or negative radiance");
+    let errors = median_and_worst(&cases, &all, &exact);
+    eprintln!("precomputed, every order against the reference (median, worst): {errors:.4?}");
+    for (regime, ((median, worst), (median_limit, worst_limit))) in ["day", "low sun", "twilight"].iter().zip(errors.iter().zip([(0.03, 0.12), (0.03, 0.15), (0.08, 0.3)])) {
+        assert!(*median <= median_limit && *worst <= worst_limit, "precomputed, {regime}: median {median:.4}, worst {worst:.4}");
+    }
+    // A second evaluation with the same atmosphere, settings and albedo reuses the tables.
+    let builds = probe.precomputed_builds.get();
+    probe.precomputed(&ctx, &atm, &PrecomputedSettings::default(), &cases[..4]).unwrap();
+    assert_eq!(probe.precomputed_builds.get(), builds, "nothing changed: the tables stay");
+    // Orders add light: with every order the sky is brighter than with one.
+    let one = probe.precomputed(&ctx, &atm, &PrecomputedSettings { orders: 1, ..Default::default() }, &cases).unwrap();
+    let brighter = all.iter().zip(&one).filter(|(a, o)| a[2] > o[2] * 1.05).count();
+    assert!(brighter > cases.len() / 2, "{brighter} of {} cases gain blue from higher orders", cases.len());
+}

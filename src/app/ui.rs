@@ -625,6 +625,7 @@ fn model_label(kind: SkyModelKind) -> &'static str {
         SkyModelKind::Bitmap => "NeL bitmaps",
         SkyModelKind::Single => "single scattering",
         SkyModelKind::Lut => "LUT multiple scattering",
+        SkyModelKind::Precomputed => "precomputed scattering (Bruneton)",
         SkyModelKind::Cells => "cells (CPU, background)",
         SkyModelKind::Reference => "reference (CPU still, background)",
         SkyModelKind::Preetham => "Preetham 1999 (analytic)",
@@ -716,6 +717,10 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
         } else if model.kind == SkyModelKind::Lut {
             ui.add(egui::Slider::new(&mut model.lut.view_steps, 1..=256).text("view steps"));
             ui.add(egui::Slider::new(&mut model.lut.multiscattering_grid, 1..=16).text("multiple-scattering directions (grid)"));
+            ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
+        } else if model.kind == SkyModelKind::Precomputed {
+            // Each change rebuilds the tables (seconds on a software rasteriser).
+            ui.add(egui::Slider::new(&mut model.precomputed.orders, 1..=crate::atmosphere::PrecomputedSettings::MAX_ORDERS).text("scattering orders"));
             ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
         } else {
             ui.add(egui::Slider::new(&mut model.single.view_steps, 1..=256).text("view steps"));

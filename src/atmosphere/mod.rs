@@ -10,7 +10,9 @@ pub mod analytic;
 pub mod cases;
 pub mod cells;
 pub mod dome;
+pub mod precomputed;
 pub mod reference;
+pub use precomputed::PrecomputedSettings;
 pub mod represent;
 
 use std::f64::consts::PI;

@@ -175,6 +175,8 @@ pub enum RadianceModel {
     Single,
     /// Multiple scattering from look-up tables on the GPU (Hillaire 2020).
     Lut,
+    /// Every order precomputed into 4D tables on the GPU (after Bruneton 2017).
+    Precomputed,
     /// The cell model of the procedural-sky text (CPU, solved per ground albedo).
     Cells,
     /// Preetham, Shirley and Smits 1999 (GPU; `--on-cpu` for the CPU evaluation).
@@ -379,6 +381,15 @@ pub struct RadianceArgs {
     /// `preetham`, `hosek`, `linear`: evaluate on the CPU (double precision; the crate's for hosek).
     #[arg(long)]
     pub on_cpu: bool,
+    /// `precomputed`: scattering orders (1: single scattering alone).
+    #[arg(long, default_value_t = skytune::atmosphere::PrecomputedSettings::default().orders)]
+    pub orders: u32,
+    /// `precomputed`: scattering table texels along nu, mu_s, mu and r, e.g. 8,32,128,32.
+    #[arg(long, value_parser = parse_scattering_size)]
+    pub scattering_size: Option<[u32; 4]>,
+    /// `precomputed`: directions per half turn of the scattering-density integral.
+    #[arg(long, default_value_t = skytune::atmosphere::PrecomputedSettings::default().density_directions)]
+    pub density_directions: u32,
 }
 
 /// Which frame to render.
@@ -590,6 +601,8 @@ pub enum BakeModel {
     Single,
     /// LUT multiple scattering (the sky file's settings).
     Lut,
+    /// Precomputed scattering (the sky file's settings).
+    Precomputed,
     /// The cell model (the sky file's iterations).
     Cells,
     /// Preetham (the sky file's turbidity).
@@ -758,4 +771,10 @@ fn parse_target_se(s: &str) -> Result<f64, String> {
         Ok(v) if v > 0.0 && v < 1.0 => Ok(v),
         _ => Err(format!("expected a relative standard error between 0 and 1 (0.005 for 0.5%), found \"{s}\"")),
     }
+}
+
+fn parse_scattering_size(s: &str) -> Result<[u32; 4], String> {
+    let bad = || format!("expected four texel counts nu,mu_s,mu,r such as 8,32,128,32, found \"{s}\"");
+    let v: Vec<u32> = s.split(',').map(|x| x.trim().parse::<u32>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    v.try_into().map_err(|_| bad())
 }

@@ -12,7 +12,6 @@ use crate::cli::{self, ModelBenchArgs};
 use skytune::atmosphere::dome::{self, DomeError, Haze, ReferenceDome, Regime};
 use skytune::atmosphere::reference::Case;
 use skytune::atmosphere::reference::ReferenceSettings;
-use skytune::atmosphere::LutSettings;
 use skytune::measure::model_points::{self, ChartRow, Evaluator, FitTarget, Method, Point, Prepared, SunRow};
 use skytune::render::passes::baseline::Baseline;
 use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions, ShaderLibrary, OFFSCREEN_FORMAT};
@@ -61,6 +60,7 @@ struct DrawCost {
 
 /// How a point's frame is drawn (points drawn alike share one measurement).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[allow(clippy::large_enum_variant)] // a handful of values, compared and copied, never stored in bulk
 enum Draw {
     /// The model's own sky-view map every frame (the sun moves).
     Model(SkyModel),
@@ -75,6 +75,10 @@ fn draw_of(method: &Method) -> Draw {
     match *method {
         Method::Single(s) => Draw::Model(SkyModel { single: s, ..with(SkyModelKind::Single) }),
         Method::Lut(s) => Draw::Model(SkyModel { lut: s, ..with(SkyModelKind::Lut) }),
+        // Every table size is looked up alike (16 texels per table and pixel): one measurement,
+        // with the small tables (quick to build), so that the frames do not rebuild tables between
+        // the points; the build itself is the point's `build_ms`.
+        Method::Precomputed(_) => Draw::Model(SkyModel { precomputed: skytune::atmosphere::PrecomputedSettings::SMALL, ..with(SkyModelKind::Precomputed) }),
         Method::Preetham => Draw::Model(with(SkyModelKind::Preetham)),
         Method::Hosek => Draw::Model(with(SkyModelKind::Hosek)),
         Method::Linear => Draw::Model(with(SkyModelKind::Linear)),
@@ -112,6 +116,27 @@ fn measure_draws(ctx: &GpuContext, (w, h): (u32, u32), sky: &Sky, draws: &[Draw]
     let per_round = frames.div_ceil(rounds).max(1);
     // Per draw: (model moving, model still, frame moving, frame still, floor) samples.
     let mut samples = vec![[(); 5].map(|_| Vec::new()); draws.len()];
+    // Tables built over frames (`precomputed` on a software rasteriser) are built before any frame
+    // is measured; later frames reuse them.
+    for d in draws {
+        if let Draw::Model(m) = d {
+            let mut input = FrameInput::new(10.0, 0.0);
+            input.sky_model = Some(*m);
+            let frame = sky.evaluate(&input);
+            for hl in [&mut plain, &mut timing] {
+                loop {
+                    {
+                        let target = hl.target.target();
+                        timed(ctx, |e| hl.renderer.render(ctx, e, &target, &frame, &camera, &whole))?;
+                    }
+                    settle(ctx, hl)?;
+                    if !hl.renderer.busy() {
+                        break;
+                    }
+                }
+            }
+        }
+    }
     let mut step = 0u32;
     for _ in 0..rounds {
         for (d, out) in draws.iter().zip(samples.iter_mut()) {
@@ -332,7 +357,7 @@ pub fn run(args: &ModelBenchArgs) -> anyhow::Result<()> {
         let prepared = prepared_default[k].as_ref().context("every point was prepared for the default atmosphere")?;
         let cost = costs[draws.iter().position(|d| *d == draw_of(&p.method)).unwrap_or(0)];
         let build_ms = match p.method {
-            Method::Lut(s) => lut_build_ms(&ev, &s)?,
+            Method::Lut(_) | Method::Precomputed(_) => table_build_ms(&ev, &p.method)?,
             _ => median(&mut build_ms[k]),
         };
         let mine: Vec<&SunRow> = by_sun.iter().filter(|r| r.id == p.id).collect();
@@ -390,13 +415,15 @@ pub fn run(args: &ModelBenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// One-off cost of the `lut` model's tables: build them and evaluate one case, wall ms (median of 3).
-fn lut_build_ms(ev: &Evaluator<'_>, settings: &LutSettings) -> anyhow::Result<f64> {
+/// One-off cost of a table model's tables (`lut`, `precomputed`): build them and evaluate one
+/// case, wall ms (median of 3).
+fn table_build_ms(ev: &Evaluator<'_>, method: &Method) -> anyhow::Result<f64> {
     let case = dome::cases(30.0, &dome::dome_directions(1, 1));
     let mut times = Vec::new();
     for _ in 0..3 {
+        ev.forget_tables();
         let t = Instant::now();
-        ev.gpu(&Method::Lut(*settings), &dome::Haze::Default.atmosphere(), 0.0, &case)?;
+        ev.gpu(method, &dome::Haze::Default.atmosphere(), 0.0, &case)?;
         times.push(t.elapsed().as_secs_f64() * 1000.0);
     }
     Ok(median(&mut times))
@@ -470,7 +497,7 @@ fn report(
         "- cost, every point in the same run, in {} interleaved rounds ({} measured frames per point and case, medians):\n  \
          - **model**: what the model itself costs per frame, the GPU time (timestamp queries) of the compute phase of a {w}x{h} frame that draws only the skydome: its sky-view map, and for `lut` its tables, recomputed when the sun moves, reused when it is still; plus the CPU time of CPU paths when the sun moves (filling the 192x108 sky-view map on one thread);\n  \
          - **frame**: a whole {w}x{h} frame of the built-in sky drawn with the model (every layer, no scene stand-in, as `skytune bench frame`), wall time (lavapipe rasterises on the CPU), as a multiple of the fill-rate floor measured alternately in the same run (`shaders/baseline.wgsl`: one full-screen triangle sampling one texture); the CPU time above is added when the sun moves;\n  \
-         - one-off: building tables (`lut`: tables + one case, wall), solving (`cells`), fitting (analytic models), baking. `kind = \"auto\"` ranks candidates by the whole frame with the sun moving.\n",
+         - one-off: building tables (`lut`, `precomputed`: tables + one case, wall; `precomputed` frames are measured once, with the small tables, since every size is looked up alike), solving (`cells`), fitting (analytic models), baking. `kind = \"auto\"` ranks candidates by the whole frame with the sun moving.\n",
         3,
         args.frames
     );

@@ -78,6 +78,7 @@ impl Pick {
         match c.method {
             Method::Single(s) => SkyModel { kind: SkyModelKind::Single, single: s, ..*base },
             Method::Lut(s) => SkyModel { kind: SkyModelKind::Lut, lut: s, ..*base },
+            Method::Precomputed(s) => SkyModel { kind: SkyModelKind::Precomputed, precomputed: s, ..*base },
             Method::Cells(i) => SkyModel { kind: SkyModelKind::Cells, cell_iterations: i as u32, ..*base },
             Method::Preetham => SkyModel { kind: SkyModelKind::Preetham, turbidity: c.turbidity as f32, turbidity_from_atmosphere: false, ..*base },
             Method::Hosek => SkyModel { kind: SkyModelKind::Hosek, turbidity: c.turbidity as f32, turbidity_from_atmosphere: false, ..*base },
@@ -86,13 +87,15 @@ impl Pick {
     }
 }
 
-/// The candidates with their committed costs, cheapest first (ties by id).
+/// The candidates with their committed costs, cheapest first: by frame cost, then by one-off cost
+/// (building tables: `precomputed` points cost the same per frame whatever their size), then by id.
 pub fn candidates() -> Vec<(model_points::Point, f64)> {
-    let costs: HashMap<String, f64> = model_points::rows_from_csv(model_points::COMMITTED_CSV).unwrap_or_default().into_iter().map(|r| (r.id.clone(), r.frame_ms())).collect();
-    let mut out: Vec<(model_points::Point, f64)> =
+    let costs: HashMap<String, (f64, f64)> =
+        model_points::rows_from_csv(model_points::COMMITTED_CSV).unwrap_or_default().into_iter().map(|r| (r.id.clone(), (r.frame_ms(), r.build_ms))).collect();
+    let mut out: Vec<(model_points::Point, (f64, f64))> =
         model_points::points().into_iter().filter(|p| p.method.is_runtime_model()).filter_map(|p| costs.get(&p.id).copied().map(|c| (p, c))).collect();
-    out.sort_by(|a, b| a.1.total_cmp(&b.1).then_with(|| a.0.id.cmp(&b.0.id)));
-    out
+    out.sort_by(|a, b| a.1 .0.total_cmp(&b.1 .0).then_with(|| a.1 .1.total_cmp(&b.1 .1)).then_with(|| a.0.id.cmp(&b.0.id)));
+    out.into_iter().map(|(p, (frame_ms, _))| (p, frame_ms)).collect()
 }
 
 /// The benchmark's sun elevations the sky needs: those within the range its sun reaches over a

@@ -148,6 +148,7 @@ pub fn method_of(model: &crate::sky::resolved::SkyModel) -> Option<Method> {
     match model.kind {
         K::Single => Some(Method::Single(model.single)),
         K::Lut => Some(Method::Lut(model.lut)),
+        K::Precomputed => Some(Method::Precomputed(model.precomputed)),
         K::Cells => Some(Method::Cells(model.cell_iterations as usize)),
         K::Preetham => Some(Method::Preetham),
         K::Hosek => Some(Method::Hosek),

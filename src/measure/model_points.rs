@@ -11,7 +11,7 @@ use crate::atmosphere::cells::{CellModel, CellSettings};
 use crate::atmosphere::dome::{self, DomeDir};
 use crate::atmosphere::reference::Case;
 use crate::atmosphere::represent::{self, Baked, DomeMapTable, Regression};
-use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, Rgb, SingleSettings};
+use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, PrecomputedSettings, Rgb, SingleSettings};
 use crate::render::passes::radiance_probe::RadianceProbe;
 use crate::render::{GpuContext, ShaderLibrary};
 
@@ -22,6 +22,8 @@ pub enum Method {
     Single(SingleSettings),
     /// `lut` on the GPU.
     Lut(LutSettings),
+    /// `precomputed` on the GPU.
+    Precomputed(PrecomputedSettings),
     /// `cells` on the CPU with this many iterations.
     Cells(usize),
     /// `preetham` (turbidity and scale fitted per atmosphere).
@@ -44,6 +46,7 @@ impl Method {
         match self {
             Method::Single(_) => "single",
             Method::Lut(_) => "lut",
+            Method::Precomputed(_) => "precomputed",
             Method::Cells(_) => "cells",
             Method::Preetham => "preetham",
             Method::Hosek => "hosek",
@@ -56,7 +59,7 @@ impl Method {
 
     /// Whether the sky file can select it (`model = "auto"` picks among these).
     pub fn is_runtime_model(&self) -> bool {
-        matches!(self, Method::Single(_) | Method::Lut(_) | Method::Cells(_) | Method::Preetham | Method::Hosek)
+        matches!(self, Method::Single(_) | Method::Lut(_) | Method::Precomputed(_) | Method::Cells(_) | Method::Preetham | Method::Hosek)
     }
 }
 
@@ -108,6 +111,8 @@ pub fn points() -> Vec<Point> {
             }),
             false,
         ),
+        p("precomputed-small", Method::Precomputed(PrecomputedSettings::SMALL), true),
+        p("precomputed-default", Method::Precomputed(PrecomputedSettings::default()), false),
         p("cells-0", Method::Cells(0), false),
         p("cells-2", Method::Cells(2), false),
         p("cells-6", Method::Cells(6), false),
@@ -182,12 +187,18 @@ impl<'a> Evaluator<'a> {
         self.ctx
     }
 
+    /// Drops tables kept between evaluations, so that the next one builds them (timing a build).
+    pub fn forget_tables(&self) {
+        self.probe.forget_precomputed();
+    }
+
     /// Radiance of a GPU or analytic method (unfitted: the model's own units) for `cases`.
     pub fn gpu(&self, method: &Method, atm: &Atmosphere, turbidity: f64, cases: &[Case]) -> anyhow::Result<Vec<Rgb>> {
         let widen = |v: Vec<[f32; 3]>| v.into_iter().map(|c| c.map(f64::from)).collect();
         Ok(match *method {
             Method::Single(s) => widen(self.probe.single(self.ctx, atm, &s, cases)?),
             Method::Lut(s) => widen(self.probe.lut(self.ctx, atm, &s, cases)?),
+            Method::Precomputed(s) => widen(self.probe.precomputed(self.ctx, atm, &s, cases)?),
             // In the published units: the fitted scale is then the factor from those.
             Method::Preetham | Method::Hosek => self.analytic(method, turbidity, AnalyticUnits::Published, cases)?,
             Method::Linear => {
@@ -220,7 +231,7 @@ impl<'a> Evaluator<'a> {
         // The cases carry the sun elevation; the source needs nothing else.
         let mut source = |_sun_elev_deg: f64, cases: &[Case]| -> anyhow::Result<Vec<Rgb>> { self.gpu(&lut, atm, 0.0, cases) };
         Ok(match *method {
-            Method::Single(_) | Method::Lut(_) => Prepared::Gpu(*method),
+            Method::Single(_) | Method::Lut(_) | Method::Precomputed(_) => Prepared::Gpu(*method),
             Method::Preetham | Method::Hosek | Method::Linear => Prepared::Analytic(*method, self.fit(method, targets)?),
             Method::Cells(iterations) => Prepared::Cells(Box::new(CellModel::solve(*atm, dome::ALBEDO, CellSettings { iterations, ..Default::default() }))),
             Method::DomeMap(res) => Prepared::DomeMap(DomeMapTable::build(res, &mut source)?),
@@ -481,6 +492,7 @@ pub fn point_for(model: &crate::sky::resolved::SkyModel) -> Option<String> {
     let exact = all.iter().find(|p| match p.method {
         Method::Single(s) => model.kind == SkyModelKind::Single && model.single == s,
         Method::Lut(s) => model.kind == SkyModelKind::Lut && model.lut == s,
+        Method::Precomputed(s) => model.kind == SkyModelKind::Precomputed && model.precomputed == s,
         Method::Cells(i) => model.kind == SkyModelKind::Cells && model.cell_iterations as usize == i,
         Method::Preetham => model.kind == SkyModelKind::Preetham,
         Method::Hosek => model.kind == SkyModelKind::Hosek,
@@ -490,6 +502,7 @@ pub fn point_for(model: &crate::sky::resolved::SkyModel) -> Option<String> {
     let default = match model.kind {
         SkyModelKind::Single => Some("single-erf-32"),
         SkyModelKind::Lut => Some("lut-default"),
+        SkyModelKind::Precomputed => Some("precomputed-default"),
         SkyModelKind::Cells => Some("cells-6"),
         _ => None,
     };

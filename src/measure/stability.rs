@@ -33,6 +33,9 @@ pub enum SweptModel {
     SingleNumerical,
     /// `lut` at its defaults.
     Lut,
+    /// `precomputed` at its defaults (a few atmospheres and one ground albedo each, since each
+    /// builds its tables).
+    Precomputed,
     /// `cells` (6 iterations; a few atmospheres, since each is solved).
     Cells,
     /// `preetham` as shipped.
@@ -49,10 +52,11 @@ pub enum SweptModel {
 
 impl SweptModel {
     /// Shipped models, then the raw fits.
-    pub const ALL: [SweptModel; 9] = [
+    pub const ALL: [SweptModel; 10] = [
         SweptModel::SingleErf,
         SweptModel::SingleNumerical,
         SweptModel::Lut,
+        SweptModel::Precomputed,
         SweptModel::Cells,
         SweptModel::Preetham,
         SweptModel::Hosek,
@@ -67,6 +71,7 @@ impl SweptModel {
             SweptModel::SingleErf => "single (erf)",
             SweptModel::SingleNumerical => "single (numerical)",
             SweptModel::Lut => "lut",
+            SweptModel::Precomputed => "precomputed",
             SweptModel::Cells => "cells",
             SweptModel::Preetham => "preetham",
             SweptModel::Hosek => "hosek",
@@ -279,7 +284,7 @@ pub fn random_cases(count: usize, per_atmosphere: usize, seed: u64) -> Vec<Sweep
 /// Cases per atmosphere of each model (the cell model is solved per atmosphere, the LUTs built).
 fn per_atmosphere(model: SweptModel) -> usize {
     match model {
-        SweptModel::Cells => 5000,
+        SweptModel::Cells | SweptModel::Precomputed => 5000,
         _ => 1000,
     }
 }
@@ -353,6 +358,11 @@ fn evaluate(ev: &Evaluator<'_>, model: SweptModel, cells: Option<&CellModel>, at
         SweptModel::SingleErf => some(ev.gpu(&single(OpticalDepth::Erf), atm, 0.0, &plain)?),
         SweptModel::SingleNumerical => some(ev.gpu(&single(OpticalDepth::Numerical), atm, 0.0, &plain)?),
         SweptModel::Lut => some(ev.gpu(&Method::Lut(LutSettings::default()), atm, 0.0, &plain)?),
+        SweptModel::Precomputed => {
+            // One ground albedo per atmosphere (the first case's), as for `cells`: one table build.
+            let one: Vec<Case> = plain.iter().map(|c| Case { albedo: plain[0].albedo, ..*c }).collect();
+            some(ev.gpu(&Method::Precomputed(Default::default()), atm, 0.0, &one)?)
+        }
         SweptModel::Cells => {
             let m = cells.ok_or_else(|| anyhow::anyhow!("the cell model was not solved"))?;
             plain.iter().map(|c| Some(m.radiance(c))).collect()

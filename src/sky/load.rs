@@ -407,6 +407,7 @@ impl Validator<'_> {
                 tone_mapper: m.tone_mapper,
                 camera_km: m.camera_km.get(),
                 lut,
+                precomputed: m.precomputed.as_ref().map_or_else(Default::default, |p| p.settings()),
                 ground_albedo: m.ground_albedo.get(),
                 cell_iterations: m.cell_iterations.map_or(6, |s| s.0),
                 auto_exposure: m.auto_exposure,
@@ -434,6 +435,9 @@ impl Validator<'_> {
         }
         if let Err(e) = model.lut.validate() {
             self.err_in("[sky_model]", e.field, &format!("sky_model.{}", e.field), e.message);
+        }
+        if let Err(e) = model.precomputed.validate() {
+            self.err_in("[sky_model.precomputed]", e.field, &format!("sky_model.precomputed.{}", e.field), e.message);
         }
         let atmosphere = match f.atmosphere.as_ref().map(|a| a.apply(crate::atmosphere::Atmosphere::default(), None)) {
             None => Ok(crate::atmosphere::Atmosphere::default()),

@@ -237,6 +237,8 @@ pub enum SkyModelKind {
     Single,
     /// Multiple scattering from look-up tables, in the manner of Hillaire 2020.
     Lut,
+    /// Every scattering order precomputed into 4D tables, after Bruneton 2017.
+    Precomputed,
     /// The cell model of the procedural-sky text, solved on the CPU in the background.
     Cells,
     /// The double-precision reference, computed on the CPU in the background (a still).
@@ -252,13 +254,14 @@ pub enum SkyModelKind {
 
 impl SkyModelKind {
     /// Every model, in the order the app lists them.
-    pub const ALL: [SkyModelKind; 8] = [
+    pub const ALL: [SkyModelKind; 9] = [
         SkyModelKind::Bitmap,
         SkyModelKind::Linear,
         SkyModelKind::Preetham,
         SkyModelKind::Hosek,
         SkyModelKind::Single,
         SkyModelKind::Lut,
+        SkyModelKind::Precomputed,
         SkyModelKind::Cells,
         SkyModelKind::Reference,
     ];
@@ -269,6 +272,7 @@ impl SkyModelKind {
             SkyModelKind::Bitmap => "bitmap",
             SkyModelKind::Single => "single",
             SkyModelKind::Lut => "lut",
+            SkyModelKind::Precomputed => "precomputed",
             SkyModelKind::Cells => "cells",
             SkyModelKind::Reference => "reference",
             SkyModelKind::Preetham => "preetham",
@@ -393,6 +397,44 @@ pub struct SkyModelDef {
     /// `linear`: Braun and Cohen's parameters.
     #[serde(default)]
     pub linear: Option<LinearDef>,
+    /// `precomputed`: table sizes and orders (`[sky_model.precomputed]`).
+    #[serde(default)]
+    pub precomputed: Option<PrecomputedDef>,
+}
+
+/// `[sky_model.precomputed]`: the `precomputed` model's settings; each key left out keeps its
+/// default (`crate::atmosphere::PrecomputedSettings`).
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrecomputedDef {
+    /// Scattering tables [nu, mu_s, mu, r], texels (mu even: half for rays that meet the ground).
+    pub scattering_size: Option<[StepCount; 4]>,
+    /// Scattering orders, 1 (single scattering) ..= 16.
+    pub orders: Option<StepCount>,
+    /// Transmittance table [width, height], texels.
+    pub transmittance_size: Option<[StepCount; 2]>,
+    /// Irradiance tables [width, height], texels.
+    pub irradiance_size: Option<[StepCount; 2]>,
+    /// Samples along each scattering texel's ray.
+    pub ray_steps: Option<StepCount>,
+    /// Directions per half turn of the scattering-density integral.
+    pub density_directions: Option<StepCount>,
+}
+
+impl PrecomputedDef {
+    /// The settings this table states, over the defaults.
+    pub fn settings(&self) -> crate::atmosphere::PrecomputedSettings {
+        let d = crate::atmosphere::PrecomputedSettings::default();
+        crate::atmosphere::PrecomputedSettings {
+            scattering_size: self.scattering_size.map_or(d.scattering_size, |s| s.map(|x| x.0)),
+            orders: self.orders.map_or(d.orders, |s| s.0),
+            transmittance_size: self.transmittance_size.map_or(d.transmittance_size, |s| s.map(|x| x.0)),
+            irradiance_size: self.irradiance_size.map_or(d.irradiance_size, |s| s.map(|x| x.0)),
+            ray_steps: self.ray_steps.map_or(d.ray_steps, |s| s.0),
+            density_directions: self.density_directions.map_or(d.density_directions, |s| s.0),
+            ..d
+        }
+    }
 }
 
 /// `[sky_model] kind`: a model, or `auto`.

@@ -92,6 +92,8 @@ pub struct SkyModel {
     pub camera_km: f32,
     /// `lut` settings.
     pub lut: crate::atmosphere::LutSettings,
+    /// `precomputed` settings.
+    pub precomputed: crate::atmosphere::PrecomputedSettings,
     /// Ground albedo of multiple scattering.
     pub ground_albedo: f32,
     /// `cells` refinement iterations.
@@ -147,6 +149,7 @@ impl Default for SkyModel {
             tone_mapper: ToneMapper::Aces,
             camera_km: 0.0,
             lut: Default::default(),
+            precomputed: Default::default(),
             ground_albedo: 0.3,
             cell_iterations: 6,
             auto_exposure: false,

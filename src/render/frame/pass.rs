@@ -102,6 +102,10 @@ impl PassBuild<'_> {
 pub struct SharedResources {
     /// The `lut` model's tables: `sky_luts` builds them, `sky_view` reads them.
     pub luts: crate::render::passes::sky_model::LutTables,
+    /// The `precomputed` model's tables: `precomputed_tables` builds them, `sky_view` reads them.
+    pub precomputed: crate::render::passes::precomputed_tables::PrecomputedTables,
+    /// Whether they are complete (a software rasteriser builds them over several frames).
+    pub precomputed_state: std::sync::Arc<crate::render::passes::precomputed_tables::PrecomputedState>,
     /// The sky-view map: a physical model's exposed linear radiance by direction (`sky_view`
     /// writes it in the compute phase, `sky_objects` samples it in the gradient stage).
     pub sky_view: wgpu::Texture,
@@ -139,7 +143,14 @@ impl SharedResources {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        Self { luts: crate::render::passes::sky_model::LutTables::new(device), sky_view, sky_view_view, sky_view_sampler }
+        Self {
+            luts: crate::render::passes::sky_model::LutTables::new(device),
+            precomputed: crate::render::passes::precomputed_tables::PrecomputedTables::largest(device),
+            precomputed_state: Default::default(),
+            sky_view,
+            sky_view_view,
+            sky_view_sampler,
+        }
     }
 }
 
@@ -383,6 +394,7 @@ pub fn boxed<P: Pass, F: Fn(&PassBuild<'_>) -> RenderResult<P>>(f: F, build: &Pa
 /// shader reloads, sky uploads, per-frame steps and GPU timings all follow it.
 pub const PASSES: &[(&str, PassConstructor)] = &[
     ("sky_luts", |b| boxed(crate::render::passes::sky_luts::SkyLutsPass::new, b)),
+    ("precomputed_tables", |b| boxed(crate::render::passes::precomputed_tables::PrecomputedTablesPass::new, b)),
     ("sky_view", |b| boxed(crate::render::passes::sky_view::SkyViewPass::new, b)),
     ("scene", |b| boxed(crate::render::passes::scene::ScenePass::new, b)),
     ("sky_objects", |b| boxed(crate::render::sky_objects::SkyObjectsPass::new, b)),

@@ -168,7 +168,7 @@ pub struct FrameStats {
     pub clears_skipped: u32,
     /// The star field was not drawn: transparent this frame.
     pub stars_skipped: bool,
-    /// The `lut` tables were not rebuilt: nothing they depend on moved.
+    /// The `lut` or `precomputed` tables were not rebuilt: nothing they depend on moved.
     pub tables_skipped: bool,
     /// The sky-view map was not recomputed: nothing it depends on moved.
     pub map_skipped: bool,

@@ -7,6 +7,7 @@ pub mod glare;
 pub mod particle_sim;
 pub mod particles;
 pub mod precipitation;
+pub mod precomputed_tables;
 pub mod radiance_probe;
 pub mod reduced_layers;
 pub mod scene;

@@ -6,22 +6,35 @@ use wgpu::util::DeviceExt;
 
 use crate::atmosphere::analytic::{self, AnalyticModel};
 use crate::atmosphere::reference::Case;
-use crate::atmosphere::{Atmosphere, LutSettings, SingleSettings};
+use crate::atmosphere::{Atmosphere, LutSettings, PrecomputedSettings, SingleSettings};
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders;
+use crate::render::passes::precomputed_tables::{PrecomputedBuilder, PrecomputedHeader, PrecomputedTables};
 use crate::render::passes::sky_model::{storage_entry, AtmosphereUniform, LutBuilder, LutTables, LutUniform, SingleUniform};
 use crate::render::{GpuContext, ShaderLibrary};
 
-/// The probe's pipelines, and the `lut` model's tables and builders.
+/// The probe's pipelines, and the `lut` and `precomputed` models' table builders.
 pub struct RadianceProbe {
     layout: wgpu::BindGroupLayout,
     empty_layout: wgpu::BindGroupLayout,
     single: wgpu::ComputePipeline,
     lut: wgpu::ComputePipeline,
     analytic: wgpu::ComputePipeline,
+    precomputed: wgpu::ComputePipeline,
     tables: LutTables,
     builder: LutBuilder,
+    precomputed_builder: PrecomputedBuilder,
+    /// Stands in for the `precomputed` tables when another model runs.
+    no_tables: PrecomputedTables,
+    /// The last `precomputed` tables built and what they were built for: evaluations that share
+    /// an atmosphere, settings and ground albedo build them once.
+    precomputed_cache: std::cell::RefCell<Option<(PrecomputedKey, PrecomputedTables)>>,
+    /// `precomputed` table builds so far (tests).
+    pub precomputed_builds: std::cell::Cell<u64>,
 }
+
+/// What `precomputed` tables depend on.
+type PrecomputedKey = (AtmosphereUniform, PrecomputedHeader, u32);
 
 /// Which entry point evaluates the cases.
 #[derive(Clone, Copy)]
@@ -29,6 +42,15 @@ enum Model {
     Single,
     Lut,
     Analytic,
+    Precomputed,
+}
+
+/// Tables a run builds before it evaluates the cases.
+#[derive(Clone, Copy)]
+enum Build<'a> {
+    Nothing,
+    Lut(&'a LutSettings),
+    Precomputed(&'a PrecomputedSettings, &'a PrecomputedTables),
 }
 
 fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
@@ -55,6 +77,7 @@ impl RadianceProbe {
                 storage_entry(5, true),
                 storage_entry(6, true),
                 storage_entry(7, true),
+                storage_entry(8, true),
             ],
         });
         // Group 0 (the frame's globals) is declared by every module but unused here.
@@ -68,22 +91,67 @@ impl RadianceProbe {
         let single = shaders::compute_pipeline(device, &pipeline_layout, &module, "cs_single", "RadianceProbe::single")?;
         let lut = shaders::compute_pipeline(device, &pipeline_layout, &module, "cs_lut", "RadianceProbe::lut")?;
         let analytic = shaders::compute_pipeline(device, &pipeline_layout, &module, "cs_analytic", "RadianceProbe::analytic")?;
+        let precomputed = shaders::compute_pipeline(device, &pipeline_layout, &module, "cs_precomputed", "RadianceProbe::precomputed")?;
         let builder = LutBuilder::new(device, library, &empty)?;
-        Ok(Self { layout, empty_layout: empty, single, lut, analytic, tables: LutTables::new(device), builder })
+        let precomputed_builder = PrecomputedBuilder::new(device, library, &empty)?;
+        let no_tables =
+            PrecomputedTables::new(device, &PrecomputedSettings { transmittance_size: [2, 2], irradiance_size: [2, 2], scattering_size: [2, 2, 4, 2], ..Default::default() });
+        Ok(Self {
+            layout,
+            empty_layout: empty,
+            single,
+            lut,
+            analytic,
+            precomputed,
+            tables: LutTables::new(device),
+            builder,
+            precomputed_builder,
+            no_tables,
+            precomputed_cache: Default::default(),
+            precomputed_builds: Default::default(),
+        })
+    }
+
+    /// Drops the kept `precomputed` tables: the next evaluation builds them (timing a build).
+    pub fn forget_precomputed(&self) {
+        self.precomputed_cache.borrow_mut().take();
+    }
+
+    /// Radiance of the `precomputed` model for every case (tables built per distinct ground
+    /// albedo, and kept for the next call while nothing they depend on changes).
+    pub fn precomputed(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &PrecomputedSettings, cases: &[Case]) -> RenderResult<Vec<[f32; 3]>> {
+        let mut out = vec![[0.0; 3]; cases.len()];
+        for (index, subset) in by_albedo(cases) {
+            let header = PrecomputedHeader::new(settings, subset[0].albedo as f32);
+            let key = (AtmosphereUniform::from(atmosphere), header, settings.orders);
+            let mut cache = self.precomputed_cache.borrow_mut();
+            let fresh = !matches!(&*cache, Some((k, _)) if *k == key);
+            if fresh {
+                let tables = match cache.take() {
+                    Some((_, t)) if t.holds(settings) => t,
+                    _ => PrecomputedTables::new(&ctx.device, settings),
+                };
+                ctx.queue.write_buffer(&tables.buffer, 0, bytemuck::bytes_of(&header));
+                *cache = Some((key, tables));
+                self.precomputed_builds.set(self.precomputed_builds.get() + 1);
+            }
+            let tables = &cache.as_ref().expect("just filled").1;
+            let build = if fresh { Build::Precomputed(settings, tables) } else { Build::Nothing };
+            let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Precomputed, build, &[], Some(tables))?;
+            for (i, r) in index.into_iter().zip(result) {
+                out[i] = r;
+            }
+        }
+        Ok(out)
     }
 
     /// Radiance of the `lut` model for every case (tables built per distinct ground albedo).
     pub fn lut(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &LutSettings, cases: &[Case]) -> RenderResult<Vec<[f32; 3]>> {
         let mut out = vec![[0.0; 3]; cases.len()];
-        let mut albedos: Vec<f64> = cases.iter().map(|c| c.albedo).collect();
-        albedos.sort_by(f64::total_cmp);
-        albedos.dedup();
-        for albedo in albedos {
-            let index: Vec<usize> = (0..cases.len()).filter(|i| cases[*i].albedo == albedo).collect();
-            let subset: Vec<Case> = index.iter().map(|i| cases[*i]).collect();
-            let params = LutUniform::new(settings, albedo as f32);
+        for (index, subset) in by_albedo(cases) {
+            let params = LutUniform::new(settings, subset[0].albedo as f32);
             ctx.queue.write_buffer(&self.tables.params, 0, bytemuck::bytes_of(&params));
-            let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Lut, Some(settings), &[])?;
+            let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Lut, Build::Lut(settings), &[], None)?;
             for (i, r) in index.into_iter().zip(result) {
                 out[i] = r;
             }
@@ -94,7 +162,7 @@ impl RadianceProbe {
     /// Radiance of the `single` model for every case, sr^-1 per unit of solar irradiance
     /// (blocks until the GPU is done).
     pub fn single(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &SingleSettings, cases: &[Case]) -> RenderResult<Vec<[f32; 3]>> {
-        self.run(ctx, atmosphere, settings, cases, Model::Single, None, &[])
+        self.run(ctx, atmosphere, settings, cases, Model::Single, Build::Nothing, &[], None)
     }
 
     /// Radiance of an analytic model for every case (the model's units, [`AnalyticModel::units`]):
@@ -115,11 +183,11 @@ impl RadianceProbe {
                 model.coefficients(sun, analytic::equinox_morning_hour(c.sun_elev_deg)).vectors
             })
             .collect();
-        self.run(ctx, &Atmosphere::default(), &SingleSettings::default(), cases, Model::Analytic, None, &coefficients)
+        self.run(ctx, &Atmosphere::default(), &SingleSettings::default(), cases, Model::Analytic, Build::Nothing, &coefficients, None)
     }
 
-    /// Evaluates `model` for `cases`; with `luts`, builds the tables first; `analytic`: the analytic
-    /// models' coefficients (12 per case, or none).
+    /// Evaluates `model` for `cases` after building the tables of `build`; `analytic`: the analytic
+    /// models' coefficients (12 per case, or none); `precomputed`: that model's tables.
     #[allow(clippy::too_many_arguments)]
     fn run(
         &self,
@@ -128,8 +196,9 @@ impl RadianceProbe {
         settings: &SingleSettings,
         cases: &[Case],
         model: Model,
-        luts: Option<&LutSettings>,
+        build: Build<'_>,
         analytic: &[[f32; 4]],
+        precomputed: Option<&PrecomputedTables>,
     ) -> RenderResult<Vec<[f32; 3]>> {
         if cases.is_empty() {
             return Ok(Vec::new());
@@ -161,21 +230,33 @@ impl RadianceProbe {
                 self.tables.entries(4)[1].clone(),
                 self.tables.entries(4)[2].clone(),
                 wgpu::BindGroupEntry { binding: 7, resource: coefficients.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 8, resource: precomputed.unwrap_or(&self.no_tables).buffer.as_entire_binding() },
             ],
         });
         let empty = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("RadianceProbe::empty"), layout: &self.empty_layout, entries: &[] });
-        let builder_group = luts.map(|_| self.builder.bind_group(device, &atm, &self.tables));
+        let builder_group = match build {
+            Build::Nothing => None,
+            Build::Lut(_) => Some(self.builder.bind_group(device, &atm, &self.tables)),
+            Build::Precomputed(_, tables) => Some(self.precomputed_builder.bind_group(device, &atm, tables)),
+        };
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("RadianceProbe::encoder") });
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("RadianceProbe::pass"), timestamp_writes: None });
             pass.set_bind_group(0, &empty, &[]);
-            if let (Some(settings), Some(group)) = (luts, &builder_group) {
-                self.builder.dispatch(&mut pass, group, settings);
+            match (build, &builder_group) {
+                (Build::Lut(settings), Some(group)) => self.builder.dispatch(&mut pass, group, settings),
+                (Build::Precomputed(settings, _), Some(group)) => {
+                    let steps = crate::render::passes::precomputed_tables::build_steps(settings, 1);
+                    self.precomputed_builder.write_steps(&ctx.queue, &steps);
+                    self.precomputed_builder.dispatch(&mut pass, group, &steps, 0..steps.len());
+                }
+                _ => {}
             }
             pass.set_pipeline(match model {
                 Model::Single => &self.single,
                 Model::Lut => &self.lut,
                 Model::Analytic => &self.analytic,
+                Model::Precomputed => &self.precomputed,
             });
             pass.set_bind_group(1, &bind_group, &[]);
             pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
@@ -185,4 +266,20 @@ impl RadianceProbe {
         let out = bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes).iter().map(|v| [v[0], v[1], v[2]]).collect();
         Ok(out)
     }
+}
+
+/// The cases grouped by ground albedo (tables are built per albedo): each group's indices into
+/// `cases` and its cases.
+fn by_albedo(cases: &[Case]) -> Vec<(Vec<usize>, Vec<Case>)> {
+    let mut albedos: Vec<f64> = cases.iter().map(|c| c.albedo).collect();
+    albedos.sort_by(f64::total_cmp);
+    albedos.dedup();
+    albedos
+        .into_iter()
+        .map(|albedo| {
+            let index: Vec<usize> = (0..cases.len()).filter(|i| cases[*i].albedo == albedo).collect();
+            let subset = index.iter().map(|i| cases[*i]).collect();
+            (index, subset)
+        })
+        .collect()
 }

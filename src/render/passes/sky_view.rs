@@ -34,7 +34,8 @@ pub struct SkyViewParams {
     /// Radiance scale 2^EV (x), tone mapper of the scene's light (y: 0 ACES, 1 neutral), map size
     /// in texels (zw).
     pub exposure: [f32; 4],
-    /// Model (x: 0 single, 1 lut, 2 radiance from the CPU), automatic exposure (y: 1).
+    /// Model (x: 0 single, 1 lut, 2 radiance from the CPU, 3 analytic, 4 precomputed), automatic
+    /// exposure (y: 1).
     pub model: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<SkyViewParams>() == 48);
@@ -46,6 +47,7 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
             SkyModelKind::Lut => 1.0,
             SkyModelKind::Cells | SkyModelKind::Reference => 2.0,
             k if k.is_analytic() => 3.0,
+            SkyModelKind::Precomputed => 4.0,
             _ => 0.0,
         };
         // Braun and Cohen's colours are display values: no exposure, the tone mapper's inverse.
@@ -66,6 +68,9 @@ struct Key {
     atmosphere: AtmosphereUniform,
     single: SingleUniform,
     lut: crate::render::passes::sky_model::LutUniform,
+    precomputed: crate::render::passes::precomputed_tables::PrecomputedHeader,
+    /// Finished builds of the `precomputed` tables (a new build changes the map).
+    precomputed_generation: u64,
     params: SkyViewParams,
     /// `cells` iterations, or `reference` paths and grid.
     cpu: [u32; 3],
@@ -242,6 +247,8 @@ pub struct SkyViewPass {
     /// Exposure (16 bytes), then the scene's fog, ambient and diffuse in the layout of `Globals`.
     sky_light: wgpu::Buffer,
     globals: wgpu::Buffer,
+    /// Whether the `precomputed` tables are complete.
+    precomputed_state: std::sync::Arc<crate::render::passes::precomputed_tables::PrecomputedState>,
     /// Whether this frame's model lights the main scene (copied into the globals every frame).
     drive_scene: bool,
     /// Whether this frame's model has a map, and so the light of lit clouds.
@@ -280,12 +287,14 @@ impl SkyViewPass {
             crate::render::passes::sky_model::storage_entry(6, true),
             crate::render::passes::sky_model::storage_entry(7, true),
             crate::render::passes::sky_model::storage_entry(8, false),
-            crate::render::passes::sky_model::storage_entry(9, true),
+            // A uniform: the stage's eight storage buffers are taken.
+            crate::render::uniform_entry(9, wgpu::ShaderStages::COMPUTE),
+            crate::render::passes::sky_model::storage_entry(10, true),
         ]);
         let analytic = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::analytic"),
             size: 12 * 16,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let sky_light = device.create_buffer(&wgpu::BufferDescriptor {
@@ -335,6 +344,7 @@ impl SkyViewPass {
                 wgpu::BindGroupEntry { binding: 7, resource: cpu_radiance.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 8, resource: sky_light.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 9, resource: analytic.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 10, resource: b.shared.precomputed.buffer.as_entire_binding() },
             ],
         });
         let map = b.shared.sky_view.clone();
@@ -358,6 +368,7 @@ impl SkyViewPass {
             sky_light,
             analytic,
             globals: b.globals_buffer.clone(),
+            precomputed_state: b.shared.precomputed_state.clone(),
             drive_scene: false,
             model_light: false,
         })
@@ -516,6 +527,8 @@ impl SkyViewPass {
             atmosphere: (&cx.frame.atmosphere).into(),
             single: (&model.single).into(),
             lut: crate::render::passes::sky_model::LutUniform::new(&model.lut, model.ground_albedo),
+            precomputed: crate::render::passes::precomputed_tables::PrecomputedHeader::new(&model.precomputed, model.ground_albedo),
+            precomputed_generation: self.precomputed_state.generation.load(Ordering::Relaxed),
             params: (model, cx.frame.towards_sun).into(),
             cpu: match model.kind {
                 SkyModelKind::Reference => [model.reference_paths, model.reference_grid[0], model.reference_grid[1]],
@@ -523,6 +536,11 @@ impl SkyViewPass {
             },
             analytic: model.analytic().map_or([[0.0; 4]; 12], |m| m.coefficients(cx.frame.towards_sun.as_dvec3().to_array(), cx.frame.hour as f64).vectors),
         };
+        // Until the tables are complete the last map stays (the tables pass builds them over
+        // frames on a software rasteriser).
+        if model.kind == SkyModelKind::Precomputed && !self.precomputed_state.complete.load(Ordering::Relaxed) {
+            return;
+        }
         // CPU models answer asynchronously: only GPU maps are recomputed when the skip is off.
         if self.computed == Some(key) && (cx.options.skips.unchanged_tables || model.kind.on_cpu()) {
             self.cells_pending = None;

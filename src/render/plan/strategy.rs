@@ -107,6 +107,8 @@ pub struct FillStrategy {
     pub flash: FlashPlacement,
     /// How two neighbouring alpha-blended layers of a run are drawn.
     pub pairs: LayerPairs,
+    /// How the `precomputed` model's tables are built: at once, or over frames.
+    pub table_builds: crate::render::passes::precomputed_tables::TableBuilds,
 }
 
 /// The named presets, for the command line and reports.
@@ -123,6 +125,8 @@ impl FillStrategy {
             sparse_stages: SparseStages::TexelPolygonsOnBands,
             flash: FlashPlacement::InRun,
             pairs: LayerPairs::AtOnce,
+            // One r-layer of a default table per frame: about half a second each on lavapipe.
+            table_builds: crate::render::passes::precomputed_tables::TableBuilds::Spread { slices: 32 },
         }
     }
 
@@ -136,6 +140,7 @@ impl FillStrategy {
             sparse_stages: SparseStages::Sampled,
             flash: FlashPlacement::OverFrame,
             pairs: LayerPairs::OneByOne,
+            table_builds: crate::render::passes::precomputed_tables::TableBuilds::AtOnce,
         }
     }
 

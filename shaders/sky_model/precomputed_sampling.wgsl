@@ -1,0 +1,214 @@
+//! requires: sky_model/transmittance_map
+// The `precomputed` model (after Bruneton 2017, precomputed atmospheric scattering): the layout of
+// its tables, their parametrisations, and the sky radiance looked up from them. A library: the
+// module that requires it declares `precomputed_tables` (read-only where the model is looked up,
+// read-write in precomputed_tables.wgsl, which builds them).
+//
+// Everything lives in one storage buffer of vec4 (the stage's storage-buffer budget is 8):
+// a header (`PrecomputedHeader`, 4 vec4), then the 2D tables (transmittance; irradiance; its
+// delta of the order being built), then five 4D tables of the same size. Keep the header and the
+// offsets in sync with src/render/passes/precomputed_tables.rs.
+struct PrecomputedHeader {
+    sizes_2d: vec4<u32>, // transmittance width, height; irradiance width, height
+    sizes_4d: vec4<u32>, // scattering table texels along nu, mu_s, mu (both halves), r
+    steps: vec4<u32>,    // transmittance samples, samples along rays, density directions per half turn, unused
+    ground: vec4<f32>,   // ground albedo, smallest sun cosine tabulated, unused
+};
+
+// The 4D tables, in order after the 2D ones.
+const PRE_SCATTERING: u32 = 0u;   // single Rayleigh + every higher order divided by the Rayleigh phase
+const PRE_SINGLE_MIE: u32 = 1u;   // single Mie, without its phase function
+const PRE_DELTA: u32 = 2u;        // single Rayleigh of order 1, then the last order's scattering
+const PRE_DELTA_MIE: u32 = 3u;    // single Mie of order 1 (read by order 2 only)
+const PRE_DENSITY: u32 = 4u;      // scattering density of the order being built, km^-1 sr^-1
+// The 2D tables after the transmittance.
+const PRE_IRRADIANCE: u32 = 1u;       // indirect irradiance, every order so far
+const PRE_DELTA_IRRADIANCE: u32 = 2u; // the last order's irradiance (direct for order 1)
+
+fn pre_header() -> PrecomputedHeader {
+    let a = bitcast<vec4<u32>>(precomputed_tables[0]);
+    let b = bitcast<vec4<u32>>(precomputed_tables[1]);
+    let c = bitcast<vec4<u32>>(precomputed_tables[2]);
+    return PrecomputedHeader(a, b, c, precomputed_tables[3]);
+}
+
+const PRE_HEADER_TEXELS: u32 = 4u;
+
+fn pre_texels_4d(h: PrecomputedHeader) -> u32 {
+    return h.sizes_4d.x * h.sizes_4d.y * h.sizes_4d.z * h.sizes_4d.w;
+}
+
+// First texel of 2D table `table` (0: transmittance).
+fn pre_offset_2d(h: PrecomputedHeader, table: u32) -> u32 {
+    if (table == 0u) {
+        return PRE_HEADER_TEXELS;
+    }
+    return PRE_HEADER_TEXELS + h.sizes_2d.x * h.sizes_2d.y + (table - 1u) * h.sizes_2d.z * h.sizes_2d.w;
+}
+
+fn pre_offset_4d(h: PrecomputedHeader, table: u32) -> u32 {
+    return pre_offset_2d(h, 3u) + table * pre_texels_4d(h);
+}
+
+fn pre_bilinear(offset: u32, size: vec2<u32>, uv: vec2<f32>) -> vec3<f32> {
+    let b = bilinear_index(size, uv);
+    let k = offset + u32(b.x);
+    let w = u32(b.y);
+    let top = mix(precomputed_tables[k].xyz, precomputed_tables[k + 1u].xyz, b.z);
+    let bottom = mix(precomputed_tables[k + w].xyz, precomputed_tables[k + w + 1u].xyz, b.z);
+    return mix(top, bottom, b.w);
+}
+
+fn pre_transmittance(atm: Atmosphere, h: PrecomputedHeader, r: f32, mu: f32) -> vec3<f32> {
+    return pre_bilinear(pre_offset_2d(h, 0u), h.sizes_2d.xy, transmittance_uv(atm, r, mu));
+}
+
+// Transmittance to the sun times its visible fraction, as the other models take it
+// (`sun_transmittance` in lut_sampling.wgsl).
+fn pre_sun_transmittance(atm: Atmosphere, h: PrecomputedHeader, r: f32, mu_s: f32) -> vec3<f32> {
+    let visible = sun_visible_fraction(atm, r, mu_s);
+    if (visible <= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    return visible * pre_transmittance(atm, h, r, max(mu_s, horizon_mu(atm, r) + 1e-4));
+}
+
+// Irradiance tables: u = (mu_s + 1) / 2, v = altitude / thickness.
+fn pre_irradiance_uv(atm: Atmosphere, r: f32, mu_s: f32) -> vec2<f32> {
+    return vec2<f32>(0.5 * (mu_s + 1.0), (r - atm.shape.x) / (atm.shape.y - atm.shape.x));
+}
+
+fn pre_irradiance(atm: Atmosphere, h: PrecomputedHeader, table: u32, r: f32, mu_s: f32) -> vec3<f32> {
+    return pre_bilinear(pre_offset_2d(h, table), h.sizes_2d.zw, pre_irradiance_uv(atm, r, mu_s));
+}
+
+// A point of the 4D tables: coordinates in [0, 1] along nu, mu_s, mu (within its half) and r, and
+// the half of the mu axis: 0 for rays that end on the ground, 1 for rays that leave the
+// atmosphere. Interpolation never mixes the halves, so the horizon stays sharp.
+struct PreCoords {
+    x: vec4<f32>,
+    half_index: u32,
+};
+
+// A texel's geometry (the inverse of `pre_coords`).
+struct PreGeometry {
+    r: f32,
+    mu: f32,
+    mu_s: f32,
+    nu: f32,
+    ground: bool,
+};
+
+fn pre_h(atm: Atmosphere) -> f32 {
+    return sqrt(max(atm.shape.y * atm.shape.y - atm.shape.x * atm.shape.x, 0.0));
+}
+
+// Bruneton's mapping of the sun cosine: fine near the horizon, nothing below `mu_s_min`.
+fn pre_x_mu_s(atm: Atmosphere, mu_s: f32, mu_s_min: f32) -> f32 {
+    let hh = pre_h(atm);
+    let d_min = atm.shape.y - atm.shape.x;
+    let d_max = hh;
+    let a = (distance_to_top(atm, atm.shape.x, mu_s) - d_min) / (d_max - d_min);
+    let big_a = (distance_to_top(atm, atm.shape.x, mu_s_min) - d_min) / (d_max - d_min);
+    return max(1.0 - a / big_a, 0.0) / (1.0 + a);
+}
+
+fn pre_mu_s_from_x(atm: Atmosphere, x: f32, mu_s_min: f32) -> f32 {
+    let hh = pre_h(atm);
+    let d_min = atm.shape.y - atm.shape.x;
+    let d_max = hh;
+    let big_a = (distance_to_top(atm, atm.shape.x, mu_s_min) - d_min) / (d_max - d_min);
+    let a = big_a * (1.0 - x) / (1.0 + big_a * x);
+    let d = d_min + min(a, big_a) * (d_max - d_min);
+    if (d <= 0.0) {
+        return 1.0;
+    }
+    return clamp((hh * hh - d * d) / (2.0 * atm.shape.x * d), -1.0, 1.0);
+}
+
+fn pre_coords(atm: Atmosphere, r_in: f32, mu: f32, mu_s: f32, nu: f32, ground: bool, mu_s_min: f32) -> PreCoords {
+    let hh = pre_h(atm);
+    let r = clamp(r_in, atm.shape.x, atm.shape.y);
+    let rho = sqrt(max(r * r - atm.shape.x * atm.shape.x, 0.0));
+    var x_mu: f32;
+    var half_index: u32;
+    if (ground) {
+        // Distance to the ground, from straight down (r - R) to the horizon (rho).
+        let disc = r * r * mu * mu - rho * rho;
+        let d = -r * mu - sqrt(max(disc, 0.0));
+        let d_min = r - atm.shape.x;
+        let d_max = rho;
+        x_mu = select(0.0, (d - d_min) / (d_max - d_min), d_max > d_min + 1e-6);
+        half_index = 0u;
+    } else {
+        // Distance to the top, from straight up (T - r) to the horizon (rho + H).
+        let d = distance_to_top(atm, r, mu);
+        let d_min = atm.shape.y - r;
+        let d_max = rho + hh;
+        x_mu = (d - d_min) / max(d_max - d_min, 1e-6);
+        half_index = 1u;
+    }
+    let x = vec4<f32>(0.5 * (nu + 1.0), pre_x_mu_s(atm, mu_s, mu_s_min), x_mu, rho / hh);
+    return PreCoords(clamp(x, vec4<f32>(0.0), vec4<f32>(1.0)), half_index);
+}
+
+// The geometry of texel `index` of a 4D table (texels at coordinates i / (n - 1) in each half).
+fn pre_geometry(atm: Atmosphere, h: PrecomputedHeader, index: u32) -> PreGeometry {
+    let n = h.sizes_4d;
+    let half_mu = n.z / 2u;
+    let i_nu = index % n.x;
+    let i_mu_s = (index / n.x) % n.y;
+    let i_mu_all = (index / (n.x * n.y)) % n.z;
+    let i_r = index / (n.x * n.y * n.z);
+    let half_index = i_mu_all / half_mu;
+    let x_mu = f32(i_mu_all % half_mu) / f32(half_mu - 1u);
+    let hh = pre_h(atm);
+    let rho = hh * f32(i_r) / f32(n.w - 1u);
+    let r = sqrt(rho * rho + atm.shape.x * atm.shape.x);
+    var mu: f32;
+    if (half_index == 0u) {
+        let d_min = r - atm.shape.x;
+        let d = d_min + x_mu * (rho - d_min);
+        mu = select(-1.0, -(rho * rho + d * d) / (2.0 * r * d), d > 1e-6);
+    } else {
+        let d_min = atm.shape.y - r;
+        let d = d_min + x_mu * (rho + hh - d_min);
+        mu = select(1.0, (hh * hh - rho * rho - d * d) / (2.0 * r * d), d > 1e-6);
+    }
+    mu = clamp(mu, -1.0, 1.0);
+    let mu_s = pre_mu_s_from_x(atm, f32(i_mu_s) / f32(n.y - 1u), h.ground.y);
+    // nu is bounded by the other two angles.
+    let spread = sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0));
+    let nu = clamp(2.0 * f32(i_nu) / f32(n.x - 1u) - 1.0, mu * mu_s - spread, mu * mu_s + spread);
+    return PreGeometry(r, mu, mu_s, nu, half_index == 0u);
+}
+
+// Quadrilinear read of 4D table `table` at `c`.
+fn pre_read_4d(h: PrecomputedHeader, table: u32, c: PreCoords) -> vec3<f32> {
+    let n = vec4<u32>(h.sizes_4d.x, h.sizes_4d.y, h.sizes_4d.z / 2u, h.sizes_4d.w);
+    let p = c.x * vec4<f32>(n - vec4<u32>(1u));
+    let i = min(vec4<u32>(floor(p)), n - vec4<u32>(2u));
+    let f = p - vec4<f32>(i);
+    let base = pre_offset_4d(h, table);
+    var sum = vec3<f32>(0.0);
+    for (var corner = 0u; corner < 16u; corner++) {
+        let o = vec4<u32>(corner & 1u, (corner >> 1u) & 1u, (corner >> 2u) & 1u, (corner >> 3u) & 1u);
+        let w4 = select(vec4<f32>(1.0) - f, f, o == vec4<u32>(1u));
+        let k = i + o;
+        let mu_index = c.half_index * n.z + k.z;
+        let index = ((k.w * h.sizes_4d.z + mu_index) * n.y + k.y) * n.x + k.x;
+        sum += precomputed_tables[base + index].xyz * (w4.x * w4.y * w4.z * w4.w);
+    }
+    return sum;
+}
+
+// Sky radiance seen from `camera_km` along `view`, sr^-1 per unit of solar irradiance: single
+// Rayleigh and every higher order from the scattering table with the Rayleigh phase, single Mie
+// from its own table with the Mie phase.
+fn precomputed_radiance(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
+    let h = pre_header();
+    let ray = view_ray(atm, camera_km, view, sun);
+    let ground = distance_to_ground(atm, ray.r, ray.mu) >= 0.0;
+    let c = pre_coords(atm, ray.r, ray.mu, sun.y, dot(view, sun), ground, h.ground.y);
+    return pre_read_4d(h, PRE_SCATTERING, c) * ray.phase_r + pre_read_4d(h, PRE_SINGLE_MIE, c) * ray.phase_m;
+}

@@ -1,0 +1,111 @@
+//! Settings of the `precomputed` model (after Bruneton 2017, precomputed atmospheric scattering):
+//! table sizes, scattering orders and sample counts, the accuracy axis of the benchmark. The
+//! tables themselves are built on the GPU (`render::passes::precomputed_tables`).
+
+use super::AtmosphereError;
+
+/// Table sizes and sample counts of the `precomputed` model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PrecomputedSettings {
+    /// Transmittance table, texels (width: view angle, height: altitude).
+    pub transmittance_size: [u32; 2],
+    /// Irradiance tables, texels (width: sun angle, height: altitude).
+    pub irradiance_size: [u32; 2],
+    /// Scattering tables, texels along nu (view-sun angle), mu_s (sun angle), mu (view angle,
+    /// both halves: rays that meet the ground and rays that leave) and r (altitude).
+    pub scattering_size: [u32; 4],
+    /// Scattering orders: 1 is single scattering alone.
+    pub orders: u32,
+    /// Samples per transmittance texel.
+    pub transmittance_steps: u32,
+    /// Samples along each scattering texel's ray.
+    pub ray_steps: u32,
+    /// Directions per half turn of the scattering-density integral (twice as many in azimuth).
+    pub density_directions: u32,
+}
+
+impl PrecomputedSettings {
+    /// Largest transmittance table.
+    pub const MAX_TRANSMITTANCE: [u32; 2] = [512, 256];
+    /// Largest irradiance table.
+    pub const MAX_IRRADIANCE: [u32; 2] = [256, 64];
+    /// Most texels of one scattering table (five share one storage buffer of at most 128 MiB).
+    pub const MAX_SCATTERING_TEXELS: u32 = 1 << 20;
+    /// Most scattering orders.
+    pub const MAX_ORDERS: u32 = 16;
+    /// Smallest cosine of the sun to the vertical the tables hold (Bruneton's 102 degrees from
+    /// the zenith); darker suns read the edge, where the sky is black already.
+    pub const MU_S_MIN: f32 = -0.2;
+
+    /// A small, fast point of the chart: a quarter of the default table in each of mu, mu_s and r.
+    pub const SMALL: Self = Self {
+        transmittance_size: [128, 32],
+        irradiance_size: [32, 8],
+        scattering_size: [8, 16, 64, 16],
+        orders: 4,
+        transmittance_steps: 30,
+        ray_steps: 30,
+        density_directions: 8,
+    };
+
+    /// Texels of one scattering table.
+    pub fn scattering_texels(&self) -> u32 {
+        self.scattering_size.iter().product()
+    }
+
+    /// Checks every setting's domain.
+    pub fn validate(&self) -> Result<(), AtmosphereError> {
+        let bad = |field: &'static str, message: String| Err(AtmosphereError { field, message });
+        for (field, [w, h], [mw, mh]) in [("transmittance_size", self.transmittance_size, Self::MAX_TRANSMITTANCE), ("irradiance_size", self.irradiance_size, Self::MAX_IRRADIANCE)]
+        {
+            if !(2..=mw).contains(&w) || !(2..=mh).contains(&h) {
+                return bad(field, format!("expected 2..={mw} x 2..={mh} texels, found {w} x {h}"));
+            }
+        }
+        let [nu, mu_s, mu, r] = self.scattering_size;
+        if nu < 2 || mu_s < 2 || r < 2 || mu < 4 || mu % 2 != 0 {
+            return bad("scattering_size", format!("expected at least 2 texels along nu, mu_s and r and an even count of at least 4 along mu, found {nu} x {mu_s} x {mu} x {r}"));
+        }
+        if self.scattering_size.iter().map(|x| *x as u64).product::<u64>() > Self::MAX_SCATTERING_TEXELS as u64 {
+            return bad("scattering_size", format!("{nu} x {mu_s} x {mu} x {r} texels is more than the {} a table may hold", Self::MAX_SCATTERING_TEXELS));
+        }
+        if !(1..=Self::MAX_ORDERS).contains(&self.orders) {
+            return bad("orders", format!("expected 1..={}, found {}", Self::MAX_ORDERS, self.orders));
+        }
+        for (field, v) in [("transmittance_steps", self.transmittance_steps), ("ray_steps", self.ray_steps), ("density_directions", self.density_directions)] {
+            if !(2..=1024).contains(&v) {
+                return bad(field, format!("expected 2..=1024, found {v}"));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Default for PrecomputedSettings {
+    fn default() -> Self {
+        Self {
+            transmittance_size: [256, 64],
+            irradiance_size: [64, 16],
+            scattering_size: [8, 32, 128, 32],
+            orders: 4,
+            transmittance_steps: 40,
+            ray_steps: 50,
+            density_directions: 16,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_bad_sizes_are_refused() {
+        assert!(PrecomputedSettings::default().validate().is_ok());
+        let odd_mu = PrecomputedSettings { scattering_size: [8, 32, 127, 32], ..Default::default() };
+        assert_eq!(odd_mu.validate().unwrap_err().field, "scattering_size");
+        let huge = PrecomputedSettings { scattering_size: [16, 64, 256, 64], ..Default::default() };
+        assert_eq!(huge.validate().unwrap_err().field, "scattering_size");
+        assert_eq!(PrecomputedSettings { orders: 0, ..Default::default() }.validate().unwrap_err().field, "orders");
+    }
+}
