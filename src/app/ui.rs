@@ -537,7 +537,7 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
         compare_window(ui, c, info, &mut actions);
     }
     let (right_min, right_max) = c.layout.right_range(screen.width(), left_width);
-    side_panel(ui, c, Side::Right, (right_min, right_max), "Objects", |ui, c| objects(ui, c, info));
+    let right_width = side_panel(ui, c, Side::Right, (right_min, right_max), "Objects", |ui, c| objects(ui, c, info));
 
     if !info.errors.is_empty() {
         egui::Panel::bottom("errors").max_size(screen.height() * ERRORS_MAX_FRACTION).show(ui, |ui| {
@@ -575,7 +575,14 @@ pub fn draw(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>, inspector_te
     // it meet without a gap.
     let ppp = ui.ctx().pixels_per_point();
     let surface = ((screen.width() * ppp).round() as u32, (screen.height() * ppp).round() as u32);
-    let sky_rect = SkyViewport::from_points(ui.available_rect_before_wrap(), ppp, surface).to_points(ppp);
+    // A panel whose content is wider than its range grows past it this frame, over what egui
+    // leaves for the centre: the sky ends where the panels drawn end.
+    let available = ui.available_rect_before_wrap();
+    let available = egui::Rect::from_min_max(
+        egui::pos2(available.min.x.max(screen.min.x + left_width), available.min.y),
+        egui::pos2(available.max.x.min(screen.max.x - right_width), available.max.y),
+    );
+    let sky_rect = SkyViewport::from_points(available, ppp, surface).to_points(ppp);
     let fill = ui.visuals().panel_fill;
     ui.painter().set(background, egui::Shape::Vec(around(screen, sky_rect).into_iter().map(|r| egui::Shape::rect_filled(r, 0.0, fill)).collect()));
 
@@ -891,7 +898,8 @@ fn objects(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         keys.dedup();
         ui.horizontal_wrapped(|ui| {
             for key in keys {
-                if ui.small_button(&key).on_hover_text(format!("edit {key} as curves over the day")).clicked() {
+                // Truncated: a long path must not widen the panel over the sky view.
+                if ui.add(egui::Button::new(key.as_str()).small().truncate()).on_hover_text(format!("edit {key} as curves over the day")).clicked() {
                     let gradient = matches!(crate::measure::bake::bake_target(sky, &key), Some(crate::measure::bake::BakeTarget::Gradient { .. }));
                     open_curves(c, sky, &key, key.clone(), gradient);
                 }
