@@ -97,6 +97,27 @@ fn along(g: PreGeometry, t: f32) -> vec2<f32> {
     return vec2<f32>(r_t, clamp((g.r * g.mu_s + t * g.nu) / r_t, -1.0, 1.0));
 }
 
+// One sample of a texel's ray march: its distance, radius and sun cosine there (`along`), its
+// altitude, and its weight: the view ray's transmittance to the sample's middle times its length.
+// Adds the sample's optical depth to `tau` (samples come in order of distance).
+struct MarchSample {
+    t: f32,
+    at: vec2<f32>,
+    alt: f32,
+    weight: vec3<f32>,
+};
+
+fn march_sample(g: PreGeometry, length: f32, i: u32, n: u32, tau: ptr<function, vec3<f32>>) -> MarchSample {
+    let sample = ray_sample(g, length, i, n);
+    let t = sample.x;
+    let dt = sample.y;
+    let alt = max(altitude_along(atmosphere, g.r, g.mu, t), 0.0);
+    let e = extinction_at(atmosphere, alt);
+    let tau_mid = *tau + e * (0.5 * dt);
+    *tau += e * dt;
+    return MarchSample(t, along(g, t), alt, exp(-tau_mid) * dt);
+}
+
 // Single scattering by the midpoint rule (`ray_sample`), the view ray's optical depth summed along the march
 // (exact for the samples, unlike ratios of table values near the horizon) and the sun's from the
 // transmittance table. Rayleigh and Mie without their phase functions.
@@ -114,17 +135,10 @@ fn cs_single(@builtin(global_invocation_id) gid: vec3<u32>) {
     var rayleigh = vec3<f32>(0.0);
     var mie = vec3<f32>(0.0);
     for (var i = 0u; i < n; i++) {
-        let sample = ray_sample(g, length, i, n);
-        let t = sample.x;
-        let dt = sample.y;
-        let alt = max(altitude_along(atmosphere, g.r, g.mu, t), 0.0);
-        let e = extinction_at(atmosphere, alt);
-        let tau_mid = tau + e * (0.5 * dt);
-        tau += e * dt;
-        let p = along(g, t);
-        let light = exp(-tau_mid) * pre_sun_transmittance(atmosphere, h, p.x, p.y) * dt;
-        rayleigh += light * pre_density_r(alt);
-        mie += light * pre_density_m(alt);
+        let m = march_sample(g, length, i, n, &tau);
+        let light = m.weight * pre_sun_transmittance(atmosphere, h, m.at.x, m.at.y);
+        rayleigh += light * pre_density_r(m.alt);
+        mie += light * pre_density_m(m.alt);
     }
     rayleigh *= atmosphere.rayleigh.xyz;
     mie *= atmosphere.mie_scattering.xyz;
@@ -262,17 +276,10 @@ fn cs_multiple(@builtin(global_invocation_id) gid: vec3<u32>) {
     var tau = vec3<f32>(0.0);
     var sum = vec3<f32>(0.0);
     for (var i = 0u; i < n; i++) {
-        let sample = ray_sample(g, length, i, n);
-        let t = sample.x;
-        let dt = sample.y;
-        let alt = max(altitude_along(atmosphere, g.r, g.mu, t), 0.0);
-        let e = extinction_at(atmosphere, alt);
-        let tau_mid = tau + e * (0.5 * dt);
-        tau += e * dt;
-        let p = along(g, t);
-        let mu_t = clamp((g.r * g.mu + t) / p.x, -1.0, 1.0);
-        let c = pre_coords(atmosphere, p.x, mu_t, p.y, g.nu, g.ground, h.ground.y);
-        sum += exp(-tau_mid) * pre_read_4d(h, PRE_DENSITY, c) * dt;
+        let m = march_sample(g, length, i, n, &tau);
+        let mu_t = clamp((g.r * g.mu + m.t) / m.at.x, -1.0, 1.0);
+        let c = pre_coords(atmosphere, m.at.x, mu_t, m.at.y, g.nu, g.ground, h.ground.y);
+        sum += m.weight * pre_read_4d(h, PRE_DENSITY, c);
     }
     precomputed_tables[pre_offset_4d(h, PRE_DELTA) + texel] = vec4<f32>(sum, 1.0);
     let total = pre_offset_4d(h, PRE_SCATTERING) + texel;

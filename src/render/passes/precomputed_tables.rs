@@ -163,11 +163,7 @@ pub fn build_steps(settings: &PrecomputedSettings, slices: u32) -> Vec<BuildStep
     let mut steps = Vec::new();
     for stage in stages {
         let texels = stage.texels(settings);
-        let cut = if texels == settings.scattering_texels() && matches!(stage, Stage::Single | Stage::DensitySecond | Stage::DensityHigher | Stage::Multiple) {
-            slices.max(1)
-        } else {
-            1
-        };
+        let cut = if matches!(stage, Stage::Single | Stage::DensitySecond | Stage::DensityHigher | Stage::Multiple) { slices.max(1) } else { 1 };
         let per = texels.div_ceil(cut);
         let mut first = 0;
         while first < texels {
