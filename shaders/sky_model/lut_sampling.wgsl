@@ -6,8 +6,27 @@
 struct LutParams {
     sizes: vec4<u32>, // transmittance width, height; multiple-scattering size; sqrt of its direction count
     steps: vec4<u32>, // transmittance, multiple-scattering and view-ray samples; unused
-    ground: vec4<f32>, // ground albedo (grey); unused
+    albedo_phase: vec4<f32>, // ground albedo (grey); Mie phase Legendre moments g_1, g_2; unused
 };
+
+// Values per multiple-scattering texel. Keep in sync with `MULTISCATTERING_LAYERS` in
+// src/render/passes/sky_model.rs.
+const MS_LAYERS: u32 = 6u;
+
+// The six real spherical harmonics (orthonormal, bands 0 to 2) even in z, of a direction d in a
+// frame whose y is the local vertical and whose x points to the sun's azimuth. The radiance that
+// arrives from the second order on is symmetric about the plane of the sun and the vertical, so
+// the odd ones vanish.
+fn ms_harmonics(d: vec3<f32>) -> array<f32, 6> {
+    return array<f32, 6>(
+        0.2820948,
+        0.4886025 * d.y,
+        0.4886025 * d.x,
+        1.0925484 * d.x * d.y,
+        0.3153916 * (3.0 * d.y * d.y - 1.0),
+        0.5462742 * (d.x * d.x - d.z * d.z),
+    );
+}
 
 fn sample_transmittance(atm: Atmosphere, r: f32, mu: f32) -> vec3<f32> {
     let b = bilinear_index(lut_params.sizes.xy, transmittance_uv(atm, r, mu));
@@ -28,19 +47,93 @@ fn sun_transmittance(atm: Atmosphere, r: f32, mu_s: f32) -> vec3<f32> {
     return visible * sample_transmittance(atm, r, max(mu_s, horizon_mu(atm, r) + 1e-4));
 }
 
-// Multiple-scattering table: u = (mu_s + 1) / 2, v = altitude / thickness.
-fn sample_multiscattering(atm: Atmosphere, r: f32, mu_s: f32) -> vec3<f32> {
-    let n = lut_params.sizes.z;
-    let uv = vec2<f32>(0.5 * (mu_s + 1.0), (r - atm.shape.x) / (atm.shape.y - atm.shape.x));
-    let b = bilinear_index(vec2<u32>(n, n), uv);
-    let k = u32(b.x);
-    let top = mix(multiscattering_lut[k].xyz, multiscattering_lut[k + 1u].xyz, b.z);
-    let bottom = mix(multiscattering_lut[k + n].xyz, multiscattering_lut[k + n + 1u].xyz, b.z);
-    return mix(top, bottom, b.w);
+// The multiple-scattering table's sun axis: u = (1 + sign(mu_s) sqrt(|mu_s|)) / 2, so texels
+// crowd around the terminator (mu_s = 0), where the scattered light changes fastest with the sun.
+fn ms_u_of_mu_s(mu_s: f32) -> f32 {
+    return 0.5 * (1.0 + sign(mu_s) * sqrt(abs(mu_s)));
 }
 
-// Sky radiance by the LUT method: single scattering with LUT transmittance to the sun plus
-// the isotropic multiple-scattering term sigma_s x Psi_ms.
+fn ms_mu_s_of_u(u: f32) -> f32 {
+    let s = 2.0 * u - 1.0;
+    return s * abs(s);
+}
+
+// Multiple-scattering table: u = ms_u_of_mu_s(mu_s), v = altitude / thickness; MS_LAYERS values
+// per texel (see `ms_harmonics`), each bilinearly interpolated. Region 0 holds the sum of the
+// orders from the second on, band 0 as its logarithm and the others as ratios to band 0, so that
+// reads follow the light's exponential fall as the sun sets (`ms_encode`); region 1 holds the
+// second order as it is while the table is built (sky_luts.wgsl).
+fn sample_multiscattering(region: u32, atm: Atmosphere, r: f32, mu_s: f32) -> array<vec3<f32>, 6> {
+    let n = lut_params.sizes.z;
+    let uv = vec2<f32>(ms_u_of_mu_s(mu_s), (r - atm.shape.x) / (atm.shape.y - atm.shape.x));
+    let b = bilinear_index(vec2<u32>(n, n), uv);
+    let k = region * n * n * MS_LAYERS + u32(b.x) * MS_LAYERS;
+    let row = n * MS_LAYERS;
+    var out: array<vec3<f32>, 6>;
+    for (var l = 0u; l < MS_LAYERS; l++) {
+        let top = mix(multiscattering_lut[k + l].xyz, multiscattering_lut[k + MS_LAYERS + l].xyz, b.z);
+        let bottom = mix(multiscattering_lut[k + row + l].xyz, multiscattering_lut[k + row + MS_LAYERS + l].xyz, b.z);
+        out[l] = mix(top, bottom, b.w);
+    }
+    if (region == 0u) {
+        return ms_decode(out);
+    }
+    return out;
+}
+
+// Region 0's form of a texel's harmonics (see `sample_multiscattering`).
+fn ms_encode(c: array<vec3<f32>, 6>) -> array<vec3<f32>, 6> {
+    var out = c;
+    let band0 = max(c[0], vec3<f32>(1e-30));
+    out[0] = log(band0);
+    for (var l = 1u; l < MS_LAYERS; l++) {
+        out[l] = c[l] / band0;
+    }
+    return out;
+}
+
+fn ms_decode(c: array<vec3<f32>, 6>) -> array<vec3<f32>, 6> {
+    var out = c;
+    out[0] = exp(c[0]);
+    for (var l = 1u; l < MS_LAYERS; l++) {
+        out[l] = c[l] * out[0];
+    }
+    return out;
+}
+
+// Radiance that the orders in table region `region` scatter at a point p (km from the planet's
+// centre, radius r_p, sun cosine mu_s) towards a camera looking along `view`: the harmonics of
+// the light arriving at p, each band scaled by the phase functions' Legendre moments (Rayleigh:
+// 1, 0, 0.1; Mie: 1, g_1, g_2; Funk-Hecke), summed at the view direction in p's frame.
+fn multiple_scattering_from(region: u32, atm: Atmosphere, p: vec3<f32>, r_p: f32, mu_s: f32, view: vec3<f32>, sun: vec3<f32>, sigma_r: vec3<f32>, sigma_m: vec3<f32>) -> vec3<f32> {
+    let c = sample_multiscattering(region, atm, r_p, mu_s);
+    let up = p / max(length(p), 1e-3);
+    let across = sun - up * dot(sun, up);
+    let across_len = length(across);
+    // With the sun overhead the field is symmetric about the vertical and the x harmonics vanish.
+    let x_axis = select(vec3<f32>(0.0), across / across_len, across_len > 1e-4);
+    let vx = dot(view, x_axis);
+    let vy = dot(view, up);
+    let y = ms_harmonics(vec3<f32>(vx, vy, sqrt(max(1.0 - vx * vx - vy * vy, 0.0))));
+    let band1 = sigma_m * lut_params.albedo_phase.y;
+    let band2 = 0.1 * sigma_r + sigma_m * lut_params.albedo_phase.z;
+    let sum = (sigma_r + sigma_m) * c[0] * y[0] + band1 * (c[1] * y[1] + c[2] * y[2]) + band2 * (c[3] * y[3] + c[4] * y[4] + c[5] * y[5]);
+    // A band-limited field can dip below zero where the true one is small.
+    return max(sum, vec3<f32>(0.0));
+}
+
+// Irradiance on the ground (units of the table) from the orders in region `region`, the sun at
+// cosine mu_s: the harmonics convolved with the clamped cosine (Ramamoorthi and Hanrahan 2001:
+// pi, 2 pi / 3, pi / 4 per band) at the vertical, where only the zonal harmonics are non-zero.
+fn ms_ground_irradiance(region: u32, atm: Atmosphere, mu_s: f32) -> vec3<f32> {
+    let c = sample_multiscattering(region, atm, atm.shape.x, mu_s);
+    let y = ms_harmonics(vec3<f32>(0.0, 1.0, 0.0));
+    return max(PI * c[0] * y[0] + (2.0 * PI / 3.0) * c[1] * y[1] + (PI / 4.0) * c[4] * y[4], vec3<f32>(0.0));
+}
+
+// Sky radiance by the LUT method: single scattering with LUT transmittance to the sun plus what
+// the multiple-scattering table's orders scatter towards the camera (Hillaire 2020's
+// sigma_s x Psi_ms, made anisotropic).
 fn lut_radiance(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
     let ray = view_ray(atm, camera_km, view, sun);
     let r = ray.r;
@@ -62,7 +155,7 @@ fn lut_radiance(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>
         let sigma_r = atm.rayleigh.xyz * exp(-h / atm.rayleigh.w);
         let sigma_m = atm.mie_scattering.xyz * exp(-h / atm.mie_scattering.w);
         let single = (sigma_r * ray.phase_r + sigma_m * ray.phase_m) * sun_transmittance(atm, r_p, mu_s);
-        let multiple = (sigma_r + sigma_m) * sample_multiscattering(atm, r_p, mu_s);
+        let multiple = multiple_scattering_from(0u, atm, p, r_p, mu_s, view, sun, sigma_r, sigma_m);
         sum += (single + multiple) * exp(-tau_mid) * dt;
     }
     return sum;

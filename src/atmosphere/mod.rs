@@ -254,6 +254,24 @@ pub fn cornette_shanks_phase(cos_theta: f64, g: f64) -> f64 {
     3.0 / (8.0 * PI) * (1.0 - g2) / (2.0 + g2) * (1.0 + cos_theta * cos_theta) / (1.0 + g2 - 2.0 * g * cos_theta).powf(1.5)
 }
 
+/// The Legendre moments g_1 and g_2 of the Cornette-Shanks phase function of asymmetry `g`:
+/// g_l = 2 pi times the integral of p(x) P_l(x) over x in -1..1 (g_0 = 1; Rayleigh's are 0 and
+/// 0.1). Convolving a radiance field's spherical-harmonic band l with the phase function scales
+/// it by g_l (Funk-Hecke), which is how the `lut` model scatters its second order anisotropically.
+pub fn cornette_shanks_moments(g: f64) -> [f64; 2] {
+    // Midpoint rule in theta: the forward peak of g near 1 is narrow in x but not in theta.
+    let n = 4096;
+    let (mut g1, mut g2) = (0.0, 0.0);
+    for i in 0..n {
+        let theta = PI * (i as f64 + 0.5) / n as f64;
+        let x = theta.cos();
+        let w = 2.0 * PI * cornette_shanks_phase(x, g) * theta.sin() * PI / n as f64;
+        g1 += w * x;
+        g2 += w * 0.5 * (3.0 * x * x - 1.0);
+    }
+    [g1, g2]
+}
+
 /// Henyey-Greenstein phase function, sr^-1 (used to importance-sample the Mie lobe).
 pub fn henyey_greenstein_phase(cos_theta: f64, g: f64) -> f64 {
     let g2 = g * g;

@@ -105,7 +105,7 @@ pub fn points() -> Vec<Point> {
                 transmittance_size: [512, 128],
                 transmittance_steps: 80,
                 multiscattering_size: 64,
-                multiscattering_grid: 8,
+                multiscattering_grid: 16,
                 multiscattering_steps: 40,
                 view_steps: 64,
             }),

@@ -149,7 +149,7 @@ impl RadianceProbe {
     pub fn lut(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &LutSettings, cases: &[Case]) -> RenderResult<Vec<[f32; 3]>> {
         let mut out = vec![[0.0; 3]; cases.len()];
         for (index, subset) in by_albedo(cases) {
-            let params = LutUniform::new(settings, subset[0].albedo as f32);
+            let params = LutUniform::new(settings, subset[0].albedo as f32, atmosphere.mie_g);
             ctx.queue.write_buffer(&self.tables.params, 0, bytemuck::bytes_of(&params));
             let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Lut, Build::Lut(settings), &[], None)?;
             for (i, r) in index.into_iter().zip(result) {

@@ -70,7 +70,7 @@ impl Pass for SkyLutsPass {
         if model.kind != SkyModelKind::Lut {
             return;
         }
-        let key = (AtmosphereUniform::from(&cx.frame.atmosphere), LutUniform::new(&model.lut, model.ground_albedo));
+        let key = (AtmosphereUniform::from(&cx.frame.atmosphere), LutUniform::new(&model.lut, model.ground_albedo, cx.frame.atmosphere.mie_g));
         if self.built == Some(key) && cx.options.skips.unchanged_tables {
             self.skipped = true;
             return;

@@ -67,22 +67,32 @@ pub struct LutUniform {
     pub sizes: [u32; 4],
     /// Transmittance, multiple-scattering and view-ray samples; unused.
     pub steps: [u32; 4],
-    /// Ground albedo; unused.
-    pub ground: [f32; 4],
+    /// Ground albedo; the Mie phase function's Legendre moments g_1, g_2; unused.
+    pub albedo_phase: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<LutUniform>() == 48);
 
 impl LutUniform {
-    /// The GPU form of `settings` with a ground albedo.
-    pub fn new(settings: &LutSettings, albedo: f32) -> Self {
+    /// The GPU form of `settings` with a ground albedo and the Mie asymmetry `mie_g`.
+    pub fn new(settings: &LutSettings, albedo: f32, mie_g: f64) -> Self {
         let [w, h] = settings.transmittance_size;
+        let [g1, g2] = crate::atmosphere::cornette_shanks_moments(mie_g);
         Self {
             sizes: [w, h, settings.multiscattering_size, settings.multiscattering_grid],
             steps: [settings.transmittance_steps, settings.multiscattering_steps, settings.view_steps, 0],
-            ground: [albedo, 0.0, 0.0, 0.0],
+            albedo_phase: [albedo, g1 as f32, g2 as f32, 0.0],
         }
     }
 }
+
+/// Values per multiple-scattering texel: the incoming radiance of the orders from the second on
+/// in six real spherical harmonics (bands 0 to 2, those even about the plane of the sun and the
+/// vertical). Keep in sync with `MS_LAYERS` in shaders/sky_model/lut_sampling.wgsl.
+pub const MULTISCATTERING_LAYERS: u32 = 6;
+
+/// Regions of the multiple-scattering buffer: the sum of the orders the model reads, and the
+/// second order alone while the table is built.
+pub const MULTISCATTERING_REGIONS: u32 = 2;
 
 /// The `lut` model's tables: storage buffers of vec4 sized for the largest settings.
 pub struct LutTables {
@@ -90,7 +100,7 @@ pub struct LutTables {
     pub params: wgpu::Buffer,
     /// Transmittance, rgb per texel.
     pub transmittance: wgpu::Buffer,
-    /// Multiple-scattering Psi, rgb per texel.
+    /// Multiple scattering: [`MULTISCATTERING_LAYERS`] rgb values per texel.
     pub multiscattering: wgpu::Buffer,
 }
 
@@ -105,7 +115,7 @@ impl LutTables {
         Self {
             params: storage("LutTables::params", std::mem::size_of::<LutUniform>() as u64, wgpu::BufferUsages::COPY_DST),
             transmittance: storage("LutTables::transmittance", (tw * th * 16) as u64, wgpu::BufferUsages::empty()),
-            multiscattering: storage("LutTables::multiscattering", (m * m * 16) as u64, wgpu::BufferUsages::empty()),
+            multiscattering: storage("LutTables::multiscattering", (m * m * MULTISCATTERING_LAYERS * MULTISCATTERING_REGIONS * 16) as u64, wgpu::BufferUsages::empty()),
         }
     }
 
@@ -134,6 +144,8 @@ pub struct LutBuilder {
     layout: wgpu::BindGroupLayout,
     transmittance: wgpu::ComputePipeline,
     multiscattering: wgpu::ComputePipeline,
+    /// The third order and the extrapolated ones above it.
+    later_orders: wgpu::ComputePipeline,
 }
 
 impl LutBuilder {
@@ -150,7 +162,12 @@ impl LutBuilder {
         });
         let module = crate::render::gpu::shaders::module(device, library, "sky_luts")?;
         let pipeline = |entry: &str, label: &str| crate::render::gpu::shaders::compute_pipeline(device, &pipeline_layout, &module, entry, label);
-        Ok(Self { transmittance: pipeline("cs_transmittance", "SkyLuts::transmittance")?, multiscattering: pipeline("cs_multiscattering", "SkyLuts::multiscattering")?, layout })
+        Ok(Self {
+            transmittance: pipeline("cs_transmittance", "SkyLuts::transmittance")?,
+            multiscattering: pipeline("cs_multiscattering", "SkyLuts::multiscattering")?,
+            later_orders: pipeline("cs_multiscattering_later", "SkyLuts::multiscattering_later")?,
+            layout,
+        })
     }
 
     /// A bind group of the builders over `tables` with the atmosphere uniform `atmosphere`.
@@ -172,6 +189,8 @@ impl LutBuilder {
         cpass.set_pipeline(&self.transmittance);
         cpass.dispatch_workgroups((w * h).div_ceil(64), 1, 1);
         cpass.set_pipeline(&self.multiscattering);
+        cpass.dispatch_workgroups((m * m).div_ceil(64), 1, 1);
+        cpass.set_pipeline(&self.later_orders);
         cpass.dispatch_workgroups((m * m).div_ceil(64), 1, 1);
     }
 }

@@ -526,7 +526,7 @@ impl SkyViewPass {
         let key = Key {
             atmosphere: (&cx.frame.atmosphere).into(),
             single: (&model.single).into(),
-            lut: crate::render::passes::sky_model::LutUniform::new(&model.lut, model.ground_albedo),
+            lut: crate::render::passes::sky_model::LutUniform::new(&model.lut, model.ground_albedo, cx.frame.atmosphere.mie_g),
             precomputed: crate::render::passes::precomputed_tables::PrecomputedHeader::new(&model.precomputed, model.ground_albedo),
             precomputed_generation: self.precomputed_state.generation.load(Ordering::Relaxed),
             params: (model, cx.frame.towards_sun).into(),
