@@ -12,7 +12,6 @@ use cli::{bench_frame, bench_models, bench_passes, stability_report};
 use cli::{Cli, Command, FrameArgs, RenderArgs};
 use skytune::files::hot_reload::{LiveSky, ReloadEvent, SkySpec};
 use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions};
-use skytune::sky::resolved::SkyModelKind;
 use skytune::sky::{procedural, FrameInput, Sky, Tier};
 use skytune::support::shard::{self, Shard};
 
@@ -564,11 +563,8 @@ fn model_override(sky: &Sky, f: &cli::FrameArgs) -> anyhow::Result<Option<skytun
         return Ok(None);
     }
     let mut model = sky.model;
-    if let Some(name) = &f.sky_model {
-        model.kind = SkyModelKind::ALL
-            .into_iter()
-            .find(|k| k.name() == name)
-            .ok_or_else(|| anyhow!("--sky-model: unknown model \"{name}\"; expected one of {}", SkyModelKind::ALL.map(|k| k.name()).join(", ")))?;
+    if let Some(kind) = f.sky_model {
+        model.kind = kind;
     }
     model.drive_scene |= f.drive_scene;
     if f.auto_exposure {

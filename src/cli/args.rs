@@ -297,6 +297,11 @@ pub struct ValidateArgs {
     pub cpu: bool,
 }
 
+fn parse_sky_model_kind(s: &str) -> Result<skytune::sky::resolved::SkyModelKind, String> {
+    use skytune::sky::resolved::SkyModelKind;
+    SkyModelKind::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| format!("expected one of {}", SkyModelKind::ALL.map(|k| k.name()).join(", ")))
+}
+
 fn parse_aerosol(s: &str) -> Result<skytune::atmosphere::aerosol::AerosolPreset, String> {
     use skytune::atmosphere::aerosol::AerosolPreset;
     AerosolPreset::ALL.into_iter().find(|p| p.name() == s).ok_or_else(|| format!("expected one of {}", AerosolPreset::ALL.map(|p| p.name()).join(", ")))
@@ -440,9 +445,9 @@ pub struct FrameArgs {
     /// With --env-map: keep the main scene's stand-in (its horizon).
     #[arg(long)]
     pub with_scene: bool,
-    /// Colour source of the skydome instead of the sky file's: bitmap, linear, preetham, hosek, single, lut, cells, reference.
-    #[arg(long)]
-    pub sky_model: Option<String>,
+    /// Colour source of the skydome instead of the sky file's (a sky file's `[sky_model] kind`, `auto` aside).
+    #[arg(long, value_parser = parse_sky_model_kind)]
+    pub sky_model: Option<skytune::sky::resolved::SkyModelKind>,
     /// Exposure of physical sky models, stops (default: the sky file's).
     #[arg(long)]
     pub exposure_ev: Option<f32>,
@@ -733,6 +738,11 @@ pub struct FrameBenchArgs {
     /// Measure only this fill strategy (software, plain); both by default, side by side.
     #[arg(long)]
     pub strategy: Option<String>,
+    /// Also measure every sky with these skydome colour sources (comma-separated `[sky_model]`
+    /// kinds, e.g. `bitmap,lut,precomputed`), besides its own; physical cases are reported
+    /// against the same sky's bitmap case.
+    #[arg(long, value_parser = parse_sky_model_kind, value_delimiter = ',')]
+    pub sky_models: Vec<skytune::sky::resolved::SkyModelKind>,
 }
 
 /// Parses a dome resolution name (full, half, quarter, auto).

@@ -16,6 +16,7 @@ use skytune::render::passes::baseline::Baseline;
 use skytune::render::plan::strategy::PRESETS;
 use skytune::render::{AdapterChoice, Camera, FillStrategy, GpuContext, Headless, RenderOptions, ShaderLibrary, OFFSCREEN_FORMAT};
 use skytune::sky::builtin::default_sky;
+use skytune::sky::resolved::SkyModelKind;
 use skytune::sky::{FrameInput, Sky};
 
 fn median(v: &[f64]) -> f64 {
@@ -33,12 +34,17 @@ const TIMES: [(f32, f32); 4] = [(12.0, 0.0), (18.5, 0.3), (23.0, 0.0), (15.0, 1.
 /// One measured case.
 struct Case {
     sky: String,
+    /// The skydome's colour source (`[sky_model] kind`).
+    model: SkyModelKind,
     /// The fill strategy's preset.
     strategy: &'static str,
     hour: f32,
     weather: f32,
     view: &'static str,
+    /// The frame with the sun still (the same frame again), ms.
     sky_ms: f64,
+    /// The frame with the sun moving every frame (a time-lapse: 0.02 h a frame), ms.
+    moving_ms: f64,
     floor_ms: f64,
     /// The same frame with the main-scene stand-in drawn (terrain and buildings in front of the
     /// sky at the horizon), ms.
@@ -53,6 +59,8 @@ struct Measured {
     with_scene: RenderOptions,
     /// Timed frames (no timestamps recorded).
     plain: Headless,
+    /// Timed frames with the sun moving: a renderer of its own, so that `plain` keeps its map.
+    moving: Headless,
     /// The same frames, recording timestamps for the phase columns.
     timing: Headless,
 }
@@ -62,6 +70,7 @@ struct Measured {
 struct Samples {
     floor_ms: Vec<f64>,
     sky_ms: Vec<f64>,
+    moving_ms: Vec<f64>,
     scene_ms: Vec<f64>,
     phases: Vec<Vec<(&'static str, f32)>>,
 }
@@ -121,7 +130,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     // phase columns. One pair of renderers per strategy: each keeps its own buffers.
     let untimed = ctx.without_timestamps();
     let floor = Baseline::new(&ctx.device, &ctx.queue, &ShaderLibrary::embedded(), OFFSCREEN_FORMAT)?;
-    let skies = skies(&args.skies)?;
+    let skies = with_models(skies(&args.skies)?, &args.sky_models);
     let views: [(&str, Camera); 2] =
         [("horizon", Camera { yaw_deg: 180.0, pitch_deg: 10.0, ..Camera::default() }), ("zenith", Camera::preset("zenith").ok_or_else(|| anyhow!("no zenith view"))?)];
     // The sky alone, filling the frame (what the goal is about); the frame with the main-scene
@@ -139,6 +148,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
                 options,
                 with_scene: RenderOptions { scene: true, ..options },
                 plain: Headless::new(untimed.clone(), w, h)?,
+                moving: Headless::new(untimed.clone(), w, h)?,
                 timing: Headless::new(ctx.clone(), w, h)?,
             })
         })
@@ -148,6 +158,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     for (name, sky) in &skies {
         for m in &mut measured {
             m.plain.set_sky(sky)?;
+            m.moving.set_sky(sky)?;
             m.timing.set_sky(sky)?;
         }
         for (hour, weather) in TIMES {
@@ -156,7 +167,11 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
                 let frame = sky.evaluate(&input);
                 let mut samples: Vec<Samples> = measured.iter().map(|_| Samples::default()).collect();
                 for i in 0..frames + 2 {
+                    let moved = sky.evaluate(&FrameInput::new(hour + SUN_STEP_HOURS * (i + 1) as f32, weather));
                     for (m, samples) in measured.iter_mut().zip(&mut samples) {
+                        let target = m.moving.target.target();
+                        let moving = timed(&ctx, |e| m.moving.renderer.render(&ctx, e, &target, &moved, camera, &m.options))?;
+                        m.moving.renderer.after_submit();
                         let target = m.plain.target.target();
                         let f = timed(&ctx, |e| floor.record(e, target.color))?;
                         let with = timed(&ctx, |e| m.plain.renderer.render(&ctx, e, &target, &frame, camera, &m.with_scene))?;
@@ -169,6 +184,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
                         if i >= 2 {
                             samples.floor_ms.push(f);
                             samples.sky_ms.push(s);
+                            samples.moving_ms.push(moving);
                             samples.scene_ms.push(with);
                             samples.phases.push(m.timing.renderer.gpu_pass_ms().to_vec());
                         }
@@ -181,23 +197,27 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
                         names.iter().map(|n| (*n, median(&phases.iter().filter_map(|p| p.iter().find(|(m, _)| m == n).map(|(_, ms)| *ms as f64)).collect::<Vec<_>>()))).collect();
                     let case = Case {
                         sky: name.clone(),
+                        model: sky.model.kind,
                         strategy: m.name,
                         hour,
                         weather,
                         view,
                         sky_ms: median(&samples.sky_ms),
+                        moving_ms: median(&samples.moving_ms),
                         floor_ms: median(&samples.floor_ms),
                         with_scene_ms: median(&samples.scene_ms),
                         phases: phase_medians,
                     };
                     println!(
-                        "{:<10} {:<8} {:>5.1} h weather {:.1} {:<7}: frame {:>8.2} ms, floor {:>6.2} ms, ratio {:>5.1} (with the scene {:>6.2} ms, {:.1})",
+                        "{:<10} {:<11} {:<8} {:>5.1} h weather {:.1} {:<7}: frame {:>8.2} ms (sun moving {:>8.2}), floor {:>6.2} ms, ratio {:>5.1} (with the scene {:>6.2} ms, {:.1})",
                         case.sky,
+                        case.model.name(),
                         case.strategy,
                         hour,
                         weather,
                         view,
                         case.sky_ms,
+                        case.moving_ms,
                         case.floor_ms,
                         case.sky_ms / case.floor_ms,
                         case.with_scene_ms,
@@ -208,23 +228,21 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
             }
         }
     }
-    // Per strategy: worst and median ratio, and each case's frame against the summarised one's.
+    // Per strategy, over the painted (bitmap) cases: worst and median ratio, and each case's
+    // frame against the summarised strategy's.
     let per_strategy: Vec<(&str, f64, f64, f64)> = measured
         .iter()
         .map(|m| {
-            let r: Vec<f64> = cases.iter().filter(|c| c.strategy == m.name).map(|c| c.sky_ms / c.floor_ms).collect();
-            let against: Vec<f64> = cases
-                .iter()
-                .filter(|c| c.strategy == m.name)
-                .filter_map(|c| {
-                    cases.iter().find(|o| o.strategy == summarised && (&o.sky, o.hour, o.weather, o.view) == (&c.sky, c.hour, c.weather, c.view)).map(|o| c.sky_ms / o.sky_ms)
-                })
-                .collect();
+            let painted = || cases.iter().filter(|c| c.strategy == m.name && !c.model.is_physical());
+            let r: Vec<f64> = painted().map(|c| c.sky_ms / c.floor_ms).collect();
+            let against: Vec<f64> =
+                painted().filter_map(|c| cases.iter().find(|o| o.strategy == summarised && o.model == c.model && o.same_view(c)).map(|o| c.sky_ms / o.sky_ms)).collect();
             (m.name, r.iter().copied().fold(0.0, f64::max), median(&r), median(&against))
         })
         .collect();
     let all_cases = cases;
-    let cases: Vec<&Case> = all_cases.iter().filter(|c| c.strategy == summarised).collect();
+    let physical = physical_ratios(&all_cases, summarised);
+    let cases: Vec<&Case> = all_cases.iter().filter(|c| c.strategy == summarised && !c.model.is_physical()).collect();
     let (_, worst, med, _) = per_strategy.iter().copied().find(|s| s.0 == summarised).ok_or_else(|| anyhow!("no cases of {summarised}"))?;
     let Measured { mut plain, timing: mut hl, options, .. } = measured.into_iter().find(|m| m.name == summarised).ok_or_else(|| anyhow!("no renderer for {summarised}"))?;
     let scene_ratios: Vec<f64> = cases.iter().map(|c| c.with_scene_ms / c.floor_ms).collect();
@@ -301,6 +319,9 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
         md,
         "\n**fill_limit_ratio worst={worst:.1} median={med:.1}** (`{summarised}` strategy; goal: 3; with the scene stand-in: worst {scene_worst:.1}, median {scene_med:.1})\n"
     );
+    if let Some(p) = &physical {
+        let _ = writeln!(md, "{}\n", p.describe(summarised));
+    }
     let _ = writeln!(md, "| strategy | worst ratio | median ratio | frame against `{summarised}`, median of the cases |\n|---|---:|---:|---:|");
     for (name, worst, med, against) in &per_strategy {
         let _ = writeln!(md, "| {name} | {worst:.2} | {med:.2} | {against:.2} |");
@@ -313,11 +334,11 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
             phase_names.push(n);
         }
     }
-    let _ = write!(md, "| sky | strategy | hour | weather | view | frame ms | floor ms | ratio | with scene ms | ratio with scene |");
+    let _ = write!(md, "| sky | model | strategy | hour | weather | view | frame ms | sun moving ms | floor ms | ratio | with scene ms | ratio with scene |");
     for n in &phase_names {
         let _ = write!(md, " {n} ms |");
     }
-    let _ = write!(md, "\n|---|---|---:|---:|---|---:|---:|---:|---:|---:|");
+    let _ = write!(md, "\n|---|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|");
     for _ in &phase_names {
         let _ = write!(md, "---:|");
     }
@@ -325,13 +346,15 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     for c in &all_cases {
         let _ = write!(
             md,
-            "| {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.1} | {:.2} | {:.1} |",
+            "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} | {:.1} |",
             c.sky,
+            c.model.name(),
             c.strategy,
             c.hour,
             c.weather,
             c.view,
             c.sky_ms,
+            c.moving_ms,
             c.floor_ms,
             c.sky_ms / c.floor_ms,
             c.with_scene_ms,
@@ -385,8 +408,86 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     for (name, worst, med, against) in &per_strategy {
         println!("strategy {name}: worst={worst:.2} median={med:.2}, frame against {summarised} median {against:.2}");
     }
+    if let Some(p) = &physical {
+        println!("physical_ratio worst={:.2} median={:.2}", p.still.0, p.still.1);
+        println!("physical_ratio_sun_moving worst={:.2} median={:.2}", p.moving.0, p.moving.1);
+    }
     println!("fill_limit_ratio worst={worst:.2} median={med:.2}");
     Ok(())
+}
+
+/// Time between the frames of the sun-moving measurement, game hours (about 0.3 degrees of sun on
+/// a 24-hour day): every frame's sun differs, so every frame updates what follows the sun.
+const SUN_STEP_HOURS: f32 = 0.02;
+
+impl Case {
+    /// Whether `other` is the same sky, strategy, moment and view (the model aside).
+    fn same_view(&self, other: &Case) -> bool {
+        (&self.sky, self.hour, self.weather, self.view) == (&other.sky, other.hour, other.weather, other.view)
+    }
+}
+
+/// `skies`, each followed by copies of itself with each of `models` as its skydome's colour
+/// source (its own model is not repeated).
+fn with_models(skies: Vec<(String, Sky)>, models: &[SkyModelKind]) -> Vec<(String, Sky)> {
+    let mut out = Vec::new();
+    for (name, sky) in skies {
+        let copies: Vec<(String, Sky)> = models
+            .iter()
+            .filter(|k| **k != sky.model.kind)
+            .map(|k| {
+                let mut copy = sky.clone();
+                copy.model.kind = *k;
+                (name.clone(), copy)
+            })
+            .collect();
+        out.push((name, sky));
+        out.extend(copies);
+    }
+    out
+}
+
+/// Physical-model frames against the same sky's painted (bitmap) frame, case by case.
+struct PhysicalRatios {
+    /// Worst and median, the sun still.
+    still: (f64, f64),
+    /// Worst and median, the sun moving every frame.
+    moving: (f64, f64),
+    /// Worst and median of the physical frames against the floor, the sun still.
+    floor: (f64, f64),
+    /// Physical cases with a painted twin.
+    count: usize,
+}
+
+impl PhysicalRatios {
+    /// A line for the report.
+    fn describe(&self, strategy: &str) -> String {
+        format!(
+            "**physical_ratio worst={:.2} median={:.2}** (`{strategy}` strategy; {} physical cases, each against the same sky, moment and view drawn with its bitmaps; goal: 1.3) and with the sun moving every frame worst={:.2} median={:.2} (goal: 1.6); against the floor worst={:.1} median={:.1}",
+            self.still.0, self.still.1, self.count, self.moving.0, self.moving.1, self.floor.0, self.floor.1
+        )
+    }
+}
+
+/// The physical cases of `strategy` against their painted twins; `None` when there are none.
+fn physical_ratios(cases: &[Case], strategy: &str) -> Option<PhysicalRatios> {
+    let of = |c: &&Case| c.strategy == strategy;
+    let pairs: Vec<(&Case, &Case)> = cases
+        .iter()
+        .filter(of)
+        .filter(|c| c.model.is_physical())
+        .filter_map(|c| cases.iter().filter(of).find(|o| !o.model.is_physical() && o.same_view(c)).map(|o| (c, o)))
+        .collect();
+    if pairs.is_empty() {
+        return None;
+    }
+    let worst_median = |v: Vec<f64>| (v.iter().copied().fold(0.0, f64::max), median(&v));
+    Some(PhysicalRatios {
+        still: worst_median(pairs.iter().map(|(p, b)| p.sky_ms / b.sky_ms).collect()),
+        moving: worst_median(pairs.iter().map(|(p, b)| p.moving_ms / b.moving_ms).collect()),
+        floor: worst_median(pairs.iter().map(|(p, _)| p.sky_ms / p.floor_ms).collect()),
+        count: pairs.len(),
+    })
 }
 
 /// Median CPU time of `Sky::evaluate` for a sky of 50 objects, microseconds, and the object count.
@@ -566,4 +667,41 @@ fn shader_latency(ctx: &GpuContext, (w, h): (u32, u32), edits: u32) -> anyhow::R
     drop(watcher);
     let _ = std::fs::remove_dir_all(&dir);
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn case(model: SkyModelKind, hour: f32, sky_ms: f64, moving_ms: f64) -> Case {
+        Case { sky: "desert".into(), model, strategy: "software", hour, weather: 0.0, view: "horizon", sky_ms, moving_ms, floor_ms: 2.0, with_scene_ms: 0.0, phases: Vec::new() }
+    }
+
+    #[test]
+    fn every_sky_gets_each_model_once_after_its_own() {
+        let sky = default_sky();
+        let own = sky.model.kind;
+        let out = with_models(vec![("a".into(), sky)], &[SkyModelKind::Lut, own, SkyModelKind::Hosek]);
+        let kinds: Vec<SkyModelKind> = out.iter().map(|(_, s)| s.model.kind).collect();
+        assert_eq!(kinds, vec![own, SkyModelKind::Lut, SkyModelKind::Hosek]);
+        assert!(out.iter().all(|(n, _)| n == "a"));
+    }
+
+    #[test]
+    fn physical_cases_are_measured_against_their_painted_twin() {
+        let cases = vec![
+            case(SkyModelKind::Bitmap, 12.0, 4.0, 4.0),
+            case(SkyModelKind::Lut, 12.0, 6.0, 20.0),
+            case(SkyModelKind::Bitmap, 18.5, 2.0, 2.0),
+            case(SkyModelKind::Hosek, 18.5, 5.0, 5.0),
+            // No painted twin at this hour: left out.
+            case(SkyModelKind::Lut, 23.0, 100.0, 100.0),
+        ];
+        let p = physical_ratios(&cases, "software").expect("physical cases");
+        assert_eq!(p.count, 2);
+        assert_eq!(p.still, (2.5, 2.5), "1.5 and 2.5: the worst, and the upper median of two");
+        assert_eq!(p.moving.0, 5.0);
+        assert!(physical_ratios(&cases[..1], "software").is_none(), "no physical case, no line");
+        assert!(physical_ratios(&cases, "plain").is_none(), "another strategy's cases are not paired");
+    }
 }
