@@ -259,6 +259,20 @@ pub fn cornette_shanks_phase(cos_theta: f64, g: f64) -> f64 {
 /// 0.1). Convolving a radiance field's spherical-harmonic band l with the phase function scales
 /// it by g_l (Funk-Hecke), which is how the `lut` model scatters its second order anisotropically.
 pub fn cornette_shanks_moments(g: f64) -> [f64; 2] {
+    // Asked for every frame (the LUT passes' keys) with the same g: the last answer is kept.
+    static LAST: std::sync::Mutex<Option<(u64, [f64; 2])>> = std::sync::Mutex::new(None);
+    let mut last = LAST.lock().unwrap_or_else(|e| e.into_inner());
+    match *last {
+        Some((bits, moments)) if bits == g.to_bits() => moments,
+        _ => {
+            let moments = integrate_cornette_shanks_moments(g);
+            *last = Some((g.to_bits(), moments));
+            moments
+        }
+    }
+}
+
+fn integrate_cornette_shanks_moments(g: f64) -> [f64; 2] {
     // Midpoint rule in theta: the forward peak of g near 1 is narrow in x but not in theta.
     let n = 4096;
     let (mut g1, mut g2) = (0.0, 0.0);
@@ -318,7 +332,8 @@ pub struct LutSettings {
     pub transmittance_steps: u32,
     /// Multiple-scattering table side, texels (sun angle x altitude).
     pub multiscattering_size: u32,
-    /// The multiple-scattering integral uses grid x grid directions.
+    /// The multiple-scattering integral uses grid polar bands x grid azimuths over the half
+    /// sphere (mirrored: grid x 2 grid over the sphere).
     pub multiscattering_grid: u32,
     /// Samples per direction of the multiple-scattering integral.
     pub multiscattering_steps: u32,
@@ -360,5 +375,25 @@ impl Default for LutSettings {
     fn default() -> Self {
         // Hillaire 2020's sizes: 256 x 64 transmittance, 32 x 32 multiple scattering, 64 directions.
         Self { transmittance_size: [256, 64], transmittance_steps: 40, multiscattering_size: 32, multiscattering_grid: 8, multiscattering_steps: 20, view_steps: 32 }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cornette_shanks_moments_match_their_closed_forms() {
+        // At g = 0 Cornette-Shanks is Rayleigh's phase function: moments 0 and 0.1.
+        let [g1, g2] = cornette_shanks_moments(0.0);
+        assert!(g1.abs() < 1e-9 && (g2 - 0.1).abs() < 1e-6, "{g1} {g2}");
+        // Its mean cosine is 3g (4 + g^2) / (5 (2 + g^2)) (Cornette and Shanks 1992).
+        for g in [-0.5, 0.3, 0.8, 0.95] {
+            let mean = 3.0 * g * (4.0 + g * g) / (5.0 * (2.0 + g * g));
+            let [g1, _] = cornette_shanks_moments(g);
+            assert!((g1 - mean).abs() < 1e-4, "g {g}: g_1 {g1}, closed form {mean}");
+        }
+        // Asked again (kept) and after another g (recomputed): the same answers.
+        assert_eq!(cornette_shanks_moments(0.8), integrate_cornette_shanks_moments(0.8));
     }
 }

@@ -358,7 +358,7 @@ pub struct RadianceArgs {
     /// `lut`: multiple-scattering table side, texels.
     #[arg(long, default_value_t = 32)]
     pub multiscattering_size: u32,
-    /// `lut`: the multiple-scattering integral uses GRID x GRID directions.
+    /// `lut`: the multiple-scattering integral uses GRID polar bands x GRID azimuths over the half sphere (mirrored: GRID x 2 GRID over the sphere).
     #[arg(long, default_value_t = 8)]
     pub multiscattering_grid: u32,
     /// `cells`: refinement iterations (0: single scattering).

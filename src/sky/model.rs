@@ -363,7 +363,7 @@ pub struct SkyModelDef {
     /// `lut`: multiple-scattering table side, texels (at most 64).
     #[serde(default)]
     pub multiscattering_size: Option<StepCount>,
-    /// `lut`: the multiple-scattering integral uses grid x grid directions.
+    /// `lut`: the multiple-scattering integral uses grid polar bands x grid azimuths over the half sphere (mirrored: grid x 2 grid).
     #[serde(default)]
     pub multiscattering_grid: Option<StepCount>,
     /// `lut`: samples per direction of the multiple-scattering integral.
