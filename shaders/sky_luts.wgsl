@@ -175,10 +175,10 @@ fn cs_multiscattering(@builtin(global_invocation_id) gid: vec3<u32>) {
     ms_add_to_sum(gid.x, second, true);
 }
 
-// The third order from the second (region 1), and every order above it by
-// extrapolation: the orders' band 0 falls by about the same ratio q from one to the next (the
-// share of light an order scatters again), so orders 4 and on add order 3 times q / (1 - q), q
-// measured per texel and channel. Instead of Hillaire's isotropic series L_2nd / (1 - f_ms), the
+// The third order from the second (region 1), and every order above it by extrapolation: each
+// further order is taken as the one before times q = Hillaire's transfer factor f (the share of
+// uniform light that the air and the ground return to the point; `MsOrder::transfer`, per texel
+// and channel), so orders 4 and on add order 3 times q / (1 - q). Instead of Hillaire's isotropic series L_2nd / (1 - f_ms), the
 // orders that matter most are iterated as Bruneton 2017 does with its 4D tables: the 2D table is
 // exact for a spherically symmetric atmosphere but for the band limit of its harmonics.
 @compute @workgroup_size(64)
