@@ -48,6 +48,9 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         let coverage = mix(0.35, 1.0, smoothstep(0.0, 0.25, lit));
         color = vec4<f32>(color.rgb * (0.04 + 0.96 * lit), color.a * coverage * step(r2, 1.0));
     }
+    if OVER_MODEL_SKY {
+        color = over_model_sky(color, in.world_dir, sky_view, sky_view_sampler);
+    }
     if UNDER_RUN {
         color = under_run(color, in.clip.xy);
     }

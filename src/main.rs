@@ -408,8 +408,7 @@ pub fn spec_for(path: Option<&Path>, season: Option<&str>) -> anyhow::Result<Sky
 /// resolution where given.
 fn strategy_from_args(f: &FrameArgs, ctx: &GpuContext) -> anyhow::Result<skytune::render::FillStrategy> {
     use skytune::render::FillStrategy;
-    let asked = f.strategy.as_deref().map(FillStrategy::preset_arg).transpose().map_err(|e| anyhow!(e))?;
-    let mut strategy = FillStrategy::resolve(asked, ctx.adapter.get_info().device_type);
+    let mut strategy = FillStrategy::resolve(f.strategy, ctx.adapter.get_info().device_type);
     if let Some(r) = f.dome_resolution {
         strategy.dome_resolution = r;
     }

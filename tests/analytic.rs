@@ -204,7 +204,7 @@ fn model_image(name: &str, kind: SkyModelKind, hour: f32, lit_clouds: bool) {
     h.set_sky(&sky).unwrap();
     let input = FrameInput { sky_model: Some(skytune::sky::resolved::SkyModel { kind, ..sky.model }), ..FrameInput::new(hour, 0.0) };
     let camera = Camera { yaw_deg: 120.0, pitch_deg: 25.0, ..Camera::default() };
-    let img = h.render(&sky, &input, &camera, &RenderOptions::default()).unwrap();
+    let img = h.render(&sky, &input, &camera, &common::hdr_options()).unwrap();
     common::check_reference(name, &img);
 }
 

@@ -1,7 +1,7 @@
 //! The renderer's pictures and counters, byte for byte: every committed sky and the built-in one,
 //! at four (hour, weather) pairs, looking at the horizon and at the zenith, on the display target
-//! (the NeL bitmaps) and the HDR target (a physical model), with the `software` and the `plain`
-//! fill strategies. Each case records a hash of the image's bytes (and of the HDR target's) and
+//! (the NeL bitmaps), the HDR target (a physical model) and display-referred (the physical model
+//! on the display target), with the `software` and the `plain` fill strategies. Each case records a hash of the image's bytes (and of the HDR target's) and
 //! the frame's `FrameStats`, in tests/snapshots/frames.txt.
 //!
 //! A restructuring of the renderer leaves this file as it is: a change of any picture or counter
@@ -14,6 +14,7 @@ mod common;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use skytune::render::plan::strategy::PhysicalTarget;
 use skytune::render::{headless, Camera, FillStrategy, Headless, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
@@ -60,8 +61,14 @@ fn sky_lines(h: &mut Headless, name: &str, sky: &Sky) -> Vec<String> {
     let views = [("horizon", Camera { yaw_deg: 220.0, pitch_deg: 4.0, ..Camera::default() }), ("zenith", Camera::preset("zenith").expect("a preset"))];
     let mut lines = Vec::new();
     for (strategy_name, strategy) in [("software", FillStrategy::software()), ("plain", FillStrategy::plain())] {
-        let options = RenderOptions::default().with_strategy(strategy);
-        for target in ["display", "hdr"] {
+        // The bitmaps on the display target, the `lut` model on the HDR target, and the `lut` model
+        // drawn display-referred (the `software` strategy's own way).
+        for target in ["display", "hdr", "display-referred"] {
+            let options = RenderOptions::default().with_strategy(match target {
+                "hdr" => strategy.with_hdr(),
+                "display-referred" => FillStrategy { physical_target: PhysicalTarget::DisplayReferred, ..strategy },
+                _ => strategy,
+            });
             for (view_name, camera) in &views {
                 for (hour, weather) in MOMENTS {
                     let mut input = FrameInput::new(hour, weather);

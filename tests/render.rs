@@ -224,7 +224,7 @@ fn render_single(name: &str, hour: f32, weather: f32) {
     let mut h = common::headless(W, H);
     h.set_sky(&sky).unwrap();
     let input = FrameInput { sky_model: Some(single_model(&sky)), ..FrameInput::new(hour, weather) };
-    let img = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+    let img = h.render(&sky, &input, &camera(), &common::hdr_options()).unwrap();
     common::check_reference(name, &img);
 }
 
@@ -271,15 +271,15 @@ fn render_lut(name: &str, hour: f32, weather: f32) {
     h.set_sky(&sky).unwrap();
     let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model };
     let input = FrameInput { sky_model: Some(model), ..FrameInput::new(hour, weather) };
-    let img = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+    let img = h.render(&sky, &input, &camera(), &common::hdr_options()).unwrap();
     common::check_reference(name, &img);
     // The tables were built once; a moving sun only recomputes the sky-view map.
     let builds = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::passes::sky_luts::SkyLutsPass>().unwrap().builds;
     let before = builds(&h);
-    h.frame(&sky, &FrameInput { hour: hour + 0.5, ..input.clone() }, &camera(), &RenderOptions::default(), 0.0);
+    h.frame(&sky, &FrameInput { hour: hour + 0.5, ..input.clone() }, &camera(), &common::hdr_options(), 0.0);
     assert_eq!(builds(&h), before, "the sun moved: the LUTs stay");
     let hazy = skytune::sky::resolved::SkyModel { ground_albedo: 0.8, ..model };
-    h.frame(&sky, &FrameInput { sky_model: Some(hazy), ..input }, &camera(), &RenderOptions::default(), 0.0);
+    h.frame(&sky, &FrameInput { sky_model: Some(hazy), ..input }, &camera(), &common::hdr_options(), 0.0);
     assert_eq!(builds(&h), before + 1, "the ground albedo changed: the LUTs are rebuilt");
     h.ctx.wait_idle().unwrap();
 }
@@ -305,14 +305,14 @@ fn precomputed_model_noon_sunset_twilight() {
     let before = builds(&h);
     for (name, hour) in [("precomputed_noon", 12.0), ("precomputed_sunset", 18.0), ("precomputed_twilight", 18.6)] {
         let input = FrameInput { sky_model: Some(model), ..FrameInput::new(hour, 0.0) };
-        let img = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+        let img = h.render(&sky, &input, &camera(), &common::hdr_options()).unwrap();
         common::check_reference(name, &img);
     }
     assert_eq!(builds(&h), before + 1, "the sun moved: the tables were built once");
     let smaller = SkyModel { precomputed: skytune::atmosphere::PrecomputedSettings::SMALL, ..model };
-    h.frame(&sky, &FrameInput { sky_model: Some(smaller), ..FrameInput::new(12.0, 0.0) }, &camera(), &RenderOptions::default(), 0.0);
+    h.frame(&sky, &FrameInput { sky_model: Some(smaller), ..FrameInput::new(12.0, 0.0) }, &camera(), &common::hdr_options(), 0.0);
     assert_eq!(builds(&h), before + 2, "the settings changed: the tables are rebuilt");
-    h.frame(&sky, &FrameInput { sky_model: Some(smaller), ..FrameInput::new(12.5, 0.0) }, &camera(), &RenderOptions::default(), 0.0);
+    h.frame(&sky, &FrameInput { sky_model: Some(smaller), ..FrameInput::new(12.5, 0.0) }, &camera(), &common::hdr_options(), 0.0);
     assert_eq!(builds(&h), before + 2, "only the sun moved: the tables stay");
     h.ctx.wait_idle().unwrap();
 }
@@ -325,7 +325,7 @@ fn cells_model_sunset() {
     h.set_sky(&sky).unwrap();
     let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Cells, ..sky.model };
     let input = FrameInput { sky_model: Some(model), ..FrameInput::new(18.0, 0.1) };
-    let img = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+    let img = h.render(&sky, &input, &camera(), &common::hdr_options()).unwrap();
     assert!(!h.renderer.busy(), "the still waited for the cells worker");
     common::check_reference("cells_sunset", &img);
 }
@@ -422,38 +422,42 @@ fn a_physical_model_can_light_the_scene() {
 #[test]
 fn physical_models_draw_through_the_hdr_target_and_keep_nel_layers_as_authored() {
     let sky = default_sky();
-    let mut h = common::headless(W, H);
-    h.set_sky(&sky).unwrap();
-    let opts = RenderOptions { glare: false, ..Default::default() };
-    let mut frame = |kind, tone_mapper| {
-        let model = skytune::sky::resolved::SkyModel { kind, tone_mapper, drive_scene: false, ..sky.model };
-        let img = h.render(&sky, &FrameInput { sky_model: Some(model), ..FrameInput::new(15.0, 0.0) }, &camera(), &opts).unwrap();
-        (img, h.renderer.stats.draw_calls)
-    };
-    use skytune::sky::resolved::{SkyModelKind, ToneMapper};
-    let (bitmap, bitmap_draws) = frame(SkyModelKind::Bitmap, ToneMapper::Aces);
-    let (aces, aces_draws) = frame(SkyModelKind::Lut, ToneMapper::Aces);
-    let (neutral, _) = frame(SkyModelKind::Lut, ToneMapper::Neutral);
-    // The display phase adds one full-screen draw for the physical model only.
-    assert_eq!(aces_draws, bitmap_draws + 1);
-    let ground = |img: &image::RgbaImage| {
-        let mut out = image::RgbaImage::new(W, 20);
-        for y in 0..20 {
-            for x in 0..W {
-                out.put_pixel(x, y, *img.get_pixel(x, H - 20 + y));
+    // On the HDR target the display phase adds one full-screen draw; display-referred, none.
+    for (strategy, display_phase) in [(skytune::render::FillStrategy::software().with_hdr(), 1), (skytune::render::FillStrategy::software(), 0)] {
+        let mut h = common::headless(W, H);
+        h.set_sky(&sky).unwrap();
+        let opts = RenderOptions { glare: false, strategy, ..Default::default() };
+        let mut frame = |kind, tone_mapper| {
+            let model = skytune::sky::resolved::SkyModel { kind, tone_mapper, drive_scene: false, ..sky.model };
+            let img = h.render(&sky, &FrameInput { sky_model: Some(model), ..FrameInput::new(15.0, 0.0) }, &camera(), &opts).unwrap();
+            (img, h.renderer.stats.draw_calls)
+        };
+        use skytune::sky::resolved::{SkyModelKind, ToneMapper};
+        let (bitmap, bitmap_draws) = frame(SkyModelKind::Bitmap, ToneMapper::Aces);
+        let (aces, aces_draws) = frame(SkyModelKind::Lut, ToneMapper::Aces);
+        let (neutral, _) = frame(SkyModelKind::Lut, ToneMapper::Neutral);
+        let target = format!("{:?}", strategy.physical_target);
+        assert_eq!(aces_draws, bitmap_draws + display_phase, "{target}");
+        let ground = |img: &image::RgbaImage| {
+            let mut out = image::RgbaImage::new(W, 20);
+            for y in 0..20 {
+                for x in 0..W {
+                    out.put_pixel(x, y, *img.get_pixel(x, H - 20 + y));
+                }
             }
+            out
+        };
+        // The scene stand-in is lit by the bitmaps here: on the HDR target its display colours go
+        // through the tone mapper's inverse and back, so it looks as authored with either mapper
+        // (display-referred, they are written as they are).
+        for (name, img) in [("aces", &aces), ("neutral", &neutral)] {
+            let (d, _) = common::diff(&ground(img), &ground(&bitmap), 3);
+            assert!(d.differing < 0.01, "{target}, {name}: the ground keeps its display colours: {d:?}");
         }
-        out
-    };
-    // The scene stand-in is lit by the bitmaps here: on the HDR target its display colours go
-    // through the tone mapper's inverse and back, so it looks as authored with either mapper.
-    for (name, img) in [("aces", &aces), ("neutral", &neutral)] {
-        let (d, _) = common::diff(&ground(img), &ground(&bitmap), 3);
-        assert!(d.differing < 0.01, "{name}: the ground keeps its display colours: {d:?}");
+        // The sky itself is the model's, tone-mapped differently by the two mappers.
+        let (d, _) = common::diff(&aces, &neutral, 3);
+        assert!(d.differing > 0.2, "{target}: the tone mapper changes the sky: {d:?}");
     }
-    // The sky itself is the model's, tone-mapped differently by the two mappers.
-    let (d, _) = common::diff(&aces, &neutral, 3);
-    assert!(d.differing > 0.2, "the tone mapper changes the sky: {d:?}");
 }
 
 #[test]
@@ -532,4 +536,63 @@ fn the_galaxy_shows_no_seam_where_its_longitude_wraps() {
     eprintln!("galaxy seam: {dips} dips, {lit} lit pixels");
     assert!(lit > 10_000, "the galaxy is too faint to show a seam: {lit} pixels lit");
     assert!(dips < 20, "{dips} pixels darker than both neighbours 4 pixels away by more than 24 levels (summed over rgb)");
+}
+
+/// The built-in sky with only its skydome, under the `lut` model.
+fn skydome_only(hour: f32) -> (skytune::sky::Sky, FrameInput) {
+    let sky = default_sky();
+    let disabled = sky.objects.iter().map(|o| o.name.clone()).filter(|n| n != "skydome").collect();
+    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model };
+    (sky, FrameInput { sky_model: Some(model), disabled, ..FrameInput::new(hour, 0.0) })
+}
+
+#[test]
+fn display_referred_physical_frames_skip_the_hdr_target() {
+    // What the window shows on lavapipe: the map tone-mapped, no HDR target, the layers blended
+    // in display values (references accepted for this path; the HDR path's are lut_day and
+    // lut_sunset).
+    let sky = default_sky();
+    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model };
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    for (name, hour, weather) in [("lut_day_display", 13.0, 0.0), ("lut_sunset_display", 18.0, 0.1)] {
+        let input = FrameInput { sky_model: Some(model), ..FrameInput::new(hour, weather) };
+        let img = h.render(&sky, &input, &camera(), &RenderOptions::default()).unwrap();
+        assert!(h.renderer.hdr_texture().is_none(), "no HDR target was made");
+        common::check_reference(name, &img);
+    }
+}
+
+#[test]
+fn display_referred_skydome_is_the_hdr_frames() {
+    // The layer holding the model's map sums its terms (the painted halo, the stars) in exposed
+    // radiance and tone-maps them itself on a display-referred frame: alone, it is the HDR path's
+    // picture, sun, halo and stars included, up to 8-bit rounding, but for the rows of pixels at
+    // the horizon that one texel of the skydome's half-resolution buffer spans, where its
+    // upsampling interpolates display values between the sky and the black below it on one path
+    // and radiance on the other.
+    let options = RenderOptions { glare: false, scene: false, ..Default::default() };
+    // (At night the layer's stars are split off to a full-resolution draw of their own, which adds
+    // display values over the tone-mapped sky, where the HDR path adds radiance: in the toe of the
+    // tone curve that leaves the HDR frame up to 6 levels brighter. Not checked here.)
+    for hour in [9.0, 13.0, 18.0] {
+        let (sky, input) = skydome_only(hour);
+        let (sun_azimuth_deg, _) = skytune::sky::eval::azimuth_elevation(sky.evaluate(&input).towards_sun);
+        for yaw_deg in [sun_azimuth_deg, sun_azimuth_deg + 180.0] {
+            let camera = Camera { yaw_deg, pitch_deg: 15.0, ..Camera::default() };
+            let mut h = common::headless(W, H);
+            h.set_sky(&sky).unwrap();
+            let display = h.render(&sky, &input, &camera, &options).unwrap();
+            let hdr = h.render(&sky, &input, &camera, &RenderOptions { strategy: options.strategy.with_hdr(), ..options }).unwrap();
+            let (d, diff) = common::diff(&display, &hdr, 2);
+            let horizon_rows = 2.05 / H as f64;
+            if d.differing > horizon_rows {
+                let out = common::output_dir();
+                display.save(out.join(format!("skydome_{hour}_{yaw_deg:.0}_display.png"))).unwrap();
+                hdr.save(out.join(format!("skydome_{hour}_{yaw_deg:.0}_hdr.png"))).unwrap();
+                diff.save(out.join(format!("skydome_{hour}_{yaw_deg:.0}_diff.png"))).unwrap();
+            }
+            assert!(d.differing <= horizon_rows, "hour {hour}, yaw {yaw_deg}: {d:?}");
+        }
+    }
 }

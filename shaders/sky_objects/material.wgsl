@@ -74,14 +74,66 @@ fn stage_uv(d: Draw, i: u32, mode: u32, at: Place) -> vec2<f32> {
     return scaled(d, i, uv);
 }
 
+// Whether this layer holds a physical model's map and draws onto the display target (a
+// display-referred frame, `PhysicalTarget::DisplayReferred`): its terms are then summed in exposed
+// radiance, as on the HDR target, and tone-mapped by the layer itself, so the skydome is the HDR
+// path's to the pixel and the frame needs no display phase.
+fn view_on_display(l: u32, d: Draw) -> bool {
+    return view_stage(l, d) < 4u && (TARGET_KIND == 1u || (TARGET_KIND == 0u && globals.output.x < 0.5));
+}
+
+// The exposed radiance the HDR frame's tone mapper takes to display value `display`.
+fn exposed_from_display(display: vec3<f32>) -> vec3<f32> {
+    let l = linear_from_display(display);
+    if TONE_KIND == 2u || (TONE_KIND == 0u && globals.output.y > 0.5) {
+        return tone_map_neutral_inverse(l);
+    }
+    return tone_map_aces_inverse(l);
+}
+
+// A blended layer's colour `c` (display values, alpha its coverage) on a display-referred
+// physical frame (`OVER_MODEL_SKY`), as what its blend onto the model's sky along `dir` must write
+// so that the pixel ends as the HDR path would leave it there: the layer's exposed radiance
+// blended with the sky's, then tone-mapped. Exact over the bare sky; over other layers it is the
+// display-space blend of a colour chosen for the sky. Alpha (BLEND_KIND 1): the colour that
+// leaves H = T(a E(c) + (1 - a) R) over D = T(R), with the coverage raised where that colour
+// would pass 1 (the target clamps it); additive (2 and 3): H - D with the sky's radiance R under
+// the layer's added radiance.
+fn over_model_sky(c: vec4<f32>, dir: vec3<f32>, view_map: texture_2d<f32>, view_sampler: sampler) -> vec4<f32> {
+    let sky = textureSampleLevel(view_map, view_sampler, sky_view_uv(normalize(dir)), 0.0).rgb;
+    var tone = 0u;
+    if globals.output.y > 0.5 { tone = 1u; }
+    let under = display_from_exposed(sky, tone);
+    if BLEND_KIND >= 2u {
+        var weight = 1.0;
+        if BLEND_KIND == 2u { weight = c.a; }
+        return vec4<f32>(display_from_exposed(sky + weight * exposed_from_display(c.rgb), tone) - under, 1.0);
+    }
+    if c.a < 1e-3 {
+        return c;
+    }
+    let over = display_from_exposed(c.a * exposed_from_display(c.rgb) + (1.0 - c.a) * sky, tone);
+    var a = c.a;
+    let rgb = (over - (1.0 - a) * under) / a;
+    if max(rgb.r, max(rgb.g, rgb.b)) > 1.0 {
+        // Coverage a' with (over - (1 - a') under) / a' <= 1 in every channel.
+        let need = (over - under) / max(vec3<f32>(1.0) - under, vec3<f32>(1e-4));
+        a = clamp(max(need.r, max(need.g, need.b)), a, 1.0);
+    }
+    return vec4<f32>(clamp((over - (1.0 - a) * under) / a, vec3<f32>(0.0), vec3<f32>(1.0)), a);
+}
+
 // Adds one term of the material (display values, times the diffuse colour) to the sum. On the
-// display target as they are; on the HDR target through `to_target`, or as a factor of the sky
-// model's exposed radiance for the term that holds it.
-fn add_term(d: Draw, sum: vec4<f32>, term_display: vec4<f32>, view: vec3<f32>, has_view: bool) -> vec4<f32> {
+// display target as they are; on the HDR target (and in a layer that tone-maps itself,
+// `view_on_display`) as exposed radiance, or as a factor of the sky model's exposed radiance for
+// the term that holds it.
+fn add_term(l: u32, d: Draw, sum: vec4<f32>, term_display: vec4<f32>, view: vec3<f32>, has_view: bool) -> vec4<f32> {
     let t = term_display * d.diffuse;
     var rgb: vec3<f32>;
     if has_view {
         rgb = view * linear_from_display(t.rgb);
+    } else if view_on_display(l, d) {
+        rgb = exposed_from_display(t.rgb);
     } else {
         rgb = to_target(t.rgb);
     }
@@ -106,7 +158,7 @@ fn fold_stage(l: u32, d: Draw, acc_in: Terms, i: u32, c_in: vec4<f32>, view: vec
     if stage_op(l, d, i) == 1u {
         acc.term = acc.term * c;
     } else {
-        if acc.has_term { acc.sum = add_term(d, acc.sum, acc.term, view, acc.term_has_view); }
+        if acc.has_term { acc.sum = add_term(l, d, acc.sum, acc.term, view, acc.term_has_view); }
         acc.term = c;
         acc.has_term = true;
         acc.term_has_view = false;
@@ -190,7 +242,12 @@ fn material(
     if count > 2u { acc = fold_stage(l, d, acc, 2u, stage_sample(l, d, 2u, t2, s2, at), view); }
     if count > 3u { acc = fold_stage(l, d, acc, 3u, stage_sample(l, d, 3u, t3, s3, at), view); }
     var sum = acc.sum;
-    if acc.has_term { sum = add_term(d, sum, acc.term, view, acc.term_has_view); }
+    if acc.has_term { sum = add_term(l, d, sum, acc.term, view, acc.term_has_view); }
+    if view_on_display(l, d) {
+        var tone = 0u;
+        if TONE_KIND == 2u || (TONE_KIND == 0u && globals.output.y > 0.5) { tone = 1u; }
+        return vec4<f32>(display_from_exposed(sum.rgb, tone), sum.a);
+    }
     // Lit clouds. The lighting is per draw (uniform control flow), so the derivatives `lit_cloud`
     // takes are computed only by the draws that use them.
     if lighting(l, d) == 2u {

@@ -29,11 +29,16 @@ fn vs_pair(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> Pair
 // (`OVER_SEED`), written as it is, with the transmittance left.
 @fragment
 fn fs_pair(in: PairOut) -> @location(0) vec4<f32> {
-    let own = material(LAYER_OWN, draw, tex0, tex1, tex2, tex3, samp0, samp1, samp2, samp3, sky_view, sky_view_sampler, Place(in.world_dir, in.mesh_uv01, in.mesh_uv23));
-    let up = material(
+    var own = material(LAYER_OWN, draw, tex0, tex1, tex2, tex3, samp0, samp1, samp2, samp3, sky_view, sky_view_sampler, Place(in.world_dir, in.mesh_uv01, in.mesh_uv23));
+    var up = material(
         LAYER_UPPER, upper, upper_tex0, upper_tex1, upper_tex2, upper_tex3, upper_samp0, upper_samp1, upper_samp2, upper_samp3, upper_sky_view, upper_sky_view_sampler,
         Place(in.world_dir, in.upper_uv01, in.upper_uv23),
     );
+    if OVER_MODEL_SKY {
+        // Each as over the bare sky: exact for the lower layer where it lies on the sky.
+        own = over_model_sky(own, in.world_dir, sky_view, sky_view_sampler);
+        up = over_model_sky(up, in.world_dir, sky_view, sky_view_sampler);
+    }
     let rgb = up.a * up.rgb + (1.0 - up.a) * own.a * own.rgb;
     let through = (1.0 - own.a) * (1.0 - up.a);
     if OVER_SEED {

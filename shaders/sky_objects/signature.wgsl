@@ -31,6 +31,9 @@ override LIVE_3: bool = true;
 // the target holds comes with TARGET_KIND and TONE_KIND (tone.wgsl).
 override VIEW_STAGE: u32 = 4u;
 override LIGHTING: u32 = 0u;
+// A blended layer (no map of its own) of a display-referred physical frame: its colour is turned
+// into what the HDR path's blend over the model's sky would leave (`over_model_sky`).
+override OVER_MODEL_SKY: bool = false;
 // The upper layer of a pair (`fs_pair`, group 3), specialised as the draw's own constants above.
 override UPPER_STAGE_COUNT: u32 = 0u;
 override UPPER_UV_MODE_0: u32 = 0u;

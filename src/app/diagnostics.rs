@@ -77,7 +77,7 @@ fn skipped(ui: &mut egui::Ui, info: &UiInfo<'_>) {
 /// now against the median when they were last all on.
 fn switches(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     let s = info.stats;
-    use crate::render::plan::strategy::{FlashPlacement, LayerPairs, RunJoining, SparseStages, UnderBackground, PRESETS};
+    use crate::render::plan::strategy::{FlashPlacement, LayerPairs, PhysicalTarget, RunJoining, SparseStages, UnderBackground, PRESETS};
     let st = &mut c.options.strategy;
     ui.horizontal_wrapped(|ui| {
         ui.label(format!("fill strategy: {} (preset", st.name()));
@@ -119,6 +119,12 @@ fn switches(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         &[(FlashPlacement::OverFrame, "over the frame"), (FlashPlacement::InRun, "in a run")],
     );
     choice(ui, &format!("alpha layers ({} pairs)", s.layers_paired), &mut st.pairs, &[(LayerPairs::OneByOne, "one by one"), (LayerPairs::AtOnce, "two at once")]);
+    choice(
+        ui,
+        "physical skies",
+        &mut st.physical_target,
+        &[(PhysicalTarget::Hdr, "HDR target, tone-mapped after"), (PhysicalTarget::DisplayReferred, "display-referred, tone-mapped per layer")],
+    );
     let median = |v: &VecDeque<f32>| {
         let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();
         x.sort_by(f32::total_cmp);

@@ -71,8 +71,8 @@ pub struct AppConfig {
     pub weather: Option<f32>,
     /// Preset view to start with (`south`, `zenith`, ...).
     pub view: Option<String>,
-    /// Fill strategy preset (`software`, `plain`; None: the adapter's, [`FillStrategy::for_device`]).
-    pub strategy: Option<String>,
+    /// Fill strategy (None: the adapter's, [`FillStrategy::for_device`]).
+    pub strategy: Option<FillStrategy>,
     /// Open the curve editor on this bitmap of the sky (a path, or a name next to the sky file).
     pub edit: Option<PathBuf>,
 }
@@ -122,7 +122,7 @@ pub fn run(config: AppConfig) -> anyhow::Result<()> {
     if let Some(v) = &config.view {
         controls.camera = crate::render::Camera::preset_arg(v).map_err(|e| anyhow!(e))?;
     }
-    let strategy = config.strategy.as_deref().map(FillStrategy::preset_arg).transpose().map_err(|e| anyhow!(e))?;
+    let strategy = config.strategy;
     if let Some(t) = config.tier {
         controls.tier = Tier::new(t).ok_or_else(|| anyhow!("--tier: expected 4, 2 or 1, found {t}"))?;
     }

@@ -434,10 +434,11 @@ pub struct FrameArgs {
     /// a buffer from 1.5 to 2 where one resolves them). Default: the fill strategy's.
     #[arg(long, value_parser = parse_dome_resolution)]
     pub dome_resolution: Option<skytune::render::DomeResolution>,
-    /// Fill strategy: software (every trick tuned for CPU rasterisers) or plain (dome layers at
-    /// full resolution, drawn one by one). Default: the adapter's (software on a CPU adapter).
-    #[arg(long)]
-    pub strategy: Option<String>,
+    /// Fill strategy: software (every trick tuned for CPU rasterisers), plain (dome layers at
+    /// full resolution, drawn one by one) or software-hdr (software with physical skies on the
+    /// HDR target). Default: the adapter's (software on a CPU adapter).
+    #[arg(long, value_parser = parse_strategy)]
+    pub strategy: Option<skytune::render::plan::strategy::FillStrategy>,
     /// Render what the environment map sees (objects with visible_in_env_map): light from the sky
     /// only, without the glare and the main scene's stand-in.
     #[arg(long)]
@@ -550,10 +551,10 @@ pub struct AppArgs {
     /// Preset view to start with: south (default), east, west, north, zenith.
     #[arg(long)]
     pub view: Option<String>,
-    /// Fill strategy to start with: software or plain (default: the adapter's; the diagnostics
-    /// panel switches it).
-    #[arg(long)]
-    pub strategy: Option<String>,
+    /// Fill strategy to start with: software, plain or software-hdr (default: the adapter's; the
+    /// diagnostics panel switches it).
+    #[arg(long, value_parser = parse_strategy)]
+    pub strategy: Option<skytune::render::plan::strategy::FillStrategy>,
 }
 
 /// `bench` and its subcommands.
@@ -735,14 +736,20 @@ pub struct FrameBenchArgs {
     /// Resolution of the dome layers, overriding each strategy's: full, half, quarter or auto.
     #[arg(long, value_parser = parse_dome_resolution)]
     pub dome_resolution: Option<skytune::render::DomeResolution>,
-    /// Measure only this fill strategy (software, plain); both by default, side by side.
-    #[arg(long)]
-    pub strategy: Option<String>,
+    /// Measure only these fill strategies (comma-separated presets: software, plain,
+    /// software-hdr); software and plain by default, side by side.
+    #[arg(long, value_parser = parse_strategy, value_delimiter = ',')]
+    pub strategy: Vec<skytune::render::plan::strategy::FillStrategy>,
     /// Also measure every sky with these skydome colour sources (comma-separated `[sky_model]`
     /// kinds, e.g. `bitmap,lut,precomputed`), besides its own; physical cases are reported
     /// against the same sky's bitmap case.
     #[arg(long, value_parser = parse_sky_model_kind, value_delimiter = ',')]
     pub sky_models: Vec<skytune::sky::resolved::SkyModelKind>,
+}
+
+/// Parses a fill strategy preset's name (software, plain, software-hdr).
+fn parse_strategy(name: &str) -> Result<skytune::render::plan::strategy::FillStrategy, String> {
+    skytune::render::plan::strategy::FillStrategy::preset_arg(name)
 }
 
 /// Parses a dome resolution name (full, half, quarter, auto).

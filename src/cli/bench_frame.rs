@@ -114,14 +114,12 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     let ctx = GpuContext::headless(if args.cpu { AdapterChoice::Cpu } else { AdapterChoice::from_env() })?;
     let adapter = ctx.adapter_line();
     println!("adapter: {adapter}");
-    // Each preset measured (both unless `--strategy` names one), side by side in every case; the
-    // adapter's own is the one the summary line is about.
-    let strategies: Vec<(&'static str, FillStrategy)> = match &args.strategy {
-        Some(name) => {
-            let preset = FillStrategy::preset_arg(name).map_err(|e| anyhow!(e))?;
-            vec![(preset.name(), preset)]
-        }
-        None => PRESETS.to_vec(),
+    // Each preset `--strategy` names (software and plain without it) measured side by side in
+    // every case; the adapter's own is the one the summary line is about.
+    let strategies: Vec<(&'static str, FillStrategy)> = if args.strategy.is_empty() {
+        PRESETS.iter().copied().filter(|(n, _)| ["software", "plain"].contains(n)).collect()
+    } else {
+        args.strategy.iter().map(|s| (s.name(), *s)).collect()
     };
     let adapter_strategy = FillStrategy::resolve(None, ctx.adapter.get_info().device_type).name();
     let summarised = strategies.iter().find(|(n, _)| *n == adapter_strategy).unwrap_or(&strategies[0]).0;

@@ -53,6 +53,8 @@ pub fn float_to_display(img: &LinearImage) -> image::RgbaImage {
 
 /// Renders a still and returns it in linear light (see the module documentation for units).
 pub fn render_linear(hl: &mut Headless, sky: &Sky, input: &FrameInput, camera: &Camera, options: &RenderOptions) -> RenderResult<LinearImage> {
+    // Radiance is read back from the HDR target, whatever the strategy draws on screen.
+    let options = &RenderOptions { strategy: options.strategy.with_hdr(), ..*options };
     let display = hl.render(sky, input, camera, options)?;
     let model = input.sky_model.unwrap_or(sky.model);
     if !model.kind.is_physical() {

@@ -5,6 +5,13 @@ use std::path::{Path, PathBuf};
 
 use skytune::render::{AdapterChoice, GpuContext, Headless};
 
+/// Options that draw physical sky models on the HDR target (the reference picture of a model:
+/// what HDR exports read), whatever the default strategy draws on screen.
+#[allow(dead_code)]
+pub fn hdr_options() -> skytune::render::RenderOptions {
+    skytune::render::RenderOptions { strategy: skytune::render::FillStrategy::software().with_hdr(), ..Default::default() }
+}
+
 /// A headless renderer on the software adapter (lavapipe): the same pixels on every machine.
 pub fn headless(width: u32, height: u32) -> Headless {
     let ctx = GpuContext::headless(AdapterChoice::Cpu).expect("lavapipe (mesa-vulkan-drivers) is required: run scripts/setup.sh");

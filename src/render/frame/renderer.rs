@@ -373,7 +373,7 @@ impl SkyRenderer {
     /// Call [`Self::after_submit`] once the encoder is submitted.
     pub fn render(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &RenderTarget<'_>, frame: &FrameSky, camera: &Camera, options: &RenderOptions) {
         let (w, h) = target.size;
-        let kind = if self.has_sky && frame.sky_model.kind.is_physical() { Target::Hdr } else { Target::Display };
+        let kind = plan::frame_target(self.has_sky && frame.sky_model.kind.is_physical(), &options.strategy);
         let globals = Globals::new(frame, camera, w, h, kind);
         ctx.queue.write_buffer(&self.globals.buffer, 0, bytemuck::bytes_of(&globals));
         if !self.has_sky {

@@ -22,9 +22,19 @@ pub mod visibility;
 
 use std::ops::Range;
 
-use crate::render::frame::pass::{DrawItem, Placement};
+use crate::render::frame::pass::{DrawItem, Placement, Target};
 use crate::render::plan::resolution::Divisor;
 use crate::render::plan::strategy::FillStrategy;
+
+/// The target a frame draws into: the HDR target for a physical sky model unless the strategy
+/// draws physical skies display-referred ([`strategy::PhysicalTarget`]); painted skies always
+/// go to the display target.
+pub fn frame_target(physical: bool, strategy: &FillStrategy) -> Target {
+    match (physical, strategy.physical_target) {
+        (true, strategy::PhysicalTarget::Hdr) => Target::Hdr,
+        _ => Target::Display,
+    }
+}
 
 /// What the plan needs to know of the frame besides its draws.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -90,6 +90,22 @@ pub enum LayerPairs {
     AtOnce,
 }
 
+/// Where a frame with a physical sky model is drawn and how its radiance reaches the display.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PhysicalTarget {
+    /// Into a linear rgba16float target, every layer blended in exposed radiance (display colours
+    /// through the tone mapper's inverse), tone-mapped into the display target by a full-screen
+    /// display phase. What HDR exports read; the reference picture of a physical sky.
+    Hdr,
+    /// Onto the display target as a painted sky is: the sky-view map holds the model's tone-mapped
+    /// display values (tone mapping 192 x 108 texels instead of the frame), and the NeL layers
+    /// blend over it in display values as authored. No HDR target, no display phase; the
+    /// layers over the sky blend in display space rather than in linear light (the difference is
+    /// measured in docs/performance-notes.md). A frame that must read radiance back (an HDR
+    /// export) asks for [`Self::Hdr`].
+    DisplayReferred,
+}
+
 /// How the sky's pixels are filled: every trick of the renderer that trades work for work, as
 /// one value. [`Self::software`] and [`Self::plain`] are the named presets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -109,10 +125,12 @@ pub struct FillStrategy {
     pub pairs: LayerPairs,
     /// How the `precomputed` model's tables are built: at once, or over frames.
     pub table_builds: crate::render::passes::precomputed_tables::TableBuilds,
+    /// Where physical-model frames are drawn.
+    pub physical_target: PhysicalTarget,
 }
 
 /// The named presets, for the command line and reports.
-pub const PRESETS: [(&str, FillStrategy); 2] = [("software", FillStrategy::software()), ("plain", FillStrategy::plain())];
+pub const PRESETS: [(&str, FillStrategy); 3] = [("software", FillStrategy::software()), ("plain", FillStrategy::plain()), ("software-hdr", FillStrategy::software().with_hdr())];
 
 impl FillStrategy {
     /// Every trick on: what measured fastest on lavapipe (docs/performance-notes.md), for CPU
@@ -127,6 +145,8 @@ impl FillStrategy {
             pairs: LayerPairs::AtOnce,
             // One r-layer of a default table per frame: about half a second each on lavapipe.
             table_builds: crate::render::passes::precomputed_tables::TableBuilds::Spread { slices: 32 },
+            // The HDR target and its display phase were 17 to 20 ms of a 25 ms frame at 1280x720.
+            physical_target: PhysicalTarget::DisplayReferred,
         }
     }
 
@@ -141,6 +161,7 @@ impl FillStrategy {
             flash: FlashPlacement::OverFrame,
             pairs: LayerPairs::OneByOne,
             table_builds: crate::render::passes::precomputed_tables::TableBuilds::AtOnce,
+            physical_target: PhysicalTarget::Hdr,
         }
     }
 
@@ -214,6 +235,12 @@ impl FillStrategy {
     /// Whether the lightning flash is added to the run before it.
     pub fn flash_in_run(&self) -> bool {
         self.flash == FlashPlacement::InRun
+    }
+
+    /// This strategy with physical frames on the HDR target: for callers that read the frame's
+    /// radiance back.
+    pub const fn with_hdr(self) -> Self {
+        Self { physical_target: PhysicalTarget::Hdr, ..self }
     }
 
     /// Whether neighbouring alpha-blended layers of a run are drawn at once.

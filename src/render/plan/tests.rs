@@ -234,3 +234,15 @@ fn the_plans_uses_are_every_draw_it_records_and_no_other() {
     assert!(matches!(composite.background, Some(Background::Composite { .. })), "{:?}", composite.background);
     assert!(composite.uses().contains(&(0, 1, Placement::First)), "{:?}", composite.uses());
 }
+
+#[test]
+fn physical_skies_go_to_the_hdr_target_only_when_the_strategy_asks() {
+    use crate::render::frame::pass::Target;
+    use crate::render::plan::strategy::PhysicalTarget;
+    assert_eq!(frame_target(true, &FillStrategy::plain()), Target::Hdr);
+    assert_eq!(frame_target(true, &FillStrategy::software()), Target::Display);
+    assert_eq!(frame_target(true, &FillStrategy::software().with_hdr()), Target::Hdr);
+    for s in [FillStrategy::plain(), FillStrategy::software(), FillStrategy { physical_target: PhysicalTarget::Hdr, ..FillStrategy::software() }] {
+        assert_eq!(frame_target(false, &s), Target::Display, "a painted sky is display-referred");
+    }
+}

@@ -30,6 +30,9 @@ pub(super) struct VariantKey {
     /// The HDR target's tone mapper (`TONE_KIND` of tone.wgsl): 1 ACES, 2 neutral; 0 on the
     /// display target.
     pub(super) tone: u32,
+    /// A blended layer of a display-referred physical frame, whose colour is made what the HDR
+    /// path's blend over the model's sky would leave (`OVER_MODEL_SKY` in the shader).
+    pub(super) over_model: bool,
     /// Drawn into a reduced-resolution buffer ([`crate::render::passes::reduced_layers`]).
     pub(super) reduced: bool,
     /// Where on the frame it goes ([`Slot::Plain`] for reduced draws).
@@ -73,7 +76,8 @@ impl VariantKey {
     /// The signature of a draw of a version with material `sig`, this frame's `live` stages
     /// (those whose term is not black: [`DrawUniform::skip_dark_terms`]) and the stage the
     /// sky-view map feeds.
-    pub(super) fn of(sig: &MaterialSignature, (live, view_stage): ([bool; 4], Option<usize>), blend: BlendMode, target: Target, neutral_tone: bool) -> Self {
+    /// `physical` says whether the frame's skydome holds a physical model.
+    pub(super) fn of(sig: &MaterialSignature, (live, view_stage): ([bool; 4], Option<usize>), blend: BlendMode, (target, physical): (Target, bool), neutral_tone: bool) -> Self {
         let tone = match (target, neutral_tone) {
             (Target::Display, _) => 0,
             (Target::Hdr, false) => 1,
@@ -90,6 +94,7 @@ impl VariantKey {
             blend: blend_index(blend),
             target,
             tone,
+            over_model: physical && target == Target::Display && view_stage.is_none() && blend != BlendMode::Opaque,
             reduced: false,
             placement: Slot::Plain,
         }
@@ -111,6 +116,7 @@ impl VariantKey {
             ("UNDER_RUN", f64::from(u8::from(self.placement == Slot::UnderRun))),
             ("BLEND_KIND", self.blend as f64),
             ("OVER_SEED", f64::from(u8::from(self.placement == Slot::OverSeed))),
+            ("OVER_MODEL_SKY", f64::from(u8::from(self.over_model))),
             (
                 "BACKGROUND",
                 match self.placement {
