@@ -14,9 +14,9 @@ struct SkyViewParams {
 // Read-only storage rather than uniform: Mesa 22 lavapipe crashes when the camera altitude is a
 // uniform-buffer value here (it runs fine as a storage value, as in radiance_probe.wgsl).
 @group(1) @binding(2) var<storage, read> params: SkyViewParams;
-// Texels as rgba16float (two u32 each: exposed linear radiance), copied into the sky-view texture
-// after the phase, so the compute phase only writes buffers (as radiance_probe.wgsl does).
-@group(1) @binding(3) var<storage, read_write> sky_view_out: array<u32>;
+// The work map: exposed linear radiance per texel, row-major. sky_view/blend.wgsl makes the shown
+// map (rgba16float, copied into the sky-view texture) from the finished ones.
+@group(1) @binding(3) var<storage, read_write> work: array<vec4<f32>>;
 // The `lut` model's tables (sky_luts.wgsl builds them earlier in the compute phase).
 @group(1) @binding(4) var<storage, read> lut_params: LutParams;
 @group(1) @binding(5) var<storage, read> transmittance_lut: array<vec4<f32>>;
@@ -34,6 +34,9 @@ struct SkyViewParams {
 @group(1) @binding(9) var<uniform> analytic_coefficients: array<vec4<f32>, 12>;
 // The `precomputed` model's tables (precomputed_tables.wgsl builds them earlier in the phase).
 @group(1) @binding(10) var<storage, read> precomputed_tables: array<vec4<f32>>;
+// The texels this frame computes: x the first (row-major), y how many (a slice of the map while
+// the sun moves: src/render/plan/map_updates.rs).
+@group(1) @binding(11) var<uniform> slice: vec4<u32>;
 
 // Braun and Cohen's colour as the exposed radiance the frame's tone mapper takes back to it
 // (its exposure scale is 1).
@@ -66,19 +69,6 @@ fn model_radiance(dir: vec3<f32>, index: u32) -> vec3<f32> {
 fn texel_index(uv: vec2<f32>, size: vec2<u32>) -> u32 {
     let t = min(vec2<u32>(uv * vec2<f32>(size)), size - vec2<u32>(1u));
     return t.y * size.x + t.x;
-}
-
-// IEEE half-precision bits of a value in [0, 65504], rounded to nearest. (pack2x16float needs a
-// shader capability that not every adapter has; this needs none.)
-fn half_bits(x: f32) -> u32 {
-    if (x < 6.103515625e-5) {
-        // Subnormal halves: multiples of 2^-24.
-        return u32(round(x * 16777216.0));
-    }
-    let b = bitcast<u32>(x);
-    // Rebias the exponent (127 -> 15) and keep 10 mantissa bits; the rounding carry may step the
-    // exponent up, which is the correctly rounded result.
-    return ((b - (112u << 23u)) + 0x1000u) >> 13u;
 }
 
 var<workgroup> radiance_samples: array<vec3<f32>, 64>;
@@ -133,16 +123,14 @@ fn cs_exposure(@builtin(local_invocation_index) i: u32) {
 @compute @workgroup_size(64)
 fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let size = vec2<u32>(params.exposure.zw);
-    if (gid.x >= size.x * size.y) {
+    let texel = slice.x + gid.x;
+    if (gid.x >= slice.y || texel >= size.x * size.y) {
         return;
     }
-    let id = vec2<u32>(gid.x % size.x, gid.x / size.x);
+    let id = vec2<u32>(texel % size.x, texel / size.x);
     let uv = (vec2<f32>(id) + 0.5) / vec2<f32>(size);
     let dir = sky_view_direction(uv);
-    let radiance = model_radiance(dir, id.y * size.x + id.x);
+    let radiance = model_radiance(dir, texel);
     // Finite in half precision (65504) whatever the exposure.
-    let exposed = clamp(radiance * sky_light[0].x, vec3<f32>(0.0), vec3<f32>(60000.0));
-    let texel = id.y * size.x + id.x;
-    sky_view_out[2u * texel] = half_bits(exposed.r) | (half_bits(exposed.g) << 16u);
-    sky_view_out[2u * texel + 1u] = half_bits(exposed.b) | (half_bits(1.0) << 16u);
+    work[texel] = vec4<f32>(clamp(radiance * sky_light[0].x, vec3<f32>(0.0), vec3<f32>(60000.0)), 1.0);
 }

@@ -596,3 +596,47 @@ fn display_referred_skydome_is_the_hdr_frames() {
         }
     }
 }
+
+#[test]
+fn a_moving_sun_spreads_the_map_over_frames_and_a_still_shows_it_exactly() {
+    // A time-lapse (0.02 h a frame, about 0.3 degrees of sun) with the `software` strategy: each
+    // frame computes a slice of the next map and shows the last two blended; stopping finishes
+    // the map at once, and the still is the one a fresh renderer draws.
+    use skytune::render::plan::map_updates::MapUpdates;
+    let sky = default_sky();
+    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model };
+    let at = |hour: f32| FrameInput { sky_model: Some(model), ..FrameInput::new(hour, 0.0) };
+    let options = RenderOptions::default();
+    let MapUpdates::Spread { slices } = options.strategy.map_updates else { panic!("the software strategy spreads maps") };
+    let (w, h) = skytune::render::frame::pass::SharedResources::SKY_VIEW_SIZE;
+    let mut moving = common::headless(W, H);
+    moving.set_sky(&sky).unwrap();
+    moving.render(&sky, &at(16.5), &camera(), &options).unwrap();
+    moving.frame(&sky, &at(17.0), &camera(), &options, 0.0);
+    assert_eq!(moving.renderer.stats.map_texels, w * h, "a jump of the sun: the whole map");
+    let maps = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::passes::sky_view::SkyViewPass>().unwrap().maps_computed;
+    let before = maps(&moving);
+    let mut hour = 17.0;
+    for frame in 0..2 * slices {
+        hour += 0.02;
+        moving.frame(&sky, &at(hour), &camera(), &options, 0.0);
+        let texels = moving.renderer.stats.map_texels;
+        assert!(texels > 0 && texels <= (w * h).div_ceil(slices), "frame {frame}: a slice, {texels} texels");
+        assert!(!moving.renderer.settled(), "frame {frame}: the shown map trails the sun");
+    }
+    assert_eq!(maps(&moving), before + 2, "two maps finished in two spreads");
+    // The sun stops: the still is exact.
+    let still = moving.render(&sky, &at(hour), &camera(), &options).unwrap();
+    assert!(moving.renderer.settled());
+    let mut fresh = common::headless(W, H);
+    fresh.set_sky(&sky).unwrap();
+    let exact = fresh.render(&sky, &at(hour), &camera(), &options).unwrap();
+    assert_eq!(common::diff(&still, &exact, 0).0.differing, 0.0, "the still after a time-lapse is the fresh one");
+    // The plain strategy computes every map whole.
+    let plain = RenderOptions::default().with_strategy(skytune::render::FillStrategy::plain());
+    fresh.render(&sky, &at(hour), &camera(), &plain).unwrap();
+    fresh.frame(&sky, &at(hour + 0.02), &camera(), &plain, 0.0);
+    assert_eq!(fresh.renderer.stats.map_texels, w * h);
+    fresh.ctx.wait_idle().unwrap();
+    moving.ctx.wait_idle().unwrap();
+}

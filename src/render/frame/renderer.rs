@@ -172,6 +172,9 @@ pub struct FrameStats {
     pub tables_skipped: bool,
     /// The sky-view map was not recomputed: nothing it depends on moved.
     pub map_skipped: bool,
+    /// Texels of the sky-view map computed this frame (a slice of it while a moving sun's maps are
+    /// spread over frames: [`crate::render::plan::map_updates`]).
+    pub map_texels: u32,
     /// Particles alive (every emitter).
     pub particles: u32,
 }

@@ -1,9 +1,12 @@
 //! Sky-view pass (compute phase): renders the frame's physical sky model into the shared sky-view
 //! map as exposed linear radiance, which the skydome's gradient stage then samples into the HDR
-//! target (the display phase tone-maps it: `tone_map.rs`). Idle with the
-//! NeL bitmap model; recomputed only when the sun, the model or the atmosphere changes. The
-//! `cells` model is solved and marched on a CPU worker thread; its radiance reaches the GPU when
-//! ready, and until then the previous map stays.
+//! target (the display phase tone-maps it: `tone_map.rs`) or tone-maps itself on a
+//! display-referred frame. Idle with the NeL bitmap model; recomputed only when the sun, the
+//! model or the atmosphere changes. While the sun moves by small steps the fill strategy may
+//! spread each map over frames ([`crate::render::plan::map_updates`]): `cs_main` computes a slice
+//! of the work map, and `sky_view/blend.wgsl` writes the shown map from the two last finished
+//! ones. The `cells` model is solved and marched on a CPU worker thread; its radiance reaches the
+//! GPU when ready, and until then the previous map stays.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -24,6 +27,18 @@ const CPU_CACHE_MAPS: usize = 16;
 
 /// Bytes of one sky-view texel ([`SharedResources::SKY_VIEW_FORMAT`]).
 const TEXEL_BYTES: u32 = 8;
+
+/// Bytes of one texel of the work and finished maps (four f32).
+const MAP_TEXEL_BYTES: u32 = 16;
+
+/// Keep in sync with `BlendParams` in shaders/sky_view/blend.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct BlendParams {
+    /// Weight of the newer finished map (x), texels (y).
+    settings: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<BlendParams>() == 16);
 
 /// Keep in sync with `SkyViewParams` in shaders/sky_view.wgsl.
 #[repr(C)]
@@ -218,17 +233,32 @@ fn sky_view_radiance([w, h]: [u32; 2], progress: &Progress, radiance: impl Fn(gl
 /// The sky-view pass.
 pub struct SkyViewPass {
     pipeline: Pipelines<[wgpu::ComputePipeline; 2]>,
+    blend_pipeline: Pipelines<wgpu::ComputePipeline>,
     atmosphere: wgpu::Buffer,
     single: wgpu::Buffer,
     params: wgpu::Buffer,
-    /// The map's texels (rgba16float), copied into the shared texture after the dispatch.
+    /// The texels `cs_main` computes this frame (first, count).
+    slice: wgpu::Buffer,
+    /// The work map (`cs_main` writes it) and the older and newer finished maps.
+    work: wgpu::Buffer,
+    older: wgpu::Buffer,
+    newer: wgpu::Buffer,
+    blend_params: wgpu::Buffer,
+    /// The shown map's texels (rgba16float), copied into the shared texture after the blend.
     texels: wgpu::Buffer,
     map: wgpu::Texture,
     bind_group: wgpu::BindGroup,
-    /// What the map holds now.
+    blend_bind_group: wgpu::BindGroup,
+    /// Group 0 of the blend pipeline (the globals, which the loader declares in every module).
+    globals_bind_group: wgpu::BindGroup,
+    /// The newest map's key: the work map's while one is under way, else the newer finished one's.
     computed: Option<Key>,
-    /// Whether this frame recomputes the map.
-    dirty: bool,
+    /// The last frame's key (how far the sun moved since).
+    last_key: Option<Key>,
+    /// How maps follow a moving sun.
+    schedule: crate::render::plan::map_updates::MapSchedule,
+    /// What this frame computes and shows.
+    step: crate::render::plan::map_updates::MapFrame,
     /// The map was current this frame: its recomputation was skipped.
     skipped: bool,
     /// Maps computed so far (the stats panel and tests).
@@ -282,6 +312,8 @@ impl SkyViewPass {
             count: None,
         });
         entries.extend([
+            // The slice: a uniform, as the stage's storage buffers are all taken.
+            crate::render::uniform_entry(11, wgpu::ShaderStages::COMPUTE),
             crate::render::passes::sky_model::storage_entry(4, true),
             crate::render::passes::sky_model::storage_entry(5, true),
             crate::render::passes::sky_model::storage_entry(6, true),
@@ -316,6 +348,46 @@ impl SkyViewPass {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
+        let map_buffer = |label: &str| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (w * h * MAP_TEXEL_BYTES) as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let (work, older, newer) = (map_buffer("SkyView::work"), map_buffer("SkyView::older"), map_buffer("SkyView::newer"));
+        let slice = uniform(device, "SkyView::slice", 16);
+        let blend_params = uniform(device, "SkyView::blend_params", std::mem::size_of::<BlendParams>());
+        let blend_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("SkyView::blend_layout"),
+            entries: &[
+                crate::render::passes::sky_model::storage_entry(0, true),
+                crate::render::passes::sky_model::storage_entry(1, true),
+                crate::render::passes::sky_model::storage_entry(2, false),
+                crate::render::uniform_entry(3, wgpu::ShaderStages::COMPUTE),
+            ],
+        });
+        let blend_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("SkyView::blend_bind_group"),
+            layout: &blend_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: older.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: newer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: texels.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: blend_params.as_entire_binding() },
+            ],
+        });
+        let globals_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("SkyView::globals_bind_group"),
+            layout: b.globals_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: b.globals_buffer.as_entire_binding() }],
+        });
+        let blend_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("SkyView::blend_pipeline_layout"),
+            bind_group_layouts: &[Some(b.globals_layout), Some(&blend_layout)],
+            immediate_size: 0,
+        });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("SkyView::layout"), entries: &entries });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("SkyView::pipeline_layout"),
@@ -337,7 +409,7 @@ impl SkyViewPass {
                 wgpu::BindGroupEntry { binding: 0, resource: atmosphere.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: single.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: texels.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: work.as_entire_binding() },
                 b.shared.luts.entries(4)[0].clone(),
                 b.shared.luts.entries(4)[1].clone(),
                 b.shared.luts.entries(4)[2].clone(),
@@ -345,19 +417,30 @@ impl SkyViewPass {
                 wgpu::BindGroupEntry { binding: 8, resource: sky_light.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 9, resource: analytic.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 10, resource: b.shared.precomputed.buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 11, resource: slice.as_entire_binding() },
             ],
         });
         let map = b.shared.sky_view.clone();
         Ok(Self {
             pipeline: Pipelines::new(b, pipeline_layout, Self::build)?,
+            blend_pipeline: Pipelines::new(b, blend_pipeline_layout, Self::build_blend)?,
             atmosphere,
             single,
             params,
+            slice,
+            work,
+            older,
+            newer,
+            blend_params,
             texels,
             map,
             bind_group,
+            blend_bind_group,
+            globals_bind_group,
             computed: None,
-            dirty: false,
+            last_key: None,
+            schedule: Default::default(),
+            step: Default::default(),
             skipped: false,
             maps_computed: 0,
             cpu_radiance,
@@ -381,6 +464,12 @@ impl SkyViewPass {
             shaders::compute_pipeline(b.device, layout, &module, "cs_exposure", "SkyView::exposure_pipeline")?,
             shaders::compute_pipeline(b.device, layout, &module, "cs_main", "SkyView::pipeline")?,
         ])
+    }
+
+    /// The pipeline that writes the shown map from the finished ones.
+    fn build_blend(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<wgpu::ComputePipeline> {
+        let module = shaders::module(b.device, b.library, "sky_view/blend")?;
+        shaders::compute_pipeline(b.device, layout, &module, "cs_blend", "SkyView::blend_pipeline")
     }
 }
 
@@ -456,11 +545,13 @@ impl Pass for SkyViewPass {
     }
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
-        self.pipeline.stage(b)
+        self.pipeline.stage(b)?;
+        self.blend_pipeline.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipeline.commit(accept);
+        self.blend_pipeline.commit(accept);
         // New shaders may compute a different map.
         self.computed = None;
     }
@@ -475,13 +566,14 @@ impl Pass for SkyViewPass {
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
-        if self.dirty {
+        if self.step.exposure || self.step.texels.is_some() {
             out.push(DrawItem::new(0, 0));
         }
     }
 
     fn stats(&self, stats: &mut crate::render::FrameStats) {
         stats.map_skipped = self.skipped;
+        stats.map_texels = self.step.texels.as_ref().map_or(0, |t| t.len() as u32);
     }
 
     fn dispatch(&self, cpass: &mut wgpu::ComputePass<'_>, _key: usize) {
@@ -506,15 +598,16 @@ impl Pass for SkyViewPass {
     }
 
     fn settled(&self) -> bool {
-        self.cells_pending.is_none()
+        self.cells_pending.is_none() && self.schedule.settled()
     }
 }
 
 impl SkyViewPass {
-    /// Decides whether this frame recomputes the map, and writes its inputs.
+    /// Decides what this frame computes and shows of the map, and writes its inputs.
     fn prepare_map(&mut self, cx: &FrameContext<'_>) {
+        use crate::render::plan::map_updates::{MapChange, MapFrame, MapUpdates, SPREAD_MAX_STEP_DEG};
         let model = &cx.frame.sky_model;
-        self.dirty = false;
+        self.step = MapFrame::default();
         self.skipped = false;
         if !model.kind.on_cpu() {
             // A switch away from a CPU model drops its request (a late answer is ignored).
@@ -536,43 +629,84 @@ impl SkyViewPass {
             },
             analytic: model.analytic().map_or([[0.0; 4]; 12], |m| m.coefficients(cx.frame.towards_sun.as_dvec3().to_array(), cx.frame.hour as f64).vectors),
         };
+        let last_key = self.last_key.replace(key);
         // Until the tables are complete the last map stays (the tables pass builds them over
         // frames on a software rasteriser).
         if model.kind == SkyModelKind::Precomputed && !self.precomputed_state.complete.load(Ordering::Relaxed) {
             return;
         }
         // CPU models answer asynchronously: only GPU maps are recomputed when the skip is off.
-        if self.computed == Some(key) && (cx.options.skips.unchanged_tables || model.kind.on_cpu()) {
+        let unchanged = self.computed == Some(key) && (cx.options.skips.unchanged_tables || model.kind.on_cpu());
+        if unchanged {
             self.cells_pending = None;
-            self.skipped = true;
+        } else if model.kind.on_cpu() && !self.cells_ready(cx, model, key) {
             return;
         }
-        if model.kind.on_cpu() && !self.cells_ready(cx, model, key) {
-            return;
+        let change = match self.computed {
+            _ if unchanged => MapChange::Same,
+            // The sun stopped away from the newest map: compute it whole, exactly.
+            Some(newest)
+                if last_key != Some(key)
+                    && !model.kind.on_cpu()
+                    && sun_moved(&newest, &key).is_some()
+                    && last_key.and_then(|l| sun_moved(&l, &key)).is_some_and(|deg| deg <= SPREAD_MAX_STEP_DEG) =>
+            {
+                MapChange::SunStep
+            }
+            _ => MapChange::Other,
+        };
+        let (w, h) = SharedResources::SKY_VIEW_SIZE;
+        let updates = if model.kind.on_cpu() { MapUpdates::Whole } else { cx.options.strategy.map_updates };
+        self.step = self.schedule.step(change, updates, w * h);
+        self.skipped = self.step.is_idle();
+        if self.step.exposure {
+            cx.queue.write_buffer(&self.atmosphere, 0, bytemuck::bytes_of(&key.atmosphere));
+            cx.queue.write_buffer(&self.single, 0, bytemuck::bytes_of(&key.single));
+            cx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&key.params));
+            cx.queue.write_buffer(&self.analytic, 0, bytemuck::cast_slice(&key.analytic));
+            self.computed = Some(key);
         }
-        cx.queue.write_buffer(&self.atmosphere, 0, bytemuck::bytes_of(&key.atmosphere));
-        cx.queue.write_buffer(&self.single, 0, bytemuck::bytes_of(&key.single));
-        cx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&key.params));
-        cx.queue.write_buffer(&self.analytic, 0, bytemuck::cast_slice(&key.analytic));
-        self.computed = Some(key);
-        self.dirty = true;
-        self.maps_computed += 1;
+        if let Some(texels) = &self.step.texels {
+            cx.queue.write_buffer(&self.slice, 0, bytemuck::cast_slice(&[texels.start, texels.len() as u32, 0, 0]));
+        }
+        if let Some(weight) = self.step.show {
+            cx.queue.write_buffer(&self.blend_params, 0, bytemuck::bytes_of(&BlendParams { settings: [weight, (w * h) as f32, 0.0, 0.0] }));
+        }
+        if self.step.finish {
+            self.maps_computed += 1;
+        }
     }
 
     fn dispatch_map(&self, cpass: &mut wgpu::ComputePass<'_>) {
-        let (w, h) = SharedResources::SKY_VIEW_SIZE;
         let [exposure, map] = self.pipeline.get();
         cpass.set_bind_group(1, &self.bind_group, &[]);
-        cpass.set_pipeline(exposure);
-        cpass.dispatch_workgroups(1, 1, 1);
-        cpass.set_pipeline(map);
-        cpass.dispatch_workgroups((w * h).div_ceil(64), 1, 1);
+        if self.step.exposure {
+            cpass.set_pipeline(exposure);
+            cpass.dispatch_workgroups(1, 1, 1);
+        }
+        if let Some(texels) = &self.step.texels {
+            cpass.set_pipeline(map);
+            cpass.dispatch_workgroups((texels.len() as u32).div_ceil(64), 1, 1);
+        }
     }
 
-    /// Between the compute phase and the sky phase, so this frame samples this frame's map.
+    /// Between the compute phase and the sky phase, so this frame samples this frame's map: a
+    /// finished work map takes its place among the finished ones, and the shown map is written.
     fn copy_map(&self, encoder: &mut wgpu::CommandEncoder) {
-        if self.dirty {
-            let (w, h) = SharedResources::SKY_VIEW_SIZE;
+        let (w, h) = SharedResources::SKY_VIEW_SIZE;
+        if self.step.finish {
+            let older_from = if self.step.whole { &self.work } else { &self.newer };
+            encoder.copy_buffer_to_buffer(older_from, 0, &self.older, 0, None);
+            encoder.copy_buffer_to_buffer(&self.work, 0, &self.newer, 0, None);
+        }
+        if self.step.show.is_some() {
+            {
+                let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("SkyView::blend"), timestamp_writes: None });
+                cpass.set_pipeline(self.blend_pipeline.get());
+                cpass.set_bind_group(0, &self.globals_bind_group, &[]);
+                cpass.set_bind_group(1, &self.blend_bind_group, &[]);
+                cpass.dispatch_workgroups((w * h).div_ceil(64), 1, 1);
+            }
             encoder.copy_buffer_to_texture(
                 wgpu::TexelCopyBufferInfo {
                     buffer: &self.texels,
@@ -583,4 +717,14 @@ impl SkyViewPass {
             );
         }
     }
+}
+
+/// How far the sun moved from `a` to `b`, degrees, if nothing else the map depends on did (the
+/// analytic models' coefficients follow the sun: they count as something else).
+fn sun_moved(a: &Key, b: &Key) -> Option<f32> {
+    let sun = |k: &Key| glam::Vec3::from_slice(&k.params.towards_sun[..3]);
+    // (towards_sun.w is the camera's altitude: not the sun.)
+    let towards_sun = [a.params.towards_sun[0], a.params.towards_sun[1], a.params.towards_sun[2], b.params.towards_sun[3]];
+    let same_but_sun = Key { params: SkyViewParams { towards_sun, ..b.params }, ..*b } == *a;
+    same_but_sun.then(|| sun(a).angle_between(sun(b)).to_degrees())
 }

@@ -15,6 +15,7 @@
 //! 5. Inside each run: the seeding of a seeded buffer, its first layer over the seed, pairs.
 //! 6. Which clears the frame can skip.
 
+pub mod map_updates;
 pub mod mip_bounds;
 pub mod resolution;
 pub mod strategy;
