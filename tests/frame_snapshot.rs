@@ -66,7 +66,7 @@ fn sky_lines(h: &mut Headless, name: &str, sky: &Sky) -> Vec<String> {
         for target in ["display", "hdr", "display-referred"] {
             let options = RenderOptions::default().with_strategy(match target {
                 "hdr" => strategy.with_hdr(),
-                "display-referred" => FillStrategy { physical_target: PhysicalTarget::DisplayReferred, ..strategy },
+                "display-referred" => FillStrategy { physical_target: PhysicalTarget::DisplayMatched, ..strategy },
                 _ => strategy,
             });
             for (view_name, camera) in &views {

@@ -114,11 +114,13 @@ fn runs_join_across_additive_draws_and_coarse_runs_go_to_coarser_buffers() {
     let auto = RenderOptions { strategy: FillStrategy { dome_resolution: DomeResolution::Auto, ..half.strategy }, ..half };
     h.render(&sky, &night, &camera, &auto).expect("rendered");
     assert_eq!(h.renderer.stats.reduced_runs, [Divisor::whole(8); 2], "{:?}", h.renderer.stats);
-    // A physical sky model's stage keeps its layer's run at half resolution (the sun's aureole).
+    // A physical sky model's stage keeps its layer's run as fine as its map (two texels per
+    // degree: 2.5 here, at 5.1 pixels per degree), finer than the painted gradient's eighth.
     let mut lut = FrameInput::new(10.0, 0.3);
     lut.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
     h.render(&sky, &lut, &camera, &auto).expect("rendered");
-    assert_eq!(h.renderer.stats.reduced_runs.first(), Some(&Divisor::HALF), "{:?}", h.renderer.stats);
+    let first = h.renderer.stats.reduced_runs.first().copied();
+    assert!(first.is_some_and(|d| d > Divisor::whole(2) && d < Divisor::whole(3)), "{:?}", h.renderer.stats);
 }
 
 #[test]

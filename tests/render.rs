@@ -582,8 +582,12 @@ fn display_referred_skydome_is_the_hdr_frames() {
             let camera = Camera { yaw_deg, pitch_deg: 15.0, ..Camera::default() };
             let mut h = common::headless(W, H);
             h.set_sky(&sky).unwrap();
-            let display = h.render(&sky, &input, &camera, &options).unwrap();
             let hdr = h.render(&sky, &input, &camera, &RenderOptions { strategy: options.strategy.with_hdr(), ..options }).unwrap();
+            // Both display-referred ways draw the map's layer alike (they differ above it).
+            let painted = skytune::render::FillStrategy::preset("software-as-painted").expect("a preset");
+            let as_painted = h.render(&sky, &input, &camera, &RenderOptions { strategy: painted, ..options }).unwrap();
+            let display = h.render(&sky, &input, &camera, &options).unwrap();
+            assert_eq!(common::diff(&display, &as_painted, 0).0.differing, 0.0, "hour {hour}: the skydome alone");
             let (d, diff) = common::diff(&display, &hdr, 2);
             let horizon_rows = 2.05 / H as f64;
             if d.differing > horizon_rows {

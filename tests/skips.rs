@@ -209,11 +209,14 @@ fn stars_too_faint_to_add_half_a_level_are_not_drawn_and_change_no_pixel() {
         ("dawn", FrameInput::new(6.0, 0.0), 0),
         ("night", FrameInput::new(23.0, 0.0), 0),
         // On the HDR target every star is drawn (the tone map's toe can lift half a level by more).
-        ("dusk, lut on the HDR target", lut, 0),
+        ("dusk, lut on the HDR target", lut.clone(), 0),
+        // Display-referred, the stars add display values as over the painted sky.
+        ("dusk, lut display-referred", lut, 0),
     ] {
+        let hdr = |o: RenderOptions| if what.contains("HDR") { RenderOptions { strategy: o.strategy.with_hdr(), ..o } } else { o };
         for pitch_deg in [10.0, 60.0] {
             let camera = Camera { pitch_deg, ..Camera::default() };
-            let (with, without) = same_pixels(&mut h, (&forest, &input, &camera), (&on, &off), tolerance, |s| {
+            let (with, without) = same_pixels(&mut h, (&forest, &input, &camera), (&hdr(on), &hdr(off)), tolerance, |s| {
                 format!("{what}, pitch {pitch_deg}: leaving out {} of {} stars", s.stars - s.stars_drawn, s.stars)
             });
             assert_eq!(without.stars_drawn, without.stars, "{what}: every star drawn with the skip off ({without:?})");

@@ -100,6 +100,11 @@ fn exposed_from_display(display: vec3<f32>) -> vec3<f32> {
 // would pass 1 (the target clamps it); additive (2 and 3): H - D with the sky's radiance R under
 // the layer's added radiance.
 fn over_model_sky(c: vec4<f32>, dir: vec3<f32>, view_map: texture_2d<f32>, view_sampler: sampler) -> vec4<f32> {
+    // Nothing over the sky here (most of a cloud layer's pixels): written as it is. First, so that
+    // a software rasteriser skips the rest where a whole block of pixels is clear.
+    if c.a < 1e-3 || (BLEND_KIND >= 2u && max(c.r, max(c.g, c.b)) <= 0.0) {
+        return c;
+    }
     let sky = textureSampleLevel(view_map, view_sampler, sky_view_uv(normalize(dir)), 0.0).rgb;
     var tone = 0u;
     if globals.output.y > 0.5 { tone = 1u; }
@@ -108,9 +113,6 @@ fn over_model_sky(c: vec4<f32>, dir: vec3<f32>, view_map: texture_2d<f32>, view_
         var weight = 1.0;
         if BLEND_KIND == 2u { weight = c.a; }
         return vec4<f32>(display_from_exposed(sky + weight * exposed_from_display(c.rgb), tone) - under, 1.0);
-    }
-    if c.a < 1e-3 {
-        return c;
     }
     let over = display_from_exposed(c.a * exposed_from_display(c.rgb) + (1.0 - c.a) * sky, tone);
     var a = c.a;

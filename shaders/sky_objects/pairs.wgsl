@@ -35,7 +35,8 @@ fn fs_pair(in: PairOut) -> @location(0) vec4<f32> {
         Place(in.world_dir, in.upper_uv01, in.upper_uv23),
     );
     if OVER_MODEL_SKY {
-        // Each as over the bare sky: exact for the lower layer where it lies on the sky.
+        // Each as over the bare sky, as the two draws one by one would (exact for the lower layer
+        // where it lies on the sky).
         own = over_model_sky(own, in.world_dir, sky_view, sky_view_sampler);
         up = over_model_sky(up, in.world_dir, sky_view, sky_view_sampler);
     }

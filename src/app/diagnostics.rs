@@ -126,7 +126,11 @@ fn switches(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         ui,
         "physical skies",
         &mut st.physical_target,
-        &[(PhysicalTarget::Hdr, "HDR target, tone-mapped after"), (PhysicalTarget::DisplayReferred, "display-referred, tone-mapped per layer")],
+        &[
+            (PhysicalTarget::Hdr, "HDR target, tone-mapped after"),
+            (PhysicalTarget::DisplayMatched, "display target, layers matched to the HDR picture"),
+            (PhysicalTarget::DisplayAsPainted, "display target, layers blended as over a painted sky"),
+        ],
     );
     let median = |v: &VecDeque<f32>| {
         let mut x: Vec<f32> = v.iter().rev().take(30).copied().collect();

@@ -142,6 +142,13 @@ impl ResolutionFacts {
     }
 }
 
+/// Texels per degree a physical model's sky-view map holds, for the buffer its layer goes to:
+/// its rows 2 degrees above the horizon (square-root spaced, 108 over the sphere) are half a
+/// degree apart, its columns 1.9 degrees (192 round the horizon). Nearer the horizon the rows
+/// crowd further; there the sky's colour changes over a degree or two, which a buffer pixel of
+/// half a degree still follows (docs/performance-notes.md measures the difference).
+pub const SKY_VIEW_TEXELS_PER_DEG: f32 = 2.0;
+
 /// What the choice of resolution knows about one dome layer's material this frame.
 #[derive(Debug, Clone, Copy)]
 pub struct LayerStages {
@@ -153,8 +160,7 @@ pub struct LayerStages {
     pub live: [bool; MAX_STAGES],
     /// The most texels per degree of view each stage's texture shows anywhere on the shape.
     pub texels_per_deg: [f32; MAX_STAGES],
-    /// A stage is fed by a physical sky model's map (which has no texel size here, and whose
-    /// sun aureole is sharp: such a layer stays at the finest buffer).
+    /// A stage is fed by a physical sky model's map, which resolves [`SKY_VIEW_TEXELS_PER_DEG`].
     pub physical: bool,
     /// How the layer blends over what is below it.
     pub blend: BlendMode,
@@ -190,7 +196,8 @@ pub fn resolution(stages: &LayerStages, facts: &ResolutionFacts) -> Resolution {
     let any_coarse = (0..count).any(|k| coarse[k] && live[k]);
     // The most texels per degree among the stages sampled of `of`.
     let densest = |of: [bool; MAX_STAGES]| (0..count).filter(|&k| of[k] && live[k]).map(|k| stages.texels_per_deg[k]).fold(0.0, f32::max);
-    let divisor = if stages.physical { facts.finest } else { Divisor::at_most(facts.frame_px_per_deg / densest(coarse), facts.finest, facts.coarsest) };
+    let density = if stages.physical { densest(coarse).max(SKY_VIEW_TEXELS_PER_DEG) } else { densest(coarse) };
+    let divisor = Divisor::at_most(facts.frame_px_per_deg / density, facts.finest, facts.coarsest);
     match (any_fine, any_coarse, stages.blend) {
         (false, _, _) => Resolution::Reduced(divisor),
         (true, true, BlendMode::Opaque) => Resolution::Split { coarse, divisor, fine },
@@ -234,10 +241,12 @@ mod tests {
         let mut dark = layer(&[30.0], &[0], BlendMode::Opaque);
         dark.live = [false; 4];
         assert_eq!(resolution(&dark, &f), Resolution::Reduced(Divisor::EIGHTH));
-        // The densest stage decides; a physical map keeps the finest.
+        // The densest stage decides; a physical map counts as SKY_VIEW_TEXELS_PER_DEG (12 / 2).
         assert_eq!(resolution(&layer(&[0.5, 3.0], &[0, 1], BlendMode::Opaque), &f), Resolution::Reduced(Divisor::whole(4)));
         let physical = LayerStages { physical: true, ..layer(&[0.5], &[0], BlendMode::Opaque) };
-        assert_eq!(resolution(&physical, &f), Resolution::Reduced(Divisor::HALF));
+        assert_eq!(resolution(&physical, &f), Resolution::Reduced(Divisor::whole(6)));
+        let physical_dense = LayerStages { physical: true, ..layer(&[4.0], &[0], BlendMode::Opaque) };
+        assert_eq!(resolution(&physical_dense, &f), Resolution::Reduced(Divisor::whole(3)));
         // Fixed resolutions keep their divisor.
         let half = ResolutionFacts::new(DomeResolution::Half, 720, 60.0);
         assert_eq!(resolution(&layer(&[0.5], &[0], BlendMode::Opaque), &half), Resolution::Reduced(Divisor::HALF));

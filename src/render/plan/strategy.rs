@@ -97,13 +97,18 @@ pub enum PhysicalTarget {
     /// through the tone mapper's inverse), tone-mapped into the display target by a full-screen
     /// display phase. What HDR exports read; the reference picture of a physical sky.
     Hdr,
-    /// Onto the display target as a painted sky is: the sky-view map holds the model's tone-mapped
-    /// display values (tone mapping 192 x 108 texels instead of the frame), and the NeL layers
-    /// blend over it in display values as authored. No HDR target, no display phase; the
-    /// layers over the sky blend in display space rather than in linear light (the difference is
-    /// measured in docs/performance-notes.md). A frame that must read radiance back (an HDR
-    /// export) asks for [`Self::Hdr`].
-    DisplayReferred,
+    /// Onto the display target as a painted sky is, with no HDR target and no display phase: the
+    /// layer holding the model's map sums its terms in radiance and tone-maps them itself, and
+    /// each blended layer above it writes what the HDR path's blend over the model's sky would
+    /// leave (exact over the bare sky). The HDR picture within a few levels, at the cost of two
+    /// tone curves per blended fragment. A frame that must read radiance back (an HDR export)
+    /// asks for [`Self::Hdr`].
+    DisplayMatched,
+    /// As `DisplayMatched` for the map's layer, and the layers above it blend in display values
+    /// as over a painted sky (the NeL look of 2005): no tone curve per cloud fragment, but
+    /// clouds greyer over a bright sky than on the HDR target (docs/performance-notes.md
+    /// measures both).
+    DisplayAsPainted,
 }
 
 /// How the sky's pixels are filled: every trick of the renderer that trades work for work, as
@@ -132,7 +137,12 @@ pub struct FillStrategy {
 }
 
 /// The named presets, for the command line and reports.
-pub const PRESETS: [(&str, FillStrategy); 3] = [("software", FillStrategy::software()), ("plain", FillStrategy::plain()), ("software-hdr", FillStrategy::software().with_hdr())];
+pub const PRESETS: [(&str, FillStrategy); 4] = [
+    ("software", FillStrategy::software()),
+    ("plain", FillStrategy::plain()),
+    ("software-hdr", FillStrategy::software().with_hdr()),
+    ("software-as-painted", FillStrategy { physical_target: PhysicalTarget::DisplayAsPainted, ..FillStrategy::software() }),
+];
 
 impl FillStrategy {
     /// Every trick on: what measured fastest on lavapipe (docs/performance-notes.md), for CPU
@@ -148,7 +158,7 @@ impl FillStrategy {
             // One r-layer of a default table per frame: about half a second each on lavapipe.
             table_builds: crate::render::passes::precomputed_tables::TableBuilds::Spread { slices: 32 },
             // The HDR target and its display phase were 17 to 20 ms of a 25 ms frame at 1280x720.
-            physical_target: PhysicalTarget::DisplayReferred,
+            physical_target: PhysicalTarget::DisplayMatched,
             // The `lut` map cost about 27 ms a frame at 192 x 108 on lavapipe with the sun moving.
             map_updates: crate::render::plan::map_updates::MapUpdates::Spread { slices: 6 },
         }

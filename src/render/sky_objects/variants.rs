@@ -76,7 +76,8 @@ impl VariantKey {
     /// The signature of a draw of a version with material `sig`, this frame's `live` stages
     /// (those whose term is not black: [`DrawUniform::skip_dark_terms`]) and the stage the
     /// sky-view map feeds.
-    /// `physical` says whether the frame's skydome holds a physical model.
+    /// `physical` says whether the frame's skydome holds a physical model whose blended layers
+    /// match the HDR picture (`PhysicalTarget::DisplayMatched`).
     pub(super) fn of(sig: &MaterialSignature, (live, view_stage): ([bool; 4], Option<usize>), blend: BlendMode, (target, physical): (Target, bool), neutral_tone: bool) -> Self {
         let tone = match (target, neutral_tone) {
             (Target::Display, _) => 0,
