@@ -11,7 +11,7 @@ struct Globals {
     time: vec4<f32>,                   // hour, hours_per_day, weather, game_hours
     viewport: vec4<f32>,               // width, height, 1/width, 1/height (pixels)
     camera_position: vec4<f32>,        // world position of the main-scene camera, m
-    output: vec4<f32>,                 // x: 1 when drawing exposed linear radiance into the HDR target (0: display values), y: tone mapper
+    output: vec4<f32>,                 // x: 1 when drawing exposed linear radiance into the HDR target (0: display values), y: tone mapper, z: 1 on a display-referred physical frame matched to the HDR picture
     cloud_sun: vec4<f32>,              // sun light on lit clouds, display values (the sky model's, else sun_diffuse)
     cloud_ambient: vec4<f32>,          // ambient light on lit clouds, display values (the sky model's, else sun_ambient)
 };

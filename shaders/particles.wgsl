@@ -26,7 +26,16 @@ fn vs_main(@builtin(vertex_index) vi: u32, p: Particle) -> ParticleOut {
 // sprite shape is evaluated over the screen (a SIMD rasteriser runs every branch of fs_main).
 @fragment
 fn fs_flash(in: ParticleOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(to_target(in.color.rgb * in.color.a), 1.0);
+    let add = in.color.rgb * in.color.a;
+    if globals.output.z > 0.5 {
+        // A display-referred physical frame matched to the HDR picture: what the HDR path's sum
+        // leaves over the model's sky, taken at its mean (globals.cloud_ambient, the map's mean
+        // radiance as a display value) for one colour over the frame.
+        let under = globals.cloud_ambient.rgb;
+        let tone = frame_tone_mapper();
+        return vec4<f32>(display_from_exposed(exposed_from_display(under) + exposed_from_display(add), tone) - under, 1.0);
+    }
+    return vec4<f32>(to_target(add), 1.0);
 }
 
 // Dome emitters' particles drawn after the composite of the run of reduced layers above them

@@ -107,11 +107,24 @@ fn to_target(display: vec3<f32>) -> vec3<f32> {
     if TARGET_KIND == 0u && globals.output.x < 0.5 {
         return display;
     }
+    return exposed_from_display(display);
+}
+
+// The exposed radiance the frame's tone mapper takes to display value `display`.
+fn exposed_from_display(display: vec3<f32>) -> vec3<f32> {
     let l = linear_from_display(display);
     if TONE_KIND == 2u || (TONE_KIND == 0u && globals.output.y > 0.5) {
         return tone_map_neutral_inverse(l);
     }
     return tone_map_aces_inverse(l);
+}
+
+// The frame's tone mapper as `display_from_exposed` takes it (0 ACES, 1 neutral).
+fn frame_tone_mapper() -> u32 {
+    if TONE_KIND == 2u || (TONE_KIND == 0u && globals.output.y > 0.5) {
+        return 1u;
+    }
+    return 0u;
 }
 
 // Linear to sRGB-encoded display values.

@@ -82,15 +82,6 @@ fn view_on_display(l: u32, d: Draw) -> bool {
     return view_stage(l, d) < 4u && (TARGET_KIND == 1u || (TARGET_KIND == 0u && globals.output.x < 0.5));
 }
 
-// The exposed radiance the HDR frame's tone mapper takes to display value `display`.
-fn exposed_from_display(display: vec3<f32>) -> vec3<f32> {
-    let l = linear_from_display(display);
-    if TONE_KIND == 2u || (TONE_KIND == 0u && globals.output.y > 0.5) {
-        return tone_map_neutral_inverse(l);
-    }
-    return tone_map_aces_inverse(l);
-}
-
 // A blended layer's colour `c` (display values, alpha its coverage) on a display-referred
 // physical frame (`OVER_MODEL_SKY`), as what its blend onto the model's sky along `dir` must write
 // so that the pixel ends as the HDR path would leave it there: the layer's exposed radiance
@@ -106,8 +97,7 @@ fn over_model_sky(c: vec4<f32>, dir: vec3<f32>, view_map: texture_2d<f32>, view_
         return c;
     }
     let sky = textureSampleLevel(view_map, view_sampler, sky_view_uv(normalize(dir)), 0.0).rgb;
-    var tone = 0u;
-    if globals.output.y > 0.5 { tone = 1u; }
+    let tone = frame_tone_mapper();
     let under = display_from_exposed(sky, tone);
     if BLEND_KIND >= 2u {
         var weight = 1.0;
@@ -246,9 +236,7 @@ fn material(
     var sum = acc.sum;
     if acc.has_term { sum = add_term(l, d, sum, acc.term, view, acc.term_has_view); }
     if view_on_display(l, d) {
-        var tone = 0u;
-        if TONE_KIND == 2u || (TONE_KIND == 0u && globals.output.y > 0.5) { tone = 1u; }
-        return vec4<f32>(display_from_exposed(sum.rgb, tone), sum.a);
+        return vec4<f32>(display_from_exposed(sum.rgb, frame_tone_mapper()), sum.a);
     }
     // Lit clouds. The lighting is per draw (uniform control flow), so the derivatives `lit_cloud`
     // takes are computed only by the draws that use them.

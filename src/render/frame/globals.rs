@@ -32,7 +32,8 @@ pub struct Globals {
     pub camera_position: [f32; 4],
     /// x: 1 when the drawing phases write exposed linear radiance into the HDR target, 0 when
     /// they write display values (see [`crate::render::frame::pass::Target`]); y: the tone mapper
-    /// ([`crate::render::passes::tone_map::ToneMapUniform`]), which display-referred colours are inverted through.
+    /// ([`crate::render::passes::tone_map::ToneMapUniform`]), which display-referred colours are inverted through;
+    /// z: 1 on a display-referred physical frame matched to the HDR picture.
     pub output: [f32; 4],
     /// Sun light on lit clouds (display values): the sky model's transmitted sun (E T / pi, as
     /// `sun_diffuse`) when a physical or analytic model shows, else the sky's `sun_diffuse`.
@@ -55,7 +56,9 @@ const _: () = assert!(std::mem::offset_of!(Globals, sun_ambient) - std::mem::off
 
 impl Globals {
     /// Globals for a frame seen by `camera` on a `width` x `height` target.
-    pub fn new(frame: &FrameSky, camera: &Camera, width: u32, height: u32, target: crate::render::frame::pass::Target) -> Self {
+    /// `matched`: a display-referred physical frame whose layers are matched to the HDR picture
+    /// ([`crate::render::plan::strategy::PhysicalTarget::DisplayMatched`]).
+    pub fn new(frame: &FrameSky, camera: &Camera, width: u32, height: u32, (target, matched): (crate::render::frame::pass::Target, bool)) -> Self {
         let aspect = width as f32 / height.max(1) as f32;
         let (clip_from_world, clip_from_sky) = camera.matrices(aspect);
         let v = |c: [f32; 4]| c;
@@ -76,7 +79,7 @@ impl Globals {
             output: [
                 if target == crate::render::frame::pass::Target::Hdr { 1.0 } else { 0.0 },
                 crate::render::passes::tone_map::ToneMapUniform::from(frame.sky_model.tone_mapper).settings[0] as f32,
-                0.0,
+                if matched { 1.0 } else { 0.0 },
                 0.0,
             ],
         }

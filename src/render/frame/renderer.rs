@@ -377,7 +377,8 @@ impl SkyRenderer {
     pub fn render(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &RenderTarget<'_>, frame: &FrameSky, camera: &Camera, options: &RenderOptions) {
         let (w, h) = target.size;
         let kind = plan::frame_target(self.has_sky && frame.sky_model.kind.is_physical(), &options.strategy);
-        let globals = Globals::new(frame, camera, w, h, kind);
+        let matched = self.has_sky && frame.sky_model.kind.is_physical() && options.strategy.physical_target == crate::render::plan::strategy::PhysicalTarget::DisplayMatched;
+        let globals = Globals::new(frame, camera, w, h, (kind, matched));
         ctx.queue.write_buffer(&self.globals.buffer, 0, bytemuck::bytes_of(&globals));
         if !self.has_sky {
             return;
