@@ -742,7 +742,7 @@ pub struct FrameBenchArgs {
     pub strategy: Vec<skytune::render::plan::strategy::FillStrategy>,
     /// Also measure every sky with these skydome colour sources (comma-separated `[sky_model]`
     /// kinds, e.g. `bitmap,lut,precomputed`), besides its own; physical cases are reported
-    /// against the same sky's bitmap case.
+    /// against the same sky's bitmap case (`precomputed` with its small tables, waited for).
     #[arg(long, value_parser = parse_sky_model_kind, value_delimiter = ',')]
     pub sky_models: Vec<skytune::sky::resolved::SkyModelKind>,
 }
