@@ -152,87 +152,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
         })
         .collect::<anyhow::Result<_>>()?;
 
-    let mut cases = Vec::new();
-    for (name, sky) in &skies {
-        for m in &mut measured {
-            m.plain.set_sky(sky)?;
-            m.moving.set_sky(sky)?;
-            m.timing.set_sky(sky)?;
-            if sky.model.kind == SkyModelKind::Precomputed {
-                // Its tables are built over frames: waited for, untimed, by a still on each renderer.
-                let still = FrameInput::new(12.0, 0.0);
-                for hl in [&mut m.plain, &mut m.moving, &mut m.timing] {
-                    hl.render(sky, &still, &views[0].1, &m.options)?;
-                }
-            }
-        }
-        for (hour, weather) in TIMES {
-            for (view, camera) in &views {
-                let input = FrameInput::new(hour, weather);
-                let frame = sky.evaluate(&input);
-                let mut samples: Vec<Samples> = measured.iter().map(|_| Samples::default()).collect();
-                for i in 0..frames + 2 {
-                    let moved = sky.evaluate(&FrameInput::new(hour + SUN_STEP_HOURS * (i + 1) as f32, weather));
-                    for (m, samples) in measured.iter_mut().zip(&mut samples) {
-                        let target = m.moving.target.target();
-                        let moving = timed(&ctx, |e| m.moving.renderer.render(&ctx, e, &target, &moved, camera, &m.options))?;
-                        m.moving.renderer.after_submit();
-                        let target = m.plain.target.target();
-                        let f = timed(&ctx, |e| floor.record(e, target.color))?;
-                        let with = timed(&ctx, |e| m.plain.renderer.render(&ctx, e, &target, &frame, camera, &m.with_scene))?;
-                        m.plain.renderer.after_submit();
-                        let s = timed(&ctx, |e| m.plain.renderer.render(&ctx, e, &target, &frame, camera, &m.options))?;
-                        m.plain.renderer.after_submit();
-                        let target = m.timing.target.target();
-                        timed(&ctx, |e| m.timing.renderer.render(&ctx, e, &target, &frame, camera, &m.options))?;
-                        settle(&ctx, &mut m.timing)?;
-                        if i >= 2 {
-                            samples.floor_ms.push(f);
-                            samples.sky_ms.push(s);
-                            samples.moving_ms.push(moving);
-                            samples.scene_ms.push(with);
-                            samples.phases.push(m.timing.renderer.gpu_pass_ms().to_vec());
-                        }
-                    }
-                }
-                for (m, samples) in measured.iter().zip(samples) {
-                    let phases = &samples.phases;
-                    let names: Vec<&'static str> = phases.first().map(|p| p.iter().map(|(n, _)| *n).collect()).unwrap_or_default();
-                    let phase_medians =
-                        names.iter().map(|n| (*n, median(&phases.iter().filter_map(|p| p.iter().find(|(m, _)| m == n).map(|(_, ms)| *ms as f64)).collect::<Vec<_>>()))).collect();
-                    let case = Case {
-                        sky: name.clone(),
-                        model: sky.model.kind,
-                        strategy: m.name,
-                        hour,
-                        weather,
-                        view,
-                        sky_ms: median(&samples.sky_ms),
-                        moving_ms: median(&samples.moving_ms),
-                        floor_ms: median(&samples.floor_ms),
-                        with_scene_ms: median(&samples.scene_ms),
-                        phases: phase_medians,
-                    };
-                    println!(
-                        "{:<10} {:<11} {:<8} {:>5.1} h weather {:.1} {:<7}: frame {:>8.2} ms (sun moving {:>8.2}), floor {:>6.2} ms, ratio {:>5.1} (with the scene {:>6.2} ms, {:.1})",
-                        case.sky,
-                        case.model.name(),
-                        case.strategy,
-                        hour,
-                        weather,
-                        view,
-                        case.sky_ms,
-                        case.moving_ms,
-                        case.floor_ms,
-                        case.sky_ms / case.floor_ms,
-                        case.with_scene_ms,
-                        case.with_scene_ms / case.floor_ms
-                    );
-                    cases.push(case);
-                }
-            }
-        }
-    }
+    let cases = measure_cases(&ctx, &floor, (&skies, &views), &mut measured, frames)?;
     // Per strategy, over the painted (bitmap) cases: worst and median ratio, and each case's
     // frame against the summarised strategy's.
     let per_strategy: Vec<(&str, f64, f64, f64)> = measured
@@ -255,46 +175,7 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     let stand_in_ms = median(&cases.iter().filter(|c| c.view == "horizon").map(|c| c.with_scene_ms - c.sky_ms).collect::<Vec<_>>());
 
     // Per object: the built-in sky at dusk, horizon view, each object left out in turn.
-    let (_, builtin) = &skies[0];
-    plain.set_sky(builtin)?;
-    let dusk = FrameInput::new(18.5, 0.3);
-    let camera = views[0].1;
-    // Frames with every object and without those left out alternate, and an object's cost is the
-    // median of the pairs' differences: a drifting machine moves both frames of a pair alike. The
-    // frames without it come from a second renderer: one renderer alternating between two sets of
-    // objects made frames slower by about 0.8 ms whatever was left out (an object outside the
-    // frame, which draws nothing, showed that much), which is not what either frame costs alone.
-    let mut other = Headless::new(untimed, w, h)?;
-    other.set_sky(builtin)?;
-    let every = builtin.evaluate(&dusk);
-    let mut paired = |hl: &mut Headless, input: &FrameInput| -> anyhow::Result<(f64, f64, f64)> {
-        let frame = builtin.evaluate(input);
-        let (mut with, mut without, mut differences) = (Vec::new(), Vec::new(), Vec::new());
-        for i in 0..frames + 2 {
-            let target = hl.target.target();
-            let a = timed(&ctx, |e| hl.renderer.render(&ctx, e, &target, &every, &camera, &options))?;
-            hl.renderer.after_submit();
-            let target = other.target.target();
-            let b = timed(&ctx, |e| other.renderer.render(&ctx, e, &target, &frame, &camera, &options))?;
-            other.renderer.after_submit();
-            if i >= 2 {
-                with.push(a);
-                without.push(b);
-                differences.push(a - b);
-            }
-        }
-        Ok((median(&with), median(&without), median(&differences)))
-    };
-    let mut per_object = Vec::new();
-    let mut with_all = Vec::new();
-    for o in &builtin.objects {
-        let (with, _, cost) = paired(&mut plain, &FrameInput { disabled: vec![o.name.clone()], ..dusk.clone() })?;
-        with_all.push(with);
-        per_object.push((o.name.clone(), cost));
-    }
-    let (with, nothing, _) = paired(&mut plain, &FrameInput { disabled: builtin.objects.iter().map(|o| o.name.clone()).collect(), ..dusk.clone() })?;
-    with_all.push(with);
-    let all = median(&with_all);
+    let (per_object, nothing, all) = per_object_costs(&ctx, &skies[0].1, (&mut plain, Headless::new(untimed, w, h)?), (&options, &views[0].1), frames)?;
 
     // CPU: evaluating a sky of 50 objects.
     let (eval_us, objects) = evaluation_cost(if args.quick { 200 } else { 2000 })?;
@@ -430,6 +311,151 @@ impl Case {
     fn same_view(&self, other: &Case) -> bool {
         (&self.sky, self.hour, self.weather, self.view) == (&other.sky, other.hour, other.weather, other.view)
     }
+}
+
+/// The views of every case: towards the horizon and the zenith.
+type Views = [(&'static str, Camera); 2];
+
+/// Every sky's cases for every strategy: each moment and view, frames of the sky alone, of the
+/// sky with the scene stand-in, with the sun moving and of the floor alternating, and the phases'
+/// GPU times from the timing renderer.
+fn measure_cases(ctx: &GpuContext, floor: &Baseline, (skies, views): (&[(String, Sky)], &Views), measured: &mut [Measured], frames: u32) -> anyhow::Result<Vec<Case>> {
+    let mut cases = Vec::new();
+    for (name, sky) in skies {
+        for m in measured.iter_mut() {
+            m.plain.set_sky(sky)?;
+            m.moving.set_sky(sky)?;
+            m.timing.set_sky(sky)?;
+            if sky.model.kind == SkyModelKind::Precomputed {
+                // Its tables are built over frames: waited for, untimed, by a still on each renderer.
+                let still = FrameInput::new(12.0, 0.0);
+                for hl in [&mut m.plain, &mut m.moving, &mut m.timing] {
+                    hl.render(sky, &still, &views[0].1, &m.options)?;
+                }
+            }
+        }
+        for (hour, weather) in TIMES {
+            for (view, camera) in views {
+                let input = FrameInput::new(hour, weather);
+                let frame = sky.evaluate(&input);
+                let mut samples: Vec<Samples> = measured.iter().map(|_| Samples::default()).collect();
+                for i in 0..frames + 2 {
+                    let moved = sky.evaluate(&FrameInput::new(hour + SUN_STEP_HOURS * (i + 1) as f32, weather));
+                    for (m, samples) in measured.iter_mut().zip(&mut samples) {
+                        let target = m.moving.target.target();
+                        let moving = timed(ctx, |e| m.moving.renderer.render(ctx, e, &target, &moved, camera, &m.options))?;
+                        m.moving.renderer.after_submit();
+                        let target = m.plain.target.target();
+                        let f = timed(ctx, |e| floor.record(e, target.color))?;
+                        let with = timed(ctx, |e| m.plain.renderer.render(ctx, e, &target, &frame, camera, &m.with_scene))?;
+                        m.plain.renderer.after_submit();
+                        let s = timed(ctx, |e| m.plain.renderer.render(ctx, e, &target, &frame, camera, &m.options))?;
+                        m.plain.renderer.after_submit();
+                        let target = m.timing.target.target();
+                        timed(ctx, |e| m.timing.renderer.render(ctx, e, &target, &frame, camera, &m.options))?;
+                        settle(ctx, &mut m.timing)?;
+                        if i >= 2 {
+                            samples.floor_ms.push(f);
+                            samples.sky_ms.push(s);
+                            samples.moving_ms.push(moving);
+                            samples.scene_ms.push(with);
+                            samples.phases.push(m.timing.renderer.gpu_pass_ms().to_vec());
+                        }
+                    }
+                }
+                for (m, samples) in measured.iter().zip(samples) {
+                    let phases = &samples.phases;
+                    let names: Vec<&'static str> = phases.first().map(|p| p.iter().map(|(n, _)| *n).collect()).unwrap_or_default();
+                    let phase_medians =
+                        names.iter().map(|n| (*n, median(&phases.iter().filter_map(|p| p.iter().find(|(m, _)| m == n).map(|(_, ms)| *ms as f64)).collect::<Vec<_>>()))).collect();
+                    let case = Case {
+                        sky: name.clone(),
+                        model: sky.model.kind,
+                        strategy: m.name,
+                        hour,
+                        weather,
+                        view,
+                        sky_ms: median(&samples.sky_ms),
+                        moving_ms: median(&samples.moving_ms),
+                        floor_ms: median(&samples.floor_ms),
+                        with_scene_ms: median(&samples.scene_ms),
+                        phases: phase_medians,
+                    };
+                    println!(
+                        "{:<10} {:<11} {:<8} {:>5.1} h weather {:.1} {:<7}: frame {:>8.2} ms (sun moving {:>8.2}), floor {:>6.2} ms, ratio {:>5.1} (with the scene {:>6.2} ms, {:.1})",
+                        case.sky,
+                        case.model.name(),
+                        case.strategy,
+                        hour,
+                        weather,
+                        view,
+                        case.sky_ms,
+                        case.moving_ms,
+                        case.floor_ms,
+                        case.sky_ms / case.floor_ms,
+                        case.with_scene_ms,
+                        case.with_scene_ms / case.floor_ms
+                    );
+                    cases.push(case);
+                }
+            }
+        }
+    }
+    Ok(cases)
+}
+
+/// Each object's cost (name, ms), the frame with no object and the median frame with every object.
+type ObjectCosts = (Vec<(String, f64)>, f64, f64);
+
+/// What each object of the built-in sky costs at dusk, looking at the horizon: frames with every
+/// object against frames with that one left out, in pairs; returns each object's cost (ms), the
+/// frame with no object and the median frame with every object.
+fn per_object_costs(
+    ctx: &GpuContext,
+    builtin: &Sky,
+    (plain, mut other): (&mut Headless, Headless),
+    (options, camera): (&RenderOptions, &Camera),
+    frames: u32,
+) -> anyhow::Result<ObjectCosts> {
+    plain.set_sky(builtin)?;
+    let dusk = FrameInput::new(18.5, 0.3);
+    let camera = *camera;
+    // Frames with every object and without those left out alternate, and an object's cost is the
+    // median of the pairs' differences: a drifting machine moves both frames of a pair alike. The
+    // frames without it come from a second renderer: one renderer alternating between two sets of
+    // objects made frames slower by about 0.8 ms whatever was left out (an object outside the
+    // frame, which draws nothing, showed that much), which is not what either frame costs alone.
+    other.set_sky(builtin)?;
+    let every = builtin.evaluate(&dusk);
+    let mut paired = |hl: &mut Headless, input: &FrameInput| -> anyhow::Result<(f64, f64, f64)> {
+        let frame = builtin.evaluate(input);
+        let (mut with, mut without, mut differences) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..frames + 2 {
+            let target = hl.target.target();
+            let a = timed(ctx, |e| hl.renderer.render(ctx, e, &target, &every, &camera, options))?;
+            hl.renderer.after_submit();
+            let target = other.target.target();
+            let b = timed(ctx, |e| other.renderer.render(ctx, e, &target, &frame, &camera, options))?;
+            other.renderer.after_submit();
+            if i >= 2 {
+                with.push(a);
+                without.push(b);
+                differences.push(a - b);
+            }
+        }
+        Ok((median(&with), median(&without), median(&differences)))
+    };
+    let mut per_object = Vec::new();
+    let mut with_all = Vec::new();
+    for o in &builtin.objects {
+        let (with, _, cost) = paired(plain, &FrameInput { disabled: vec![o.name.clone()], ..dusk.clone() })?;
+        with_all.push(with);
+        per_object.push((o.name.clone(), cost));
+    }
+    let (with, nothing, _) = paired(plain, &FrameInput { disabled: builtin.objects.iter().map(|o| o.name.clone()).collect(), ..dusk.clone() })?;
+    with_all.push(with);
+    let all = median(&with_all);
+    Ok((per_object, nothing, all))
 }
 
 /// `skies`, each followed by copies of itself with each of `models` as its skydome's colour
