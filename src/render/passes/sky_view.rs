@@ -644,7 +644,7 @@ impl SkyViewPass {
         }
         let change = match self.computed {
             _ if unchanged => MapChange::Same,
-            // The sun stopped away from the newest map: compute it whole, exactly.
+            // The sun still moving by a small step, nothing else changed: the spread goes on.
             Some(newest)
                 if last_key != Some(key)
                     && !model.kind.on_cpu()
@@ -653,6 +653,7 @@ impl SkyViewPass {
             {
                 MapChange::SunStep
             }
+            // Anything else, the sun stopped away from the newest map included: whole, exactly.
             _ => MapChange::Other,
         };
         let (w, h) = SharedResources::SKY_VIEW_SIZE;
