@@ -42,8 +42,16 @@ fn stars_drawn_texel_by_texel_give_the_sampled_picture() {
     h.set_sky(&sky).expect("uploaded");
     let mut input = FrameInput::new(23.0, 0.0);
     input.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
-    h.render(&sky, &input, &views[0].1, &on).expect("rendered");
+    let hdr = RenderOptions { strategy: on.strategy.with_hdr(), ..on };
+    h.render(&sky, &input, &views[0].1, &hdr).expect("rendered");
     assert_eq!(h.renderer.stats.texel_triangles, 0, "{:?}", h.renderer.stats);
+    // Display-referred, the stars split off the map's layer add display values, as over a
+    // painted sky: texel by texel, the same picture as sampled.
+    let with = h.render(&sky, &input, &views[0].1, &on).expect("rendered");
+    assert!(h.renderer.stats.texel_triangles > 0, "{:?}", h.renderer.stats);
+    let without = h.render(&sky, &input, &views[0].1, &off).expect("rendered");
+    let (d, _) = common::diff(&with, &without, 2);
+    assert_eq!(d.differing, 0.0, "lut display-referred: {:.4} of the pixels moved by more than 2 (largest {})", d.differing, d.max);
 }
 
 #[test]
