@@ -101,19 +101,21 @@ override TARGET_KIND: u32 = 0u;
 override TONE_KIND: u32 = 0u;
 
 fn to_target(display: vec3<f32>) -> vec3<f32> {
-    if TARGET_KIND == 1u {
-        return display;
-    }
-    if TARGET_KIND == 0u && globals.output.x < 0.5 {
+    if on_display_target() {
         return display;
     }
     return exposed_from_display(display);
 }
 
+// Whether the pipeline draws into the display target (display values).
+fn on_display_target() -> bool {
+    return TARGET_KIND == 1u || (TARGET_KIND == 0u && globals.output.x < 0.5);
+}
+
 // The exposed radiance the frame's tone mapper takes to display value `display`.
 fn exposed_from_display(display: vec3<f32>) -> vec3<f32> {
     let l = linear_from_display(display);
-    if TONE_KIND == 2u || (TONE_KIND == 0u && globals.output.y > 0.5) {
+    if frame_tone_mapper() == 1u {
         return tone_map_neutral_inverse(l);
     }
     return tone_map_aces_inverse(l);

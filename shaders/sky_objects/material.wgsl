@@ -75,11 +75,11 @@ fn stage_uv(d: Draw, i: u32, mode: u32, at: Place) -> vec2<f32> {
 }
 
 // Whether this layer holds a physical model's map and draws onto the display target (a
-// display-referred frame, `PhysicalTarget::DisplayReferred`): its terms are then summed in exposed
-// radiance, as on the HDR target, and tone-mapped by the layer itself, so the skydome is the HDR
-// path's to the pixel and the frame needs no display phase.
+// display-referred frame, `PhysicalTarget::DisplayMatched` or `DisplayAsPainted`): its terms are
+// then summed in exposed radiance, as on the HDR target, and tone-mapped by the layer itself, so
+// the skydome is the HDR path's to the pixel and the frame needs no display phase.
 fn view_on_display(l: u32, d: Draw) -> bool {
-    return view_stage(l, d) < 4u && (TARGET_KIND == 1u || (TARGET_KIND == 0u && globals.output.x < 0.5));
+    return view_stage(l, d) < 4u && on_display_target();
 }
 
 // A blended layer's colour `c` (display values, alpha its coverage) on a display-referred

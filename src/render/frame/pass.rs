@@ -182,6 +182,9 @@ pub struct FrameContext<'a> {
     pub size: (u32, u32),
     /// The colour target this frame's drawing phases write.
     pub target: Target,
+    /// Whether blended layers are drawn as the HDR path's blend over the model's sky would leave
+    /// them ([`crate::render::plan::matches_hdr_picture`]).
+    pub matched: bool,
     /// The frame's HDR target and a number that changes whenever it is recreated (`None` when
     /// the frame draws display values directly).
     pub hdr: Option<(&'a wgpu::TextureView, u64)>,

@@ -376,8 +376,8 @@ impl SkyRenderer {
     /// Call [`Self::after_submit`] once the encoder is submitted.
     pub fn render(&mut self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, target: &RenderTarget<'_>, frame: &FrameSky, camera: &Camera, options: &RenderOptions) {
         let (w, h) = target.size;
-        let kind = plan::frame_target(self.has_sky && frame.sky_model.kind.is_physical(), &options.strategy);
-        let matched = self.has_sky && frame.sky_model.kind.is_physical() && options.strategy.physical_target == crate::render::plan::strategy::PhysicalTarget::DisplayMatched;
+        let physical = self.has_sky && frame.sky_model.kind.is_physical();
+        let (kind, matched) = (plan::frame_target(physical, &options.strategy), plan::matches_hdr_picture(physical, &options.strategy));
         let globals = Globals::new(frame, camera, w, h, (kind, matched));
         ctx.queue.write_buffer(&self.globals.buffer, 0, bytemuck::bytes_of(&globals));
         if !self.has_sky {
@@ -387,7 +387,7 @@ impl SkyRenderer {
             self.ensure_hdr(&ctx.device, target.size);
         }
         let hdr = self.hdr.as_ref().filter(|_| kind == Target::Hdr).map(|t| (&t.view, t.generation));
-        let cx = FrameContext { device: &ctx.device, queue: &ctx.queue, frame, camera, options, size: target.size, target: kind, hdr };
+        let cx = FrameContext { device: &ctx.device, queue: &ctx.queue, frame, camera, options, size: target.size, target: kind, matched, hdr };
         for pass in &mut self.passes {
             pass.prepare(&cx);
         }

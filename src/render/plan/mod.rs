@@ -37,6 +37,12 @@ pub fn frame_target(physical: bool, strategy: &FillStrategy) -> Target {
     }
 }
 
+/// Whether a frame's blended layers are drawn as the HDR path's blend over the model's sky would
+/// leave them: a physical sky drawn display-referred with [`strategy::PhysicalTarget::DisplayMatched`].
+pub fn matches_hdr_picture(physical: bool, strategy: &FillStrategy) -> bool {
+    physical && strategy.physical_target == strategy::PhysicalTarget::DisplayMatched
+}
+
 /// What the plan needs to know of the frame besides its draws.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FrameFacts {

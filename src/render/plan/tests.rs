@@ -244,5 +244,9 @@ fn physical_skies_go_to_the_hdr_target_only_when_the_strategy_asks() {
     assert_eq!(frame_target(true, &FillStrategy::software().with_hdr()), Target::Hdr);
     for s in [FillStrategy::plain(), FillStrategy::software(), FillStrategy { physical_target: PhysicalTarget::Hdr, ..FillStrategy::software() }] {
         assert_eq!(frame_target(false, &s), Target::Display, "a painted sky is display-referred");
+        assert!(!matches_hdr_picture(false, &s), "a painted sky's layers are drawn as authored");
     }
+    assert!(matches_hdr_picture(true, &FillStrategy::software()));
+    assert!(!matches_hdr_picture(true, &FillStrategy::software().with_hdr()), "on the HDR target the blend itself is the HDR path's");
+    assert!(!matches_hdr_picture(true, &FillStrategy { physical_target: PhysicalTarget::DisplayAsPainted, ..FillStrategy::software() }));
 }

@@ -426,14 +426,7 @@ impl Pass for SkyObjectsPass {
         let Some(draws) = &self.draws.current else { return };
         let neutral = crate::render::passes::tone_map::ToneMapUniform::from(cx.frame.sky_model.tone_mapper).settings[0] != 0;
         self.keys.clear();
-        self.stages_skipped = draws.prepare(
-            cx.queue,
-            cx.frame,
-            cx.camera,
-            cx.options.skips.dark_stages,
-            (cx.target, neutral, cx.options.strategy.physical_target == crate::render::plan::strategy::PhysicalTarget::DisplayMatched),
-            &mut self.keys,
-        );
+        self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera, cx.options.skips.dark_stages, (cx.target, neutral, cx.matched), &mut self.keys);
         self.ref_hidden = 0;
         self.below_horizon = 0;
         self.off_screen = 0;

@@ -76,9 +76,9 @@ impl VariantKey {
     /// The signature of a draw of a version with material `sig`, this frame's `live` stages
     /// (those whose term is not black: [`DrawUniform::skip_dark_terms`]) and the stage the
     /// sky-view map feeds.
-    /// `physical` says whether the frame's skydome holds a physical model whose blended layers
-    /// match the HDR picture (`PhysicalTarget::DisplayMatched`).
-    pub(super) fn of(sig: &MaterialSignature, (live, view_stage): ([bool; 4], Option<usize>), blend: BlendMode, (target, physical): (Target, bool), neutral_tone: bool) -> Self {
+    /// `matched`: the frame's blended layers match the HDR picture
+    /// ([`crate::render::plan::matches_hdr_picture`]).
+    pub(super) fn of(sig: &MaterialSignature, (live, view_stage): ([bool; 4], Option<usize>), blend: BlendMode, (target, matched): (Target, bool), neutral_tone: bool) -> Self {
         let tone = match (target, neutral_tone) {
             (Target::Display, _) => 0,
             (Target::Hdr, false) => 1,
@@ -95,7 +95,7 @@ impl VariantKey {
             blend: blend_index(blend),
             target,
             tone,
-            over_model: physical && target == Target::Display && view_stage.is_none() && blend != BlendMode::Opaque,
+            over_model: matched && view_stage.is_none() && blend != BlendMode::Opaque,
             reduced: false,
             placement: Slot::Plain,
         }
