@@ -434,10 +434,10 @@ pub struct FrameArgs {
     /// a buffer from 1.5 to 2 where one resolves them). Default: the fill strategy's.
     #[arg(long, value_parser = parse_dome_resolution)]
     pub dome_resolution: Option<skytune::render::DomeResolution>,
-    /// Fill strategy: software (every trick tuned for CPU rasterisers), plain (dome layers at
-    /// full resolution, drawn one by one) or software-hdr (software with physical skies on the
-    /// HDR target). Default: the adapter's (software on a CPU adapter).
-    #[arg(long, value_parser = parse_strategy)]
+    /// Fill strategy preset: software (every trick tuned for CPU rasterisers), plain (dome layers
+    /// at full resolution, drawn one by one), or a variant of software that turns one trick off
+    /// (docs/architecture.md). Default: the adapter's (software on a CPU adapter).
+    #[arg(long, value_parser = parse_strategy())]
     pub strategy: Option<skytune::render::plan::strategy::FillStrategy>,
     /// Render what the environment map sees (objects with visible_in_env_map): light from the sky
     /// only, without the glare and the main scene's stand-in.
@@ -551,9 +551,9 @@ pub struct AppArgs {
     /// Preset view to start with: south (default), east, west, north, zenith.
     #[arg(long)]
     pub view: Option<String>,
-    /// Fill strategy to start with: software, plain or software-hdr (default: the adapter's; the
-    /// diagnostics panel switches it).
-    #[arg(long, value_parser = parse_strategy)]
+    /// Fill strategy preset to start with (default: the adapter's; the diagnostics panel switches
+    /// it).
+    #[arg(long, value_parser = parse_strategy())]
     pub strategy: Option<skytune::render::plan::strategy::FillStrategy>,
 }
 
@@ -736,9 +736,9 @@ pub struct FrameBenchArgs {
     /// Resolution of the dome layers, overriding each strategy's: full, half, quarter or auto.
     #[arg(long, value_parser = parse_dome_resolution)]
     pub dome_resolution: Option<skytune::render::DomeResolution>,
-    /// Measure only these fill strategies (comma-separated presets: software, plain,
-    /// software-hdr); software and plain by default, side by side.
-    #[arg(long, value_parser = parse_strategy, value_delimiter = ',')]
+    /// Measure only these fill strategy presets (comma-separated); software and plain by default,
+    /// side by side.
+    #[arg(long, value_parser = parse_strategy(), value_delimiter = ',')]
     pub strategy: Vec<skytune::render::plan::strategy::FillStrategy>,
     /// Also measure every sky with these skydome colour sources (comma-separated `[sky_model]`
     /// kinds, e.g. `bitmap,lut,precomputed`), besides its own; physical cases are reported
@@ -748,8 +748,11 @@ pub struct FrameBenchArgs {
 }
 
 /// Parses a fill strategy preset's name (software, plain, software-hdr).
-fn parse_strategy(name: &str) -> Result<skytune::render::plan::strategy::FillStrategy, String> {
-    skytune::render::plan::strategy::FillStrategy::preset_arg(name)
+/// Parses a fill strategy preset by name; clap lists the names in the help and in its errors.
+fn parse_strategy() -> impl clap::builder::TypedValueParser<Value = skytune::render::plan::strategy::FillStrategy> {
+    use clap::builder::TypedValueParser as _;
+    use skytune::render::plan::strategy::{FillStrategy, PRESETS};
+    clap::builder::PossibleValuesParser::new(PRESETS.map(|(name, _)| name)).try_map(|name: String| FillStrategy::preset_arg(&name))
 }
 
 /// Parses a dome resolution name (full, half, quarter, auto).

@@ -46,6 +46,7 @@ use crate::render::gpu::textures::{self, TextureCache};
 use crate::render::plan::mip_bounds::{self, DomeGrid, DrawMesh};
 use crate::render::plan::resolution::Divisor;
 use crate::render::plan::resolution::{resolution, LayerStages, Resolution, ResolutionFacts};
+use crate::render::plan::strategy::DisplayCurves;
 use crate::render::plan::visibility::{visibility, CullFacts, Visibility};
 use crate::sky::eval::{FrameSky, VersionFrame};
 use crate::sky::resolved::{BlendMode, Lighting, Shape, Sky, StageOp, TextureImage, UvSource, Version, MAX_STAGES};
@@ -426,7 +427,8 @@ impl Pass for SkyObjectsPass {
         let Some(draws) = &self.draws.current else { return };
         let neutral = crate::render::passes::tone_map::ToneMapUniform::from(cx.frame.sky_model.tone_mapper).settings[0] != 0;
         self.keys.clear();
-        self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera, cx.options.skips.dark_stages, (cx.target, neutral, cx.matched), &mut self.keys);
+        let shading = FrameShading { target: cx.target, matched: cx.matched, neutral_tone: neutral, curves: cx.options.strategy.display_curves };
+        self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera, cx.options.skips.dark_stages, shading, &mut self.keys);
         self.ref_hidden = 0;
         self.below_horizon = 0;
         self.off_screen = 0;

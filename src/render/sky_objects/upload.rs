@@ -81,7 +81,7 @@ impl SkyObjectDraws {
         frame: &FrameSky,
         camera: &Camera,
         skip_dark: bool,
-        (target, neutral, matched): (Target, bool, bool),
+        shading: FrameShading,
         keys: &mut HashMap<(usize, usize), VariantKey>,
     ) -> u32 {
         let mut skipped = 0;
@@ -101,7 +101,7 @@ impl SkyObjectDraws {
                     std::array::from_fn(|k| k < d.signature.count as usize)
                 };
                 queue.write_buffer(&d.uniform, 0, bytemuck::bytes_of(&u));
-                let key = VariantKey::of(&d.signature, (live, sky_view_stage), d.blend, (target, matched), neutral);
+                let key = VariantKey::of(&d.signature, (live, sky_view_stage), d.blend, shading);
                 // The signature from the sky's data is what the shader's generic path reads.
                 debug_assert_eq!(
                     (key.count, key.modes, key.ops, key.constants, key.live, key.view_stage, key.lighting),

@@ -27,9 +27,11 @@ pub(super) struct VariantKey {
     pub(super) lighting: u32,
     pub(super) blend: usize,
     pub(super) target: Target,
-    /// The HDR target's tone mapper (`TONE_KIND` of tone.wgsl): 1 ACES, 2 neutral; 0 on the
-    /// display target.
+    /// The frame's tone mapper where the shader tone-maps (`TONE_KIND` of tone.wgsl): 1 ACES, 2
+    /// neutral; 0 where it does not (display colours onto the display target).
     pub(super) tone: u32,
+    /// How the sRGB curves are evaluated (`CURVES_KIND` of tone.wgsl).
+    pub(super) curves: DisplayCurves,
     /// A blended layer of a display-referred physical frame, whose colour is made what the HDR
     /// path's blend over the model's sky would leave (`OVER_MODEL_SKY` in the shader).
     pub(super) over_model: bool,
@@ -37,6 +39,19 @@ pub(super) struct VariantKey {
     pub(super) reduced: bool,
     /// Where on the frame it goes ([`Slot::Plain`] for reduced draws).
     pub(super) placement: Slot,
+}
+
+/// What a frame's sky-object pipelines are specialised for besides each draw's material.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(super) struct FrameShading {
+    /// The target the frame's layers draw into.
+    pub(super) target: Target,
+    /// The frame's blended layers match the HDR picture ([`crate::render::plan::matches_hdr_picture`]).
+    pub(super) matched: bool,
+    /// The frame's tone mapper is Khronos PBR Neutral (else ACES).
+    pub(super) neutral_tone: bool,
+    /// How the strategy evaluates the sRGB curves.
+    pub(super) curves: DisplayCurves,
 }
 
 /// Where a draw on the frame goes, as its pipeline variant sees it (the shader's switches of a
@@ -76,13 +91,18 @@ impl VariantKey {
     /// The signature of a draw of a version with material `sig`, this frame's `live` stages
     /// (those whose term is not black: [`DrawUniform::skip_dark_terms`]) and the stage the
     /// sky-view map feeds.
-    /// `matched`: the frame's blended layers match the HDR picture
-    /// ([`crate::render::plan::matches_hdr_picture`]).
-    pub(super) fn of(sig: &MaterialSignature, (live, view_stage): ([bool; 4], Option<usize>), blend: BlendMode, (target, matched): (Target, bool), neutral_tone: bool) -> Self {
-        let tone = match (target, neutral_tone) {
-            (Target::Display, _) => 0,
-            (Target::Hdr, false) => 1,
-            (Target::Hdr, true) => 2,
+    pub(super) fn of(sig: &MaterialSignature, (live, view_stage): ([bool; 4], Option<usize>), blend: BlendMode, shading: FrameShading) -> Self {
+        let FrameShading { target, matched, neutral_tone, curves } = shading;
+        let over_model = matched && view_stage.is_none() && blend != BlendMode::Opaque;
+        // Whether the shader tone-maps: on the HDR target (display colours taken to radiance), a
+        // layer holding the map on the display target (`view_on_display`) and a matched layer.
+        // Left to the uniform, lavapipe would run both tone mappers and both inverses for every
+        // fragment (it evaluates both sides of a uniform branch).
+        let tone_maps = target == Target::Hdr || view_stage.is_some() || over_model;
+        let tone = match (tone_maps, neutral_tone) {
+            (false, _) => 0,
+            (true, false) => 1,
+            (true, true) => 2,
         };
         Self {
             count: sig.count,
@@ -95,7 +115,9 @@ impl VariantKey {
             blend: blend_index(blend),
             target,
             tone,
-            over_model: matched && view_stage.is_none() && blend != BlendMode::Opaque,
+            // Only a shader that tone-maps evaluates the curves.
+            curves: if tone_maps { curves } else { DisplayCurves::Exact },
+            over_model,
             reduced: false,
             placement: Slot::Plain,
         }
@@ -114,6 +136,7 @@ impl VariantKey {
             ("LIGHTING", f64::from(self.lighting)),
             ("TARGET_KIND", if self.target == Target::Hdr { 2.0 } else { 1.0 }),
             ("TONE_KIND", f64::from(self.tone)),
+            ("CURVES_KIND", f64::from(self.curves.shader_kind())),
             ("UNDER_RUN", f64::from(u8::from(self.placement == Slot::UnderRun))),
             ("BLEND_KIND", self.blend as f64),
             ("OVER_SEED", f64::from(u8::from(self.placement == Slot::OverSeed))),
