@@ -602,6 +602,46 @@ fn display_referred_skydome_is_the_hdr_frames() {
 }
 
 #[test]
+fn a_time_lapse_shows_the_sky_where_the_sun_is() {
+    // Spread maps are computed for the sun of the frame that shows them alone
+    // (`map_updates::sun_ahead`): in a steady time-lapse at dusk the frame is the sky of its own
+    // hour, not of the hour a spread's lead before it.
+    use skytune::render::plan::map_updates::lead_frames;
+    let sky = default_sky();
+    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model };
+    let at = |hour: f32| FrameInput { sky_model: Some(model), ..FrameInput::new(hour, 0.0) };
+    let options = RenderOptions::default();
+    let lead = lead_frames(options.strategy.map_updates);
+    assert!(lead > 0, "the software strategy spreads maps");
+    // Looking towards the setting sun, where the sky changes fastest.
+    let towards_sun = Camera { yaw_deg: 270.0, pitch_deg: 10.0, ..Camera::default() };
+    let step_h = 0.02;
+    let mut moving = common::headless(W, H);
+    moving.set_sky(&sky).unwrap();
+    let mut hour = 17.6;
+    moving.render(&sky, &at(hour), &towards_sun, &options).unwrap();
+    // Three leads of frames: the maps begun from the first still are all replaced.
+    for _ in 0..3 * lead {
+        hour += step_h;
+        moving.frame(&sky, &at(hour), &towards_sun, &options, 0.0);
+    }
+    assert!(!moving.renderer.settled(), "still under way");
+    let shown = moving.target.read(&moving.ctx).unwrap();
+    let mut fresh = common::headless(W, H);
+    fresh.set_sky(&sky).unwrap();
+    let now = fresh.render(&sky, &at(hour), &towards_sun, &options).unwrap();
+    let trailing = fresh.render(&sky, &at(hour - lead as f32 * step_h), &towards_sun, &options).unwrap();
+    let (to_now, _) = common::diff(&shown, &now, 2);
+    let (to_trailing, _) = common::diff(&shown, &trailing, 2);
+    let (between, _) = common::diff(&now, &trailing, 2);
+    assert!(between.mean > 1.0, "the sky moves visibly over a lead ({between:?})");
+    assert!(to_now.mean < 0.25 * between.mean, "the frame against its own hour: {to_now:?}, the hours a lead apart: {between:?}");
+    assert!(to_trailing.mean > 0.5 * between.mean, "the frame against the hour a lead before: {to_trailing:?}");
+    fresh.ctx.wait_idle().unwrap();
+    moving.ctx.wait_idle().unwrap();
+}
+
+#[test]
 fn a_moving_sun_spreads_the_map_over_frames_and_a_still_shows_it_exactly() {
     // A time-lapse (0.02 h a frame, about 0.3 degrees of sun) with the `software` strategy: each
     // frame computes a slice of the next map and shows the last two blended; stopping finishes

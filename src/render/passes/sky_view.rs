@@ -605,7 +605,7 @@ impl Pass for SkyViewPass {
 impl SkyViewPass {
     /// Decides what this frame computes and shows of the map, and writes its inputs.
     fn prepare_map(&mut self, cx: &FrameContext<'_>) {
-        use crate::render::plan::map_updates::{MapChange, MapFrame, MapUpdates, SPREAD_MAX_STEP_DEG};
+        use crate::render::plan::map_updates::{lead_frames, sun_ahead, MapChange, MapFrame, MapUpdates, SPREAD_MAX_STEP_DEG};
         let model = &cx.frame.sky_model;
         self.step = MapFrame::default();
         self.skipped = false;
@@ -660,6 +660,13 @@ impl SkyViewPass {
         let updates = if model.kind.on_cpu() { MapUpdates::Whole } else { cx.options.strategy.map_updates };
         self.step = self.schedule.step(change, updates, w * h);
         self.skipped = self.step.is_idle();
+        let mut key = key;
+        if let (true, MapChange::SunStep, Some(last)) = (self.step.exposure, change, last_key) {
+            // A spread map is computed for the sun of the frame that will show it alone.
+            let sun = |k: &Key| glam::Vec3::from_slice(&k.params.towards_sun[..3]);
+            let ahead = sun_ahead(sun(&last), sun(&key), lead_frames(updates));
+            key.params.towards_sun = ahead.extend(key.params.towards_sun[3]).to_array();
+        }
         if self.step.exposure {
             cx.queue.write_buffer(&self.atmosphere, 0, bytemuck::bytes_of(&key.atmosphere));
             cx.queue.write_buffer(&self.single, 0, bytemuck::bytes_of(&key.single));

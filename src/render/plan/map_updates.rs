@@ -5,9 +5,12 @@
 //! 27 ms at 192 x 108, four times a painted frame. While the sun moves a little every frame (a
 //! time-lapse) the map can be spread: each frame computes a slice of the next map (the work map)
 //! for the sun of the frame that began it, and the frame shows the last two finished maps
-//! blended by how far the slices have come, so the sky moves smoothly, one to two spreads
-//! behind the sun. A still (the sun where the work map's is), a jump of the sun, or any other
-//! change computes the whole map at once and shows it exactly.
+//! blended by how far the slices have come, so the sky moves smoothly. Shown that way, a map
+//! computed for the sun of the frame that began it would trail the sun by [`lead_frames`]; it is
+//! computed instead for the sun that many frames on, turning as it turned over the last frame
+//! ([`sun_ahead`]), so a steady time-lapse shows the sky where the sun is. A still (the sun where
+//! the work map's is), a jump of the sun, or any other change computes the whole map at once for
+//! the frame's own sun and shows it exactly.
 
 use std::ops::Range;
 
@@ -26,6 +29,27 @@ pub enum MapUpdates {
 /// Largest move of the sun between two frames, degrees, that a spread update follows; a larger
 /// one (a scrubbed slider, a new still) computes the whole map at once.
 pub const SPREAD_MAX_STEP_DEG: f32 = 1.0;
+
+/// Frames from the one that begins a spread map to the one that shows it alone: its slices, then
+/// as many frames blending towards it from the map before (0 for whole maps, shown at once).
+pub fn lead_frames(updates: MapUpdates) -> u32 {
+    match updates {
+        MapUpdates::Spread { slices } if slices > 1 => 2 * slices - 1,
+        _ => 0,
+    }
+}
+
+/// Unit vector towards the sun `frames` frames on, if it keeps turning every frame as it turned
+/// from `previous` to `current` (a time-lapse turns it about the celestial pole at a steady
+/// rate; the arc between two frames' suns turns it about a nearby axis, which over a spread's
+/// lead of a few degrees stays within a fraction of a degree of the sun's path).
+pub fn sun_ahead(previous: glam::Vec3, current: glam::Vec3, frames: u32) -> glam::Vec3 {
+    let (axis, angle) = glam::Quat::from_rotation_arc(previous.normalize(), current.normalize()).to_axis_angle();
+    if angle.abs() < 1e-7 || !axis.is_finite() {
+        return current;
+    }
+    (glam::Quat::from_axis_angle(axis, angle * frames as f32) * current).normalize()
+}
 
 /// How this frame's sky relates to the newest map (the work map while one is being computed,
 /// else the last finished one).
@@ -210,6 +234,48 @@ mod tests {
             assert!(t.step(change, MapUpdates::Whole, TEXELS).whole, "{change:?}");
             assert!(t.settled());
         }
+    }
+
+    #[test]
+    fn a_spread_map_is_shown_alone_its_lead_after_it_begins() {
+        let slices = 4;
+        let updates = MapUpdates::Spread { slices };
+        let mut s = MapSchedule::default();
+        s.step(MapChange::Other, updates, TEXELS);
+        // A map begins at an exposure step; it is shown alone at the second finish after that
+        // (the first makes it the newer map, shown from 0; the next map's finish makes it the
+        // older one, shown with weight 0 of the newer: as it is).
+        let (mut begins, mut finishes) = (Vec::new(), Vec::new());
+        for frame in 0..4 * slices {
+            let f = s.step(MapChange::SunStep, updates, TEXELS);
+            if f.exposure {
+                begins.push(frame);
+            }
+            if f.finish {
+                finishes.push(frame);
+            }
+        }
+        for (k, begin) in begins.iter().enumerate().take(3) {
+            assert_eq!(finishes[k + 1], begin + lead_frames(updates), "map {k}");
+        }
+        assert_eq!(lead_frames(MapUpdates::Whole), 0);
+        assert_eq!(lead_frames(MapUpdates::Spread { slices: 1 }), 0);
+    }
+
+    #[test]
+    fn the_sun_ahead_keeps_turning_on_its_path() {
+        // A sun on a circle of declination 20 degrees about a tilted pole, a quarter of a degree
+        // of hour angle a frame.
+        let pole = glam::Vec3::new(0.0, 0.8, 0.6).normalize();
+        let start = (glam::Quat::from_rotation_arc(glam::Vec3::Y, pole) * glam::Vec3::new(70f32.to_radians().sin(), 70f32.to_radians().cos(), 0.0)).normalize();
+        let at = |frame: f32| glam::Quat::from_axis_angle(pole, (0.25 * frame).to_radians()) * start;
+        for frames in [1, 11, 23] {
+            let ahead = sun_ahead(at(0.0), at(1.0), frames);
+            let off_deg = ahead.angle_between(at(1.0 + frames as f32)).to_degrees();
+            assert!(off_deg < 0.01 * frames as f32, "{frames} frames on: {off_deg} degrees off");
+        }
+        let still = glam::Vec3::new(0.3, 0.5, -0.8).normalize();
+        assert_eq!(sun_ahead(still, still, 11), still);
     }
 
     #[test]
