@@ -433,3 +433,24 @@ fn two_alpha_layers_drawn_at_once_give_the_same_picture() {
         assert!(d.differing < 0.001, "{what}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
     }
 }
+
+#[test]
+fn a_physical_night_sky_drawn_in_parts_is_the_one_drawn_whole() {
+    // On the HDR target a display black converts to no light: the skydome drawn as a reduced part
+    // (the model's map) and a full-resolution one (its stars), each reading the other's stages as
+    // black, adds nothing for them. (Converted by the ACES fit's inverse, each black term added
+    // the foot of its toe, and the `software` frame came out 8 levels brighter than `plain`'s.)
+    let sky = default_sky();
+    let mut h = common::headless(320, 180);
+    h.set_sky(&sky).expect("uploaded");
+    let camera = Camera { pitch_deg: 89.0, ..Camera::default() };
+    for hour in [23.0, 1.0] {
+        let mut input = FrameInput::new(hour, 0.0);
+        input.sky_model = Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model });
+        let whole = h.render(&sky, &input, &camera, &RenderOptions::default().with_strategy(FillStrategy::plain())).unwrap();
+        let parts = h.render(&sky, &input, &camera, &common::hdr_options()).unwrap();
+        assert!(h.renderer.stats.objects_reduced > 0, "the skydome drawn in parts");
+        let (d, _) = common::diff(&parts, &whole, 2);
+        assert!(d.mean < 0.1 && d.differing < 0.001, "hour {hour}: {d:?}");
+    }
+}

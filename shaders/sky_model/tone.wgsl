@@ -131,7 +131,11 @@ fn exposed_from_display(display: vec3<f32>) -> vec3<f32> {
     if frame_tone_mapper() == 1u {
         return tone_map_neutral_inverse(l);
     }
-    return tone_map_aces_inverse(l);
+    // Black is no light. The ACES fit is 0 up to about 0.0037, and its inverse gives the foot of
+    // that toe for black (about 0.0033): every black term (a stage left dark or to another draw
+    // of the layer, a black texel of an additive layer) would add it, and a night sky drawn in
+    // parts would come out several levels brighter than drawn whole.
+    return select(tone_map_aces_inverse(l), vec3<f32>(0.0), all(display <= vec3<f32>(0.0)));
 }
 
 // The frame's tone mapper as `display_from_exposed` takes it (0 ACES, 1 neutral).
