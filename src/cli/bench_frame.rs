@@ -4,6 +4,8 @@
 //! per-object cost (each object left out in turn), the CPU cost of evaluating a sky of 50 objects,
 //! and the latency from a file write to the first frame showing it.
 
+mod report;
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -185,120 +187,28 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     // Particles: the CPU's closed-form evaluation plus its upload against the same as a compute pass.
     let particles = particle_costs(&ctx, if args.quick { 3 } else { 15 }, if args.quick { &[1_000, 3_000, 10_000][..] } else { &[1_000, 3_000, 10_000, 100_000][..] })?;
 
-    let mut md = String::new();
-    let _ = writeln!(md, "# Performance\n\nWritten by `skytune bench frame` (`cargo run --release -- bench frame`); re-run it to refresh this file.\n");
-    let _ = writeln!(md, "- adapter: {adapter}");
-    let _ = writeln!(
-        md,
-        "- machine: {} logical CPUs; {}; {w}x{h}; {} measured frames per case after 2 warm-up frames; dome layers at {} resolution (`--dome-resolution`); fill strategies {} (`--strategy`), the adapter's own `{adapter_strategy}`",
-        std::thread::available_parallelism().map_or(1, |n| n.get()),
-        skytune::build_line(),
+    let report = report::FrameReport {
+        adapter,
+        size: (w, h),
         frames,
-        args.dome_resolution.map_or("the strategy's", |r| r.name()),
-        strategies.iter().map(|(n, _)| format!("`{n}`")).collect::<Vec<_>>().join(" and ")
-    );
-    let _ = writeln!(
-        md,
-        "- method: each frame is recorded, submitted and waited for (wall time: on lavapipe the rasterisation itself). The floor is one render pass that clears the same target (rgba8) and draws one full-screen triangle sampling one 128 x 128 texture (`shaders/baseline.wgsl`); floor and sky frames alternate within each case, and the ratio is sky over floor of the same case. The sky is drawn alone, filling the frame (`scene` off: the goal is the sky's cost); the frame with the main-scene stand-in in front of it (terrain and buildings at the horizon: {stand_in_ms:.1} ms more there, median over the horizon cases) is measured in the same alternation, for reference. The timed frames come from a renderer that records no GPU timestamps (the floor records none, and lavapipe charges a sky frame's timestamps about 3% of its time); the phase columns are timestamp medians of the same sky-alone frame drawn by a second renderer that records them, in the same alternation."
-    );
-    let _ = writeln!(
-        md,
-        "\n**fill_limit_ratio worst={worst:.1} median={med:.1}** (`{summarised}` strategy; goal: 3; with the scene stand-in: worst {scene_worst:.1}, median {scene_med:.1})\n"
-    );
-    if let Some(p) = &physical {
-        let _ = writeln!(md, "{}\n", p.describe(summarised));
-    }
-    let _ = writeln!(md, "| strategy | worst ratio | median ratio | frame against `{summarised}`, median of the cases |\n|---|---:|---:|---:|");
-    for (name, worst, med, against) in &per_strategy {
-        let _ = writeln!(md, "| {name} | {worst:.2} | {med:.2} | {against:.2} |");
-    }
-    let _ = writeln!(md);
-    // Every phase any case drew (rain's and the compute phase's only in some), in the order met.
-    let mut phase_names: Vec<&str> = Vec::new();
-    for (n, _) in all_cases.iter().flat_map(|c| &c.phases) {
-        if !phase_names.contains(n) {
-            phase_names.push(n);
-        }
-    }
-    let _ = write!(md, "| sky | model | strategy | hour | weather | view | frame ms | sun moving ms | floor ms | ratio | with scene ms | ratio with scene |");
-    for n in &phase_names {
-        let _ = write!(md, " {n} ms |");
-    }
-    let _ = write!(md, "\n|---|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|");
-    for _ in &phase_names {
-        let _ = write!(md, "---:|");
-    }
-    let _ = writeln!(md);
-    for c in &all_cases {
-        let _ = write!(
-            md,
-            "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} | {:.1} |",
-            c.sky,
-            c.model.name(),
-            c.strategy,
-            c.hour,
-            c.weather,
-            c.view,
-            c.sky_ms,
-            c.moving_ms,
-            c.floor_ms,
-            c.sky_ms / c.floor_ms,
-            c.with_scene_ms,
-            c.with_scene_ms / c.floor_ms
-        );
-        for n in &phase_names {
-            let _ = match c.phases.iter().find(|(m, _)| m == n) {
-                Some((_, ms)) => write!(md, " {ms:.2} |"),
-                None => write!(md, " - |"),
-            };
-        }
-        let _ = writeln!(md);
-    }
-    let _ = writeln!(md, "\n## Where the time goes\n\nThe built-in sky alone at 18.5 h, weather 0.3, horizon view: {all:.2} ms a frame; with every object left out {nothing:.2} ms. Each object's cost is the median difference between a frame with every object and one without it, the two alternating, each drawn by a renderer of its own (leaving one out can also change how the others are drawn: which layers join, which draw is the background):\n");
-    let _ = writeln!(md, "| object | ms | share of the frame |\n|---|---:|---:|");
-    for (name, ms) in &per_object {
-        let _ = writeln!(md, "| {name} | {ms:.2} | {:.0}% |", 100.0 * ms / all);
-    }
-    let _ = writeln!(md, "\n## CPU: evaluating the sky\n\n`Sky::evaluate` for a sky of {objects} objects (the built-in sky plus billboards on its paths): median {eval_us:.1} us per frame (target: 50 us).\n");
-    let _ = writeln!(
-        md,
-        "## Particles: CPU or GPU simulation\n\nOne camera emitter (the built-in rain, always on, rate = cap / lifetime so the cap fills) at N particles, medians of {} frames at different times, side by side in one run. CPU: `sky::particles::simulate` (the closed-form evaluation of every birth slot of the last lifetime) plus the upload of its instances; GPU: the CPU's table of birth conditions per sixteenth of a second, then the same evaluation as a compute pass (`shaders/particle_sim.wgsl`, one invocation per slot writing its instance in slot order), submitted and waited for. The renderer evaluates camera emitters (rain, snow: thousands of particles) on the GPU and dome emitters (shooting stars, eruptions, lightning: tens) on the CPU.\n",
-        particles.first().map_or(0, |p| p.runs)
-    );
-    let _ = writeln!(md, "| particles | alive (CPU) | alive (GPU) | CPU + upload ms | GPU ms | GPU / CPU |\n|---:|---:|---:|---:|---:|---:|");
-    for p in &particles {
-        let _ = writeln!(md, "| {} | {} | {} | {:.3} | {:.3} | {:.2} |", p.cap, p.cpu_alive, p.gpu_alive, p.cpu_ms, p.gpu_ms, p.gpu_ms / p.cpu_ms);
-    }
-    let _ = writeln!(md);
-    let _ = writeln!(md, "## Hot-reload latency\n\nFrom the end of a file write to the end of the first frame rendered with the change (file watcher with its debounce of {} ms, off-thread load, upload, one frame at {w}x{h}), medians of {} edits (target: 100 ms plus the debounce):\n", skytune::files::watch::DEBOUNCE.as_millis(), latency.0.len().min(latency.1.len()));
-    let _ = writeln!(
-        md,
-        "| edit | median ms |\n|---|---:|\n| sky file | {:.0} |\n| bitmap | {:.0} |\n| shader (`sky_objects.wgsl`: every pipeline of the renderer rebuilt) | {:.0} |",
-        median(&latency.0),
-        median(&latency.1),
-        median(&shader_ms)
-    );
-    skytune::support::safe_write::write_atomic(&args.out, md.as_bytes())?;
-    for p in &particles {
-        println!("particles {}: CPU + upload {:.3} ms ({} alive), GPU {:.3} ms ({} alive)", p.cap, p.cpu_ms, p.cpu_alive, p.gpu_ms, p.gpu_alive);
-    }
-    println!("per object (built-in sky, dusk, horizon): {}", per_object.iter().map(|(n, ms)| format!("{n} {ms:.2} ms")).collect::<Vec<_>>().join(", "));
-    println!(
-        "evaluate: {eval_us:.1} us for {objects} objects; reload latency: sky file {:.0} ms, bitmap {:.0} ms, shader {:.0} ms",
-        median(&latency.0),
-        median(&latency.1),
-        median(&shader_ms)
-    );
-    println!("wrote {}", args.out.display());
-    println!("with the scene stand-in: worst={scene_worst:.2} median={scene_med:.2}");
-    for (name, worst, med, against) in &per_strategy {
-        println!("strategy {name}: worst={worst:.2} median={med:.2}, frame against {summarised} median {against:.2}");
-    }
-    if let Some(p) = &physical {
-        println!("physical_ratio worst={:.2} median={:.2}", p.still.0, p.still.1);
-        println!("physical_ratio_sun_moving worst={:.2} median={:.2}", p.moving.0, p.moving.1);
-    }
-    println!("fill_limit_ratio worst={worst:.2} median={med:.2}");
+        dome_resolution: args.dome_resolution,
+        strategies: strategies.iter().map(|(n, _)| *n).collect(),
+        adapter_strategy,
+        summarised,
+        stand_in_ms,
+        fill: (worst, med),
+        scene: (scene_worst, scene_med),
+        physical,
+        per_strategy,
+        cases: all_cases,
+        per_object,
+        frame_ms: (nothing, all),
+        evaluation: (eval_us, objects),
+        particles,
+        latency: (latency.0, latency.1, shader_ms),
+    };
+    skytune::support::safe_write::write_atomic(&args.out, report.markdown().as_bytes())?;
+    report.print_summary(&args.out);
     Ok(())
 }
 
