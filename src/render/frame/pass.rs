@@ -353,8 +353,8 @@ pub trait Pass: Any {
     }
 
     /// Right after the pass's phase ended, every frame (whether or not the pass had items in it):
-    /// copies that later phases of the same frame need.
-    fn after_phase(&self, _encoder: &mut wgpu::CommandEncoder) {}
+    /// copies that later phases of the same frame need; `globals` is the renderer's bind group 0.
+    fn after_phase(&self, _encoder: &mut wgpu::CommandEncoder, _globals: &wgpu::BindGroup) {}
 
     /// After every phase was recorded: resolve queries, copy results.
     fn resolve(&self, _encoder: &mut wgpu::CommandEncoder) {}

@@ -450,7 +450,7 @@ impl SkyRenderer {
                 _ => stats.draw_calls += self.record_phase(encoder, target, (phase, kind), options, (&plan, &items[Phase::Scene.index()], list)),
             }
             for pass in self.passes.iter().filter(|p| p.phase() == phase) {
-                pass.after_phase(encoder);
+                pass.after_phase(encoder, &self.globals.bind_group);
             }
         }
         for pass in &self.passes {

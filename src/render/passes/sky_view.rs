@@ -249,8 +249,6 @@ pub struct SkyViewPass {
     map: wgpu::Texture,
     bind_group: wgpu::BindGroup,
     blend_bind_group: wgpu::BindGroup,
-    /// Group 0 of the blend pipeline (the globals, which the loader declares in every module).
-    globals_bind_group: wgpu::BindGroup,
     /// The newest map's key: the work map's while one is under way, else the newer finished one's.
     computed: Option<Key>,
     /// The last frame's key (how far the sun moved since).
@@ -378,11 +376,6 @@ impl SkyViewPass {
                 wgpu::BindGroupEntry { binding: 3, resource: blend_params.as_entire_binding() },
             ],
         });
-        let globals_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("SkyView::globals_bind_group"),
-            layout: b.globals_layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: b.globals_buffer.as_entire_binding() }],
-        });
         let blend_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("SkyView::blend_pipeline_layout"),
             bind_group_layouts: &[Some(b.globals_layout), Some(&blend_layout)],
@@ -436,7 +429,6 @@ impl SkyViewPass {
             map,
             bind_group,
             blend_bind_group,
-            globals_bind_group,
             computed: None,
             last_key: None,
             schedule: Default::default(),
@@ -580,8 +572,8 @@ impl Pass for SkyViewPass {
         self.dispatch_map(cpass);
     }
 
-    fn after_phase(&self, encoder: &mut wgpu::CommandEncoder) {
-        self.copy_map(encoder);
+    fn after_phase(&self, encoder: &mut wgpu::CommandEncoder, globals: &wgpu::BindGroup) {
+        self.copy_map(encoder, globals);
         // Every frame: the renderer rewrites the globals each frame.
         if self.drive_scene {
             encoder.copy_buffer_to_buffer(&self.sky_light, 16, &self.globals, crate::render::frame::globals::SCENE_LIGHT_OFFSET, 48);
@@ -700,7 +692,7 @@ impl SkyViewPass {
 
     /// Between the compute phase and the sky phase, so this frame samples this frame's map: a
     /// finished work map takes its place among the finished ones, and the shown map is written.
-    fn copy_map(&self, encoder: &mut wgpu::CommandEncoder) {
+    fn copy_map(&self, encoder: &mut wgpu::CommandEncoder, globals: &wgpu::BindGroup) {
         let (w, h) = SharedResources::SKY_VIEW_SIZE;
         if self.step.finish {
             let older_from = if self.step.whole { &self.work } else { &self.newer };
@@ -711,7 +703,7 @@ impl SkyViewPass {
             {
                 let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("SkyView::blend"), timestamp_writes: None });
                 cpass.set_pipeline(self.blend_pipeline.get());
-                cpass.set_bind_group(0, &self.globals_bind_group, &[]);
+                cpass.set_bind_group(0, globals, &[]);
                 cpass.set_bind_group(1, &self.blend_bind_group, &[]);
                 cpass.dispatch_workgroups((w * h).div_ceil(64), 1, 1);
             }
