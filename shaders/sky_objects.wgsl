@@ -35,6 +35,9 @@ fn vs_fullscreen(@builtin(vertex_index) vi: u32) -> VertexOut {
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let at = Place(in.world_dir, in.mesh_uv01, in.mesh_uv23);
     var color = material(LAYER_OWN, draw, tex0, tex1, tex2, tex3, samp0, samp1, samp2, samp3, sky_view, sky_view_sampler, at);
+    // What scales the colour's radiance where it is matched to the HDR picture (there the moon's
+    // shading applies to radiance, as on the HDR target, not to display values).
+    var shade = 1.0;
     if lighting(LAYER_OWN, draw) == 1u {
         // Moon: a lit sphere seen from the dome centre; the sun side is bright, so phases show.
         let p = in.uv * 2.0 - vec2<f32>(1.0);
@@ -46,10 +49,13 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         let lit = max(dot(n, globals.towards_sun.xyz), 0.0);
         // The unlit side is dark but also transparent: in daylight the sky shows through it.
         let coverage = mix(0.35, 1.0, smoothstep(0.0, 0.25, lit));
-        color = vec4<f32>(color.rgb * (0.04 + 0.96 * lit), color.a * coverage * step(r2, 1.0));
+        shade = 0.04 + 0.96 * lit;
+        var rgb = color.rgb;
+        if !OVER_MODEL_SKY { rgb *= shade; }
+        color = vec4<f32>(rgb, color.a * coverage * step(r2, 1.0));
     }
     if OVER_MODEL_SKY {
-        color = over_model_sky(color, in.world_dir, sky_view, sky_view_sampler);
+        color = over_model_sky(color, shade, in.world_dir, sky_view, sky_view_sampler);
     }
     if UNDER_RUN {
         color = under_run(color, in.clip.xy);

@@ -685,3 +685,26 @@ fn a_moving_sun_spreads_the_map_over_frames_and_a_still_shows_it_exactly() {
     fresh.ctx.wait_idle().unwrap();
     moving.ctx.wait_idle().unwrap();
 }
+
+#[test]
+fn a_display_referred_night_matches_the_hdr_one() {
+    // At night the matched layers and billboards are drawn over a nearly black sky, where matching
+    // is exact: the moon's lit side shaded in radiance as on the HDR target (shaded in display
+    // values it came out up to 180 levels darker at its edge). What is left: some stars, which the
+    // stars pass adds as display values.
+    let sky = default_sky();
+    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model };
+    let input = FrameInput { sky_model: Some(model), ..FrameInput::new(23.0, 0.0) };
+    let zenith = Camera::preset("zenith").expect("a zenith view");
+    let mut h = common::headless(640, 360);
+    h.set_sky(&sky).unwrap();
+    let hdr = h.render(&sky, &input, &zenith, &RenderOptions::default().with_strategy(skytune::render::FillStrategy::plain())).unwrap();
+    let display = h.render(&sky, &input, &zenith, &RenderOptions::default()).unwrap();
+    let (d, diff) = common::diff(&display, &hdr, 10);
+    if d.differing >= 0.001 {
+        let out = common::output_dir();
+        display.save(out.join("night_display.png")).unwrap();
+        diff.save(out.join("night_display_diff.png")).unwrap();
+    }
+    assert!(d.differing < 0.001 && d.mean < 0.5, "{d:?}");
+}

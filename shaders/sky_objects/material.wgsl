@@ -90,7 +90,8 @@ fn view_on_display(l: u32, d: Draw) -> bool {
 // leaves H = T(a E(c) + (1 - a) R) over D = T(R), with the coverage raised where that colour
 // would pass 1 (the target clamps it); additive (2 and 3): H - D with the sky's radiance R under
 // the layer's added radiance.
-fn over_model_sky(c: vec4<f32>, dir: vec3<f32>, view_map: texture_2d<f32>, view_sampler: sampler) -> vec4<f32> {
+// `shade` scales the layer's radiance (the moon's lit side, which the HDR path applies to radiance).
+fn over_model_sky(c: vec4<f32>, shade: f32, dir: vec3<f32>, view_map: texture_2d<f32>, view_sampler: sampler) -> vec4<f32> {
     // Nothing over the sky here (most of a cloud layer's pixels): written as it is. First, so that
     // a software rasteriser skips the rest where a whole block of pixels is clear.
     if c.a < 1e-3 || (BLEND_KIND >= 2u && max(c.r, max(c.g, c.b)) <= 0.0) {
@@ -102,9 +103,9 @@ fn over_model_sky(c: vec4<f32>, dir: vec3<f32>, view_map: texture_2d<f32>, view_
     if BLEND_KIND >= 2u {
         var weight = 1.0;
         if BLEND_KIND == 2u { weight = c.a; }
-        return vec4<f32>(display_from_exposed(sky + weight * exposed_from_display(c.rgb), tone) - under, 1.0);
+        return vec4<f32>(display_from_exposed(sky + weight * shade * exposed_from_display(c.rgb), tone) - under, 1.0);
     }
-    let over = display_from_exposed(c.a * exposed_from_display(c.rgb) + (1.0 - c.a) * sky, tone);
+    let over = display_from_exposed(c.a * shade * exposed_from_display(c.rgb) + (1.0 - c.a) * sky, tone);
     var a = c.a;
     let rgb = (over - (1.0 - a) * under) / a;
     if max(rgb.r, max(rgb.g, rgb.b)) > 1.0 {

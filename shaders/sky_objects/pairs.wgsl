@@ -37,8 +37,8 @@ fn fs_pair(in: PairOut) -> @location(0) vec4<f32> {
     if OVER_MODEL_SKY {
         // Each as over the bare sky, as the two draws one by one would (exact for the lower layer
         // where it lies on the sky).
-        own = over_model_sky(own, in.world_dir, sky_view, sky_view_sampler);
-        up = over_model_sky(up, in.world_dir, sky_view, sky_view_sampler);
+        own = over_model_sky(own, 1.0, in.world_dir, sky_view, sky_view_sampler);
+        up = over_model_sky(up, 1.0, in.world_dir, sky_view, sky_view_sampler);
     }
     let rgb = up.a * up.rgb + (1.0 - up.a) * own.a * own.rgb;
     let through = (1.0 - own.a) * (1.0 - up.a);
