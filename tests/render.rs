@@ -14,6 +14,11 @@ fn camera() -> Camera {
     Camera { yaw_deg: 220.0, pitch_deg: 20.0, ..Camera::default() }
 }
 
+/// `sky` at (`hour`, `weather`) with the `lut` model as its skydome colour source.
+fn lut_input(sky: &skytune::sky::Sky, hour: f32, weather: f32) -> FrameInput {
+    FrameInput { sky_model: Some(skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model }), ..FrameInput::new(hour, weather) }
+}
+
 fn render_default(name: &str, hour: f32, weather: f32) {
     let sky = default_sky();
     let mut h = common::headless(W, H);
@@ -608,8 +613,7 @@ fn a_time_lapse_shows_the_sky_where_the_sun_is() {
     // hour, not of the hour a spread's lead before it.
     use skytune::render::plan::map_updates::lead_frames;
     let sky = default_sky();
-    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model };
-    let at = |hour: f32| FrameInput { sky_model: Some(model), ..FrameInput::new(hour, 0.0) };
+    let at = |hour: f32| lut_input(&sky, hour, 0.0);
     let options = RenderOptions::default();
     let lead = lead_frames(options.strategy.map_updates);
     assert!(lead > 0, "the software strategy spreads maps");
@@ -649,8 +653,7 @@ fn a_moving_sun_spreads_the_map_over_frames_and_a_still_shows_it_exactly() {
     // the map at once, and the still is the one a fresh renderer draws.
     use skytune::render::plan::map_updates::MapUpdates;
     let sky = default_sky();
-    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model };
-    let at = |hour: f32| FrameInput { sky_model: Some(model), ..FrameInput::new(hour, 0.0) };
+    let at = |hour: f32| lut_input(&sky, hour, 0.0);
     let options = RenderOptions::default();
     let MapUpdates::Spread { slices } = options.strategy.map_updates else { panic!("the software strategy spreads maps") };
     let (w, h) = skytune::render::frame::pass::SharedResources::SKY_VIEW_SIZE;
@@ -693,8 +696,7 @@ fn a_display_referred_night_matches_the_hdr_one() {
     // values it came out up to 180 levels darker at its edge). What is left: some stars, which the
     // stars pass adds as display values.
     let sky = default_sky();
-    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, ..sky.model };
-    let input = FrameInput { sky_model: Some(model), ..FrameInput::new(23.0, 0.0) };
+    let input = lut_input(&sky, 23.0, 0.0);
     let zenith = Camera::preset("zenith").expect("a zenith view");
     let mut h = common::headless(640, 360);
     h.set_sky(&sky).unwrap();

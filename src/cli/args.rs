@@ -747,7 +747,6 @@ pub struct FrameBenchArgs {
     pub sky_models: Vec<skytune::sky::resolved::SkyModelKind>,
 }
 
-/// Parses a fill strategy preset's name (software, plain, software-hdr).
 /// Parses a fill strategy preset by name; clap lists the names in the help and in its errors.
 fn parse_strategy() -> impl clap::builder::TypedValueParser<Value = skytune::render::plan::strategy::FillStrategy> {
     use clap::builder::TypedValueParser as _;
