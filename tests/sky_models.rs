@@ -208,7 +208,8 @@ fn precomputed_matches_the_reference() {
     let ctx = GpuContext::headless(AdapterChoice::Cpu).unwrap();
     let probe = RadianceProbe::new(&ctx, &ShaderLibrary::embedded()).unwrap();
     // Order 1 alone against the reference's single scattering: the tables' parametrisation and
-    // interpolation (thresholds day, low sun, twilight: docs/sky-models.md).
+    // interpolation (thresholds day, low sun, twilight: docs/sky-models.md). The worst cases are
+    // the Earth's shadow near the anti-solar horizon with the sun between two texels of mu_s.
     let cases = grid();
     let single_reference = Reference::new(atm, ReferenceSettings { max_order: 1, ..Default::default() });
     let single_exact: Vec<[f64; 3]> = cases.iter().map(|c| single_reference.radiance(c)).collect();
@@ -216,7 +217,7 @@ fn precomputed_matches_the_reference() {
     assert!(order1.iter().flatten().all(|x| x.is_finite() && *x >= 0.0), "NaN or negative radiance");
     let errors = median_and_worst(&cases, &order1, &single_exact);
     eprintln!("precomputed, order 1 against single scattering (median, worst): {errors:.4?}");
-    for (regime, ((median, worst), (median_limit, worst_limit))) in ["day", "low sun", "twilight"].iter().zip(errors.iter().zip([(0.005, 0.04), (0.01, 0.08), (0.05, 0.9)])) {
+    for (regime, ((median, worst), (median_limit, worst_limit))) in ["day", "low sun", "twilight"].iter().zip(errors.iter().zip([(0.005, 0.04), (0.01, 0.1), (0.05, 1.2)])) {
         assert!(*median <= median_limit && *worst <= worst_limit, "precomputed order 1, {regime}: median {median:.4}, worst {worst:.4}");
     }
     // Every order at the defaults against the reference with every order (its Monte Carlo noise

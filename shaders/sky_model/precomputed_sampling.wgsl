@@ -103,8 +103,32 @@ fn pre_h(atm: Atmosphere) -> f32 {
     return sqrt(max(atm.shape.y * atm.shape.y - atm.shape.x * atm.shape.x, 0.0));
 }
 
-// Bruneton's mapping of the sun cosine: fine near the horizon, nothing below `mu_s_min`.
-fn pre_x_mu_s(atm: Atmosphere, mu_s: f32, mu_s_min: f32) -> f32 {
+// Half the range of nu that mu and mu_s allow: nu = mu mu_s + cos(azimuth) spread.
+fn pre_nu_spread(mu: f32, mu_s: f32) -> f32 {
+    return sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0));
+}
+
+// The nu axis is the cosine of the azimuth between the view and the sun rather than nu itself
+// (Bruneton's axis): every texel is then a possible geometry, so none is clamped, and a fixed
+// azimuth reads the same geometry from neighbouring mu_s and mu texels. With nu itself, a view
+// near the sun's azimuth or opposite it read neighbours clamped to other azimuths: with the sun
+// 60 to 75 degrees up, where the mu_s texels lie far apart, the sky was 7% too bright towards the
+// sun's azimuth and 5% too dark away from it. Where the azimuth is undefined (view or sun
+// vertical) nothing depends on it.
+fn pre_cos_azimuth(mu: f32, mu_s: f32, nu: f32) -> f32 {
+    let spread = pre_nu_spread(mu, mu_s);
+    return select(1.0, clamp((nu - mu * mu_s) / spread, -1.0, 1.0), spread > 1e-6);
+}
+
+// The sun axis: Bruneton's mapping (the distance to the top from the ground: fine around the
+// horizon, nothing below `mu_s_min`) plus a term linear in the sun's elevation. Bruneton's
+// mapping alone is quadratic in the sun's zenith angle near the zenith: at 32 texels its last one
+// spanned the sun from 53 to 90 degrees up, and a sun between them read 4.5% off towards and away
+// from its azimuth (42 dB where the rest of the day reads 46 to 53). The linear term bounds the
+// spacing there and costs little near the horizon, where Bruneton's term is steep.
+const PRE_MU_S_LINEAR: f32 = 0.15; // per radian of elevation, against Bruneton's 0..1
+
+fn pre_mu_s_bruneton(atm: Atmosphere, mu_s: f32, mu_s_min: f32) -> f32 {
     let hh = pre_h(atm);
     let d_min = atm.shape.y - atm.shape.x;
     let d_max = hh;
@@ -113,17 +137,31 @@ fn pre_x_mu_s(atm: Atmosphere, mu_s: f32, mu_s_min: f32) -> f32 {
     return max(1.0 - a / big_a, 0.0) / (1.0 + a);
 }
 
+fn pre_mu_s_warp(atm: Atmosphere, mu_s: f32, mu_s_min: f32) -> f32 {
+    return pre_mu_s_bruneton(atm, mu_s, mu_s_min) + PRE_MU_S_LINEAR * asin(clamp(mu_s, -1.0, 1.0));
+}
+
+fn pre_x_mu_s(atm: Atmosphere, mu_s: f32, mu_s_min: f32) -> f32 {
+    let low = pre_mu_s_warp(atm, mu_s_min, mu_s_min);
+    let high = pre_mu_s_warp(atm, 1.0, mu_s_min);
+    return clamp((pre_mu_s_warp(atm, max(mu_s, mu_s_min), mu_s_min) - low) / (high - low), 0.0, 1.0);
+}
+
+// The inverse of `pre_x_mu_s`, by bisection on the elevation (the warp is increasing; only the
+// build calls this, once per texel).
 fn pre_mu_s_from_x(atm: Atmosphere, x: f32, mu_s_min: f32) -> f32 {
-    let hh = pre_h(atm);
-    let d_min = atm.shape.y - atm.shape.x;
-    let d_max = hh;
-    let big_a = (distance_to_top(atm, atm.shape.x, mu_s_min) - d_min) / (d_max - d_min);
-    let a = big_a * (1.0 - x) / (1.0 + big_a * x);
-    let d = d_min + min(a, big_a) * (d_max - d_min);
-    if (d <= 0.0) {
-        return 1.0;
+    var lo = asin(clamp(mu_s_min, -1.0, 1.0));
+    var hi = 0.5 * PI;
+    let target_warp = mix(pre_mu_s_warp(atm, mu_s_min, mu_s_min), pre_mu_s_warp(atm, 1.0, mu_s_min), clamp(x, 0.0, 1.0));
+    for (var i = 0u; i < 32u; i++) {
+        let mid = 0.5 * (lo + hi);
+        if (pre_mu_s_warp(atm, sin(mid), mu_s_min) < target_warp) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
     }
-    return clamp((hh * hh - d * d) / (2.0 * atm.shape.x * d), -1.0, 1.0);
+    return sin(0.5 * (lo + hi));
 }
 
 fn pre_coords(atm: Atmosphere, r_in: f32, mu: f32, mu_s: f32, nu: f32, ground: bool, mu_s_min: f32) -> PreCoords {
@@ -148,7 +186,7 @@ fn pre_coords(atm: Atmosphere, r_in: f32, mu: f32, mu_s: f32, nu: f32, ground: b
         x_mu = (d - d_min) / max(d_max - d_min, 1e-6);
         half_index = 1u;
     }
-    let x = vec4<f32>(0.5 * (nu + 1.0), pre_x_mu_s(atm, mu_s, mu_s_min), x_mu, rho / hh);
+    let x = vec4<f32>(0.5 * (pre_cos_azimuth(mu, mu_s, nu) + 1.0), pre_x_mu_s(atm, mu_s, mu_s_min), x_mu, rho / hh);
     return PreCoords(clamp(x, vec4<f32>(0.0), vec4<f32>(1.0)), half_index);
 }
 
@@ -177,9 +215,8 @@ fn pre_geometry(atm: Atmosphere, h: PrecomputedHeader, index: u32) -> PreGeometr
     }
     mu = clamp(mu, -1.0, 1.0);
     let mu_s = pre_mu_s_from_x(atm, f32(i_mu_s) / f32(n.y - 1u), h.ground.y);
-    // nu is bounded by the other two angles.
-    let spread = sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0));
-    let nu = clamp(2.0 * f32(i_nu) / f32(n.x - 1u) - 1.0, mu * mu_s - spread, mu * mu_s + spread);
+    let cos_azimuth = 2.0 * f32(i_nu) / f32(n.x - 1u) - 1.0;
+    let nu = clamp(mu * mu_s + cos_azimuth * pre_nu_spread(mu, mu_s), -1.0, 1.0);
     return PreGeometry(r, mu, mu_s, nu, half_index == 0u);
 }
 

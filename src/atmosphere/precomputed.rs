@@ -14,7 +14,8 @@ pub struct PrecomputedSettings {
     /// Scattering tables, texels along nu (view-sun angle), mu_s (sun angle), mu (view angle,
     /// both halves: rays that meet the ground and rays that leave) and r (altitude).
     pub scattering_size: [u32; 4],
-    /// Scattering orders: 1 is single scattering alone.
+    /// Scattering orders computed: 1 is single scattering alone. From 3 on, the orders above the
+    /// last are added as a geometric series of the last two (per texel and channel).
     pub orders: u32,
     /// Samples per transmittance texel.
     pub transmittance_steps: u32,
@@ -86,7 +87,7 @@ impl Default for PrecomputedSettings {
         Self {
             transmittance_size: [256, 64],
             irradiance_size: [64, 16],
-            scattering_size: [8, 32, 128, 32],
+            scattering_size: [6, 40, 128, 32],
             orders: 4,
             transmittance_steps: 40,
             ray_steps: 50,

@@ -386,7 +386,7 @@ pub struct RadianceArgs {
     /// `preetham`, `hosek`, `linear`: evaluate on the CPU (double precision; the crate's for hosek).
     #[arg(long)]
     pub on_cpu: bool,
-    /// `precomputed`: scattering orders (1: single scattering alone).
+    /// `precomputed`: scattering orders computed (1: single scattering alone; from 3, the orders above are added as a geometric series).
     #[arg(long, default_value_t = skytune::atmosphere::PrecomputedSettings::default().orders)]
     pub orders: u32,
     /// `precomputed`: scattering table texels along nu, mu_s, mu and r, e.g. 8,32,128,32.

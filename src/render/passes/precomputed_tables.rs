@@ -110,11 +110,23 @@ pub enum Stage {
     IndirectHigher,
     /// An order's scattering, added to the total.
     Multiple,
+    /// The last order's scattering (from order 3), added to the total with the orders above it
+    /// extrapolated as a geometric series.
+    MultipleLast,
 }
 
 impl Stage {
-    const ALL: [Stage; 8] =
-        [Stage::Transmittance, Stage::DirectIrradiance, Stage::Single, Stage::DensitySecond, Stage::DensityHigher, Stage::IndirectFirst, Stage::IndirectHigher, Stage::Multiple];
+    const ALL: [Stage; 9] = [
+        Stage::Transmittance,
+        Stage::DirectIrradiance,
+        Stage::Single,
+        Stage::DensitySecond,
+        Stage::DensityHigher,
+        Stage::IndirectFirst,
+        Stage::IndirectHigher,
+        Stage::Multiple,
+        Stage::MultipleLast,
+    ];
 
     fn entry(self) -> &'static str {
         match self {
@@ -126,6 +138,7 @@ impl Stage {
             Stage::IndirectFirst => "cs_indirect_first",
             Stage::IndirectHigher => "cs_indirect_higher",
             Stage::Multiple => "cs_multiple",
+            Stage::MultipleLast => "cs_multiple_last",
         }
     }
 
@@ -136,7 +149,7 @@ impl Stage {
         match self {
             Stage::Transmittance => tw * th,
             Stage::DirectIrradiance | Stage::IndirectFirst | Stage::IndirectHigher => iw * ih,
-            Stage::Single | Stage::DensitySecond | Stage::DensityHigher | Stage::Multiple => settings.scattering_texels(),
+            Stage::Single | Stage::DensitySecond | Stage::DensityHigher | Stage::Multiple | Stage::MultipleLast => settings.scattering_texels(),
         }
     }
 }
@@ -158,12 +171,14 @@ pub fn build_steps(settings: &PrecomputedSettings, slices: u32) -> Vec<BuildStep
     let mut stages = vec![Stage::Transmittance, Stage::DirectIrradiance, Stage::Single];
     for order in 2..=settings.orders {
         let second = order == 2;
-        stages.extend([if second { Stage::DensitySecond } else { Stage::DensityHigher }, if second { Stage::IndirectFirst } else { Stage::IndirectHigher }, Stage::Multiple]);
+        // The tail needs two orders of multiple scattering to take their ratio.
+        let multiple = if order == settings.orders && order >= 3 { Stage::MultipleLast } else { Stage::Multiple };
+        stages.extend([if second { Stage::DensitySecond } else { Stage::DensityHigher }, if second { Stage::IndirectFirst } else { Stage::IndirectHigher }, multiple]);
     }
     let mut steps = Vec::new();
     for stage in stages {
         let texels = stage.texels(settings);
-        let cut = if matches!(stage, Stage::Single | Stage::DensitySecond | Stage::DensityHigher | Stage::Multiple) { slices.max(1) } else { 1 };
+        let cut = if matches!(stage, Stage::Single | Stage::DensitySecond | Stage::DensityHigher | Stage::Multiple | Stage::MultipleLast) { slices.max(1) } else { 1 };
         let per = texels.div_ceil(cut);
         let mut first = 0;
         while first < texels {
@@ -458,7 +473,7 @@ mod tests {
                 v
             });
             use Stage::*;
-            assert_eq!(stages, [Transmittance, DirectIrradiance, Single, DensitySecond, IndirectFirst, Multiple, DensityHigher, IndirectHigher, Multiple]);
+            assert_eq!(stages, [Transmittance, DirectIrradiance, Single, DensitySecond, IndirectFirst, Multiple, DensityHigher, IndirectHigher, MultipleLast]);
             // Each run of one stage covers its table from the first texel to the last, in order.
             let mut next = 0;
             for (k, step) in steps.iter().enumerate() {
@@ -475,6 +490,17 @@ mod tests {
             assert_eq!(single.iter().map(|s| s.count).sum::<u32>(), settings.scattering_texels());
         }
         assert!(build_steps(&PrecomputedSettings { orders: PrecomputedSettings::MAX_ORDERS, ..Default::default() }, 64).len() <= MAX_STEPS);
+    }
+
+    #[test]
+    fn only_the_last_of_at_least_two_multiple_orders_adds_the_tail() {
+        let multiple = |orders: u32| -> Vec<Stage> {
+            build_steps(&PrecomputedSettings { orders, ..Default::default() }, 1).iter().map(|s| s.stage).filter(|s| matches!(s, Stage::Multiple | Stage::MultipleLast)).collect()
+        };
+        assert!(multiple(1).is_empty());
+        // Order 2 alone has no order below it to take a ratio with.
+        assert_eq!(multiple(2), [Stage::Multiple]);
+        assert_eq!(multiple(4), [Stage::Multiple, Stage::Multiple, Stage::MultipleLast]);
     }
 
     #[test]
