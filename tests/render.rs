@@ -703,6 +703,7 @@ fn a_display_referred_night_matches_the_hdr_one() {
     let hdr = h.render(&sky, &input, &zenith, &RenderOptions::default().with_strategy(skytune::render::FillStrategy::plain())).unwrap();
     let display = h.render(&sky, &input, &zenith, &RenderOptions::default()).unwrap();
     let (d, diff) = common::diff(&display, &hdr, 10);
+    eprintln!("display-referred night against HDR: {d:?}");
     if d.differing >= 0.001 {
         let out = common::output_dir();
         display.save(out.join("night_display.png")).unwrap();
