@@ -693,8 +693,9 @@ fn a_moving_sun_spreads_the_map_over_frames_and_a_still_shows_it_exactly() {
 fn a_display_referred_night_matches_the_hdr_one() {
     // At night the matched layers and billboards are drawn over a nearly black sky, where matching
     // is exact: the moon's lit side shaded in radiance as on the HDR target (shaded in display
-    // values it came out up to 180 levels darker at its edge). What is left: some stars, which the
-    // stars pass adds as display values.
+    // values it came out up to 180 levels darker at its edge). What is left: some stars, where
+    // point stars, the skydome's tiled stars and the galaxy overlap, each matched against the
+    // map's sky alone (docs/performance-notes.md).
     let sky = default_sky();
     let input = lut_input(&sky, 23.0, 0.0);
     let zenith = Camera::preset("zenith").expect("a zenith view");

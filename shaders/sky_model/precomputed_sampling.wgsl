@@ -141,10 +141,14 @@ fn pre_mu_s_warp(atm: Atmosphere, mu_s: f32, mu_s_min: f32) -> f32 {
     return pre_mu_s_bruneton(atm, mu_s, mu_s_min) + PRE_MU_S_LINEAR * asin(clamp(mu_s, -1.0, 1.0));
 }
 
+// The warp at `mu_s_min` and at the zenith, where Bruneton's term is 0 and 1 by construction.
+fn pre_mu_s_warp_range(mu_s_min: f32) -> vec2<f32> {
+    return vec2<f32>(PRE_MU_S_LINEAR * asin(clamp(mu_s_min, -1.0, 1.0)), 1.0 + PRE_MU_S_LINEAR * 0.5 * PI);
+}
+
 fn pre_x_mu_s(atm: Atmosphere, mu_s: f32, mu_s_min: f32) -> f32 {
-    let low = pre_mu_s_warp(atm, mu_s_min, mu_s_min);
-    let high = pre_mu_s_warp(atm, 1.0, mu_s_min);
-    return clamp((pre_mu_s_warp(atm, max(mu_s, mu_s_min), mu_s_min) - low) / (high - low), 0.0, 1.0);
+    let range = pre_mu_s_warp_range(mu_s_min);
+    return clamp((pre_mu_s_warp(atm, max(mu_s, mu_s_min), mu_s_min) - range.x) / (range.y - range.x), 0.0, 1.0);
 }
 
 // The inverse of `pre_x_mu_s`, by bisection on the elevation (the warp is increasing; only the
@@ -152,7 +156,8 @@ fn pre_x_mu_s(atm: Atmosphere, mu_s: f32, mu_s_min: f32) -> f32 {
 fn pre_mu_s_from_x(atm: Atmosphere, x: f32, mu_s_min: f32) -> f32 {
     var lo = asin(clamp(mu_s_min, -1.0, 1.0));
     var hi = 0.5 * PI;
-    let target_warp = mix(pre_mu_s_warp(atm, mu_s_min, mu_s_min), pre_mu_s_warp(atm, 1.0, mu_s_min), clamp(x, 0.0, 1.0));
+    let range = pre_mu_s_warp_range(mu_s_min);
+    let target_warp = mix(range.x, range.y, clamp(x, 0.0, 1.0));
     for (var i = 0u; i < 32u; i++) {
         let mid = 0.5 * (lo + hi);
         if (pre_mu_s_warp(atm, sin(mid), mu_s_min) < target_warp) {

@@ -142,14 +142,19 @@ impl Stage {
         }
     }
 
+    /// Whether the stage writes a 4D scattering table (the stages a software rasteriser slices).
+    fn writes_4d(self) -> bool {
+        matches!(self, Stage::Single | Stage::DensitySecond | Stage::DensityHigher | Stage::Multiple | Stage::MultipleLast)
+    }
+
     /// Texels the stage writes with `settings`.
     fn texels(self, settings: &PrecomputedSettings) -> u32 {
         let [tw, th] = settings.transmittance_size;
         let [iw, ih] = settings.irradiance_size;
         match self {
+            s if s.writes_4d() => settings.scattering_texels(),
             Stage::Transmittance => tw * th,
-            Stage::DirectIrradiance | Stage::IndirectFirst | Stage::IndirectHigher => iw * ih,
-            Stage::Single | Stage::DensitySecond | Stage::DensityHigher | Stage::Multiple | Stage::MultipleLast => settings.scattering_texels(),
+            _ => iw * ih,
         }
     }
 }
@@ -178,7 +183,7 @@ pub fn build_steps(settings: &PrecomputedSettings, slices: u32) -> Vec<BuildStep
     let mut steps = Vec::new();
     for stage in stages {
         let texels = stage.texels(settings);
-        let cut = if matches!(stage, Stage::Single | Stage::DensitySecond | Stage::DensityHigher | Stage::Multiple | Stage::MultipleLast) { slices.max(1) } else { 1 };
+        let cut = if stage.writes_4d() { slices.max(1) } else { 1 };
         let per = texels.div_ceil(cut);
         let mut first = 0;
         while first < texels {
