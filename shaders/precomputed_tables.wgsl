@@ -316,3 +316,17 @@ fn cs_multiple(@builtin(global_invocation_id) gid: vec3<u32>) {
 fn cs_multiple_last(@builtin(global_invocation_id) gid: vec3<u32>) {
     multiple(gid.x, true);
 }
+
+// Half-precision storage: packs the finished scattering and single-Mie tables into one
+// (`pre_pack_half`), the last step of the build.
+@compute @workgroup_size(64)
+fn cs_pack_half(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let h = pre_header();
+    let texel = slice_texel(gid.x, pre_texels_4d(h));
+    if (texel == 0xffffffffu) {
+        return;
+    }
+    let s = precomputed_tables[pre_offset_4d(h, PRE_SCATTERING) + texel].xyz;
+    let m = precomputed_tables[pre_offset_4d(h, PRE_SINGLE_MIE) + texel].xyz;
+    precomputed_tables[pre_offset_4d(h, PRE_PACKED) + texel] = pre_pack_half(s, m);
+}

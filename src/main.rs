@@ -252,6 +252,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
                 orders: args.orders,
                 scattering_size: args.scattering_size.unwrap_or(d.scattering_size),
                 density_directions: args.density_directions,
+                precision: args.precision,
                 ..d
             };
             settings.validate().map_err(|e| anyhow!("--{}: {}", e.field.replace('_', "-"), e.message))?;

@@ -217,6 +217,16 @@ fn quick_benchmark_writes_the_csv_and_both_charts() {
     assert!(md.contains("dE2000") && md.contains("model GPU ms, sun moving / still") && md.contains("frame / floor"), "{md}");
     assert!(md.contains("## Accuracy by regime") && md.contains("twilight (sun 0 deg and below) rel. RMSE"), "{md}");
     assert!(md.contains("the reference's relative standard error per value"), "{md}");
+    // `precomputed` per pixel and through the map, side by side: both measured, the map's
+    // lookups far fewer than a frame's pixels.
+    let section = md.split("## Per-pixel lookup against the sky-view map").nth(1).expect("the per-pixel against map section");
+    let cells = |path: &str| -> Vec<f64> {
+        let line = section.lines().find(|l| l.starts_with("| precomputed-small |") && l.contains(&format!("| {path} |"))).unwrap_or_else(|| panic!("no {path} row"));
+        line.split('|').skip(3).filter_map(|c| c.trim().parse().ok()).collect()
+    };
+    let (pixel, map) = (cells("per pixel"), cells("sky-view map"));
+    assert_eq!(pixel[0], 320.0 * 180.0, "{section}");
+    assert!(map[0] < pixel[0] && pixel.iter().chain(&map).all(|v| v.is_finite() && *v > 0.0), "{section}");
 
     // The error part in 3 shards, merged folder by folder: the unsharded run's file, byte for byte.
     let shards = tempfile::tempdir().expect("temp dir");

@@ -248,3 +248,30 @@ fn precomputed_matches_the_reference() {
     let brighter = all.iter().zip(&one).filter(|(a, o)| a[2] > o[2] * 1.05).count();
     assert!(brighter > cases.len() / 2, "{brighter} of {} cases gain blue from higher orders", cases.len());
 }
+
+#[test]
+fn half_precision_tables_read_as_single_precision_ones() {
+    use skytune::atmosphere::{PrecomputedSettings, TablePrecision};
+    let ctx = GpuContext::headless(AdapterChoice::Cpu).unwrap();
+    let probe = RadianceProbe::new(&ctx, &ShaderLibrary::embedded()).unwrap();
+    let cases = grid();
+    // A dense, hazy atmosphere too: its horizon holds the tables' largest values.
+    let hazy = skytune::atmosphere::dome::Haze::Hazy.atmosphere();
+    for atm in [Atmosphere::default(), hazy] {
+        let single = PrecomputedSettings { precision: TablePrecision::Single, ..PrecomputedSettings::SMALL };
+        let half = PrecomputedSettings { precision: TablePrecision::Half, ..single };
+        let a = probe.precomputed(&ctx, &atm, &single, &cases).unwrap();
+        let builds = probe.precomputed_builds.get();
+        let b = probe.precomputed(&ctx, &atm, &half, &cases).unwrap();
+        assert_eq!(probe.precomputed_builds.get(), builds + 1, "a change of storage rebuilds the tables");
+        let peak = a.iter().flatten().cloned().fold(0.0f32, f32::max);
+        // A half holds 11 significant bits: 0.05% per texel, a little more after interpolation;
+        // values far below the peak (the Earth's shadow) are compared against 1e-4 of it.
+        let worst = a.iter().zip(&b).flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs() / x[c].max(1e-4 * peak))).fold(0.0f32, f32::max);
+        eprintln!("half against single precision: worst relative difference {worst}");
+        assert!(worst < 2e-3, "half against single precision: worst relative difference {worst}");
+        // The single-precision tables stay in the buffer after packing: rounding shows that the
+        // lookup read the packed one.
+        assert!(a != b, "half precision read the single-precision tables");
+    }
+}

@@ -11,7 +11,7 @@
 struct PrecomputedHeader {
     sizes_2d: vec4<u32>, // transmittance width, height; irradiance width, height
     sizes_4d: vec4<u32>, // scattering table texels along nu, mu_s, mu (both halves), r
-    steps: vec4<u32>,    // transmittance samples, samples along rays, density directions per half turn, unused
+    steps: vec4<u32>,    // transmittance samples, samples along rays, density directions per half turn, precision (0 single, 1 half)
     ground: vec4<f32>,   // ground albedo, smallest sun cosine tabulated, unused
 };
 
@@ -21,6 +21,15 @@ const PRE_SINGLE_MIE: u32 = 1u;   // single Mie, without its phase function
 const PRE_DELTA: u32 = 2u;        // single Rayleigh of order 1, then the last order's scattering
 const PRE_DELTA_MIE: u32 = 3u;    // single Mie of order 1 (read by order 2 only)
 const PRE_DENSITY: u32 = 4u;      // scattering density of the order being built, km^-1 sr^-1
+// With half-precision storage, the last build step packs the scattering and single-Mie tables
+// into this one (the first delta's place, free once the build is done): per texel, six halves
+// of the two tables times PRE_HALF_SCALE, so that one 16-byte read serves both.
+const PRE_PACKED: u32 = 2u;
+// Keeps twilight's small values normal halves (below 6e-5 a half loses precision). Values above
+// 65504 / 4096 = 16 would be clamped; the tables hold radiance over a phase function, a few
+// units at most at the horizon of a hazy sky (tests/sky_models.rs compares half with single
+// precision in one).
+const PRE_HALF_SCALE: f32 = 4096.0;
 // The 2D tables after the transmittance.
 const PRE_IRRADIANCE: u32 = 1u;       // indirect irradiance, every order so far
 const PRE_DELTA_IRRADIANCE: u32 = 2u; // the last order's irradiance (direct for order 1)
@@ -225,23 +234,116 @@ fn pre_geometry(atm: Atmosphere, h: PrecomputedHeader, index: u32) -> PreGeometr
     return PreGeometry(r, mu, mu_s, nu, half_index == 0u);
 }
 
-// Quadrilinear read of 4D table `table` at `c`.
-fn pre_read_4d(h: PrecomputedHeader, table: u32, c: PreCoords) -> vec3<f32> {
+// Corner `corner` (bits: nu, mu_s, mu, r) of the 16 around `c`: its texel index in a 4D table
+// and its weight.
+struct PreCorner {
+    index: u32,
+    weight: f32,
+};
+
+fn pre_corner(h: PrecomputedHeader, c: PreCoords, corner: u32) -> PreCorner {
     let n = vec4<u32>(h.sizes_4d.x, h.sizes_4d.y, h.sizes_4d.z / 2u, h.sizes_4d.w);
     let p = c.x * vec4<f32>(n - vec4<u32>(1u));
     let i = min(vec4<u32>(floor(p)), n - vec4<u32>(2u));
     let f = p - vec4<f32>(i);
+    let o = vec4<u32>(corner & 1u, (corner >> 1u) & 1u, (corner >> 2u) & 1u, (corner >> 3u) & 1u);
+    let w4 = select(vec4<f32>(1.0) - f, f, o == vec4<u32>(1u));
+    let k = i + o;
+    let mu_index = c.half_index * n.z + k.z;
+    return PreCorner(((k.w * h.sizes_4d.z + mu_index) * n.y + k.y) * n.x + k.x, w4.x * w4.y * w4.z * w4.w);
+}
+
+// Quadrilinear read of 4D table `table` at `c`.
+fn pre_read_4d(h: PrecomputedHeader, table: u32, c: PreCoords) -> vec3<f32> {
     let base = pre_offset_4d(h, table);
     var sum = vec3<f32>(0.0);
     for (var corner = 0u; corner < 16u; corner++) {
-        let o = vec4<u32>(corner & 1u, (corner >> 1u) & 1u, (corner >> 2u) & 1u, (corner >> 3u) & 1u);
-        let w4 = select(vec4<f32>(1.0) - f, f, o == vec4<u32>(1u));
-        let k = i + o;
-        let mu_index = c.half_index * n.z + k.z;
-        let index = ((k.w * h.sizes_4d.z + mu_index) * n.y + k.y) * n.x + k.x;
-        sum += precomputed_tables[base + index].xyz * (w4.x * w4.y * w4.z * w4.w);
+        let k = pre_corner(h, c, corner);
+        sum += precomputed_tables[base + k.index].xyz * k.weight;
     }
     return sum;
+}
+
+// What the lookup reads at a point of the 4D tables: the scattering table (single Rayleigh and
+// the higher orders over the Rayleigh phase) and single Mie (without its phase).
+struct PreScattering {
+    rayleigh: vec3<f32>,
+    mie: vec3<f32>,
+};
+
+// Half-float bits of a non-negative `x`, rounded to nearest (the largest half where it would
+// overflow), in integer arithmetic: `pack2x16float` needs a capability downlevel adapters lack.
+fn pre_half_bits(x: f32) -> u32 {
+    let b = bitcast<u32>(max(x, 0.0));
+    // The half's exponent field: the f32's, rebiased from 127 to 15.
+    let e = i32(b >> 23u) - 112;
+    if (e >= 31) {
+        return 0x7bffu;
+    }
+    if (e <= 0) {
+        // A subnormal half: the significand with its implicit bit, in units of 2^-24.
+        let shift = u32(14 - e);
+        if (shift > 24u) {
+            return 0u;
+        }
+        let m = (b & 0x7fffffu) | 0x800000u;
+        return (m + (1u << (shift - 1u))) >> shift;
+    }
+    // A carry out of the significand rounds into the exponent, as it should.
+    return min(((u32(e) << 10u) | ((b >> 13u) & 0x3ffu)) + ((b >> 12u) & 1u), 0x7bffu);
+}
+
+fn pre_half_value(h: u32) -> f32 {
+    let e = (h >> 10u) & 0x1fu;
+    let m = h & 0x3ffu;
+    if (e == 0u) {
+        return f32(m) * 5.9604645e-8; // 2^-24
+    }
+    return bitcast<f32>(((e + 112u) << 23u) | (m << 13u));
+}
+
+fn pre_half_pair(lo: f32, hi: f32) -> u32 {
+    return pre_half_bits(lo) | (pre_half_bits(hi) << 16u);
+}
+
+// Three pairs of halves: scattering rgb and single Mie rgb, scaled. The words travel as f32 bits,
+// as the header's integers do (loads, stores and bitcasts move bits; only arithmetic may flush).
+fn pre_pack_half(s: vec3<f32>, m: vec3<f32>) -> vec4<f32> {
+    let a = s * PRE_HALF_SCALE;
+    let b = m * PRE_HALF_SCALE;
+    return bitcast<vec4<f32>>(vec4<u32>(pre_half_pair(a.x, a.y), pre_half_pair(a.z, b.x), pre_half_pair(b.y, b.z), 0u));
+}
+
+fn pre_unpack_half(t: vec4<f32>) -> PreScattering {
+    let u = bitcast<vec4<u32>>(t);
+    let v = vec3<u32>(u.x, u.y, u.z);
+    let lo = vec3<f32>(pre_half_value(v.x & 0xffffu), pre_half_value(v.y & 0xffffu), pre_half_value(v.z & 0xffffu));
+    let hi = vec3<f32>(pre_half_value(v.x >> 16u), pre_half_value(v.y >> 16u), pre_half_value(v.z >> 16u));
+    return PreScattering(vec3<f32>(lo.x, hi.x, lo.y) / PRE_HALF_SCALE, vec3<f32>(hi.y, lo.z, hi.z) / PRE_HALF_SCALE);
+}
+
+// Both looked-up tables at `c`, from one loop over the corners: two single-precision tables, or
+// the packed half-precision one.
+fn pre_read_scattering(h: PrecomputedHeader, c: PreCoords) -> PreScattering {
+    var out = PreScattering(vec3<f32>(0.0), vec3<f32>(0.0));
+    if (h.steps.w == 1u) {
+        let base = pre_offset_4d(h, PRE_PACKED);
+        for (var corner = 0u; corner < 16u; corner++) {
+            let k = pre_corner(h, c, corner);
+            let t = pre_unpack_half(precomputed_tables[base + k.index]);
+            out.rayleigh += t.rayleigh * k.weight;
+            out.mie += t.mie * k.weight;
+        }
+        return out;
+    }
+    let base_r = pre_offset_4d(h, PRE_SCATTERING);
+    let base_m = pre_offset_4d(h, PRE_SINGLE_MIE);
+    for (var corner = 0u; corner < 16u; corner++) {
+        let k = pre_corner(h, c, corner);
+        out.rayleigh += precomputed_tables[base_r + k.index].xyz * k.weight;
+        out.mie += precomputed_tables[base_m + k.index].xyz * k.weight;
+    }
+    return out;
 }
 
 // Sky radiance seen from `camera_km` along `view`, sr^-1 per unit of solar irradiance: single
@@ -252,5 +354,6 @@ fn precomputed_radiance(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: v
     let ray = view_ray(atm, camera_km, view, sun);
     let ground = distance_to_ground(atm, ray.r, ray.mu) >= 0.0;
     let c = pre_coords(atm, ray.r, ray.mu, sun.y, dot(view, sun), ground, h.ground.y);
-    return pre_read_4d(h, PRE_SCATTERING, c) * ray.phase_r + pre_read_4d(h, PRE_SINGLE_MIE, c) * ray.phase_m;
+    let t = pre_read_scattering(h, c);
+    return t.rayleigh * ray.phase_r + t.mie * ray.phase_m;
 }

@@ -12,7 +12,7 @@ pub mod cells;
 pub mod dome;
 pub mod precomputed;
 pub mod reference;
-pub use precomputed::PrecomputedSettings;
+pub use precomputed::{PrecomputedSettings, TablePrecision};
 pub mod represent;
 
 use std::f64::consts::PI;

@@ -395,6 +395,9 @@ pub struct RadianceArgs {
     /// `precomputed`: directions per half turn of the scattering-density integral.
     #[arg(long, default_value_t = skytune::atmosphere::PrecomputedSettings::default().density_directions)]
     pub density_directions: u32,
+    /// `precomputed`: storage of the looked-up tables, single or half.
+    #[arg(long, default_value_t = skytune::atmosphere::TablePrecision::default())]
+    pub precision: skytune::atmosphere::TablePrecision,
 }
 
 /// Which frame to render.

@@ -9,6 +9,7 @@ pub mod bench_passes;
 pub mod bench_reference;
 pub mod charts;
 pub mod export_env;
+pub mod lookup_paths;
 pub mod stability_report;
 pub mod validate;
 

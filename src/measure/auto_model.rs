@@ -1,7 +1,7 @@
 //! `kind = "auto"` in `[sky_model]`: the cheapest model and setting whose error against the
 //! reference, over the sky's own range of sun elevations and weathers, stays within the budget.
 //!
-//! - Candidates: the benchmark's points a sky file can select ([`Method::is_runtime_model`]),
+//! - Candidates: the benchmark's points a sky file can select ([`model_points::Point::auto`]),
 //!   ranked by the frame cost of the committed benchmark (docs/models.csv, embedded), ties by id:
 //!   the same inputs give the same pick on any machine.
 //! - Error: for each weather step's atmosphere and each sun elevation of the benchmark that the
@@ -92,8 +92,7 @@ impl Pick {
 pub fn candidates() -> Vec<(model_points::Point, f64)> {
     let costs: HashMap<String, (f64, f64)> =
         model_points::rows_from_csv(model_points::COMMITTED_CSV).unwrap_or_default().into_iter().map(|r| (r.id.clone(), (r.frame_ms(), r.build_ms))).collect();
-    let mut out: Vec<(model_points::Point, (f64, f64))> =
-        model_points::points().into_iter().filter(|p| p.method.is_runtime_model()).filter_map(|p| costs.get(&p.id).copied().map(|c| (p, c))).collect();
+    let mut out: Vec<(model_points::Point, (f64, f64))> = model_points::points().into_iter().filter(|p| p.auto).filter_map(|p| costs.get(&p.id).copied().map(|c| (p, c))).collect();
     out.sort_by(|a, b| a.1 .0.total_cmp(&b.1 .0).then_with(|| a.1 .1.total_cmp(&b.1 .1)).then_with(|| a.0.id.cmp(&b.0.id)));
     out.into_iter().map(|(p, (frame_ms, _))| (p, frame_ms)).collect()
 }

@@ -6,6 +6,7 @@ pub mod auto_model;
 pub mod bake;
 pub mod image_diff;
 pub mod model_points;
+pub mod sky_view_map;
 pub mod soak;
 pub mod stability;
 pub mod validation;

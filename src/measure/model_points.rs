@@ -11,7 +11,7 @@ use crate::atmosphere::cells::{CellModel, CellSettings};
 use crate::atmosphere::dome::{self, DomeDir};
 use crate::atmosphere::reference::Case;
 use crate::atmosphere::represent::{self, Baked, DomeMapTable, Regression};
-use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, PrecomputedSettings, Rgb, SingleSettings};
+use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, PrecomputedSettings, Rgb, SingleSettings, TablePrecision};
 use crate::render::passes::radiance_probe::RadianceProbe;
 use crate::render::{GpuContext, ShaderLibrary};
 
@@ -72,11 +72,16 @@ pub struct Point {
     pub method: Method,
     /// Part of the quick benchmark (CI).
     pub quick: bool,
+    /// A candidate of `model = "auto"` (where the sky file can select its model). Points that
+    /// chart one quality axis at the default tables are not: each costs `auto` a table build per
+    /// weather step (over a minute on a software rasteriser) and draws at the default's cost.
+    pub auto: bool,
 }
 
 /// Every point of the benchmark.
 pub fn points() -> Vec<Point> {
-    let p = |id: &str, method: Method, quick: bool| Point { id: id.into(), method, quick };
+    let p = |id: &str, method: Method, quick: bool| Point { id: id.into(), method, quick, auto: method.is_runtime_model() };
+    let chart_only = |p: Point| Point { auto: false, ..p };
     let single = |view_steps: u32, sun_steps: u32, optical_depth| Method::Single(SingleSettings { view_steps, sun_steps, optical_depth });
     let lut = LutSettings::default();
     vec![
@@ -113,6 +118,10 @@ pub fn points() -> Vec<Point> {
         ),
         p("precomputed-small", Method::Precomputed(PrecomputedSettings::SMALL), true),
         p("precomputed-default", Method::Precomputed(PrecomputedSettings::default()), false),
+        // The quality axes other than table size, each at the default tables.
+        chart_only(p("precomputed-half", Method::Precomputed(PrecomputedSettings { precision: TablePrecision::Half, ..Default::default() }), false)),
+        chart_only(p("precomputed-1-order", Method::Precomputed(PrecomputedSettings { orders: 1, ..Default::default() }), false)),
+        chart_only(p("precomputed-2-orders", Method::Precomputed(PrecomputedSettings { orders: 2, ..Default::default() }), false)),
         p("cells-0", Method::Cells(0), false),
         p("cells-2", Method::Cells(2), false),
         p("cells-6", Method::Cells(6), false),

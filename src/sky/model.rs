@@ -419,6 +419,8 @@ pub struct PrecomputedDef {
     pub ray_steps: Option<StepCount>,
     /// Directions per half turn of the scattering-density integral.
     pub density_directions: Option<StepCount>,
+    /// Storage of the looked-up tables: `single` or `half`.
+    pub precision: Option<crate::atmosphere::TablePrecision>,
 }
 
 impl PrecomputedDef {
@@ -432,6 +434,7 @@ impl PrecomputedDef {
             irradiance_size: self.irradiance_size.map_or(d.irradiance_size, |s| s.map(|x| x.0)),
             ray_steps: self.ray_steps.map_or(d.ray_steps, |s| s.0),
             density_directions: self.density_directions.map_or(d.density_directions, |s| s.0),
+            precision: self.precision.unwrap_or(d.precision),
             ..d
         }
     }

@@ -6,7 +6,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::atmosphere::PrecomputedSettings;
+use crate::atmosphere::{PrecomputedSettings, TablePrecision};
 use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Staged};
 use crate::render::gpu::error::RenderResult;
 use crate::render::passes::sky_model::{storage_entry, AtmosphereUniform};
@@ -21,7 +21,8 @@ pub struct PrecomputedHeader {
     pub sizes_2d: [u32; 4],
     /// Scattering texels along nu, mu_s, mu (both halves), r.
     pub sizes_4d: [u32; 4],
-    /// Transmittance samples, samples along rays, density directions per half turn; unused.
+    /// Transmittance samples, samples along rays, density directions per half turn; storage of
+    /// the looked-up tables (0 single, 1 half).
     pub steps: [u32; 4],
     /// Ground albedo, smallest sun cosine tabulated; unused.
     pub ground: [f32; 4],
@@ -36,7 +37,7 @@ impl PrecomputedHeader {
         Self {
             sizes_2d: [tw, th, iw, ih],
             sizes_4d: settings.scattering_size,
-            steps: [settings.transmittance_steps, settings.ray_steps, settings.density_directions, 0],
+            steps: [settings.transmittance_steps, settings.ray_steps, settings.density_directions, settings.precision as u32],
             ground: [albedo, PrecomputedSettings::MU_S_MIN, 0.0, 0.0],
         }
     }
@@ -113,10 +114,12 @@ pub enum Stage {
     /// The last order's scattering (from order 3), added to the total with the orders above it
     /// extrapolated as a geometric series.
     MultipleLast,
+    /// Half-precision storage: both looked-up tables packed into one, after the last order.
+    PackHalf,
 }
 
 impl Stage {
-    const ALL: [Stage; 9] = [
+    const ALL: [Stage; 10] = [
         Stage::Transmittance,
         Stage::DirectIrradiance,
         Stage::Single,
@@ -126,6 +129,7 @@ impl Stage {
         Stage::IndirectHigher,
         Stage::Multiple,
         Stage::MultipleLast,
+        Stage::PackHalf,
     ];
 
     fn entry(self) -> &'static str {
@@ -139,12 +143,13 @@ impl Stage {
             Stage::IndirectHigher => "cs_indirect_higher",
             Stage::Multiple => "cs_multiple",
             Stage::MultipleLast => "cs_multiple_last",
+            Stage::PackHalf => "cs_pack_half",
         }
     }
 
     /// Whether the stage writes a 4D scattering table (the stages a software rasteriser slices).
     fn writes_4d(self) -> bool {
-        matches!(self, Stage::Single | Stage::DensitySecond | Stage::DensityHigher | Stage::Multiple | Stage::MultipleLast)
+        matches!(self, Stage::Single | Stage::DensitySecond | Stage::DensityHigher | Stage::Multiple | Stage::MultipleLast | Stage::PackHalf)
     }
 
     /// Texels the stage writes with `settings`.
@@ -179,6 +184,9 @@ pub fn build_steps(settings: &PrecomputedSettings, slices: u32) -> Vec<BuildStep
         // The tail needs two orders of multiple scattering to take their ratio.
         let multiple = if order == settings.orders && order >= 3 { Stage::MultipleLast } else { Stage::Multiple };
         stages.extend([if second { Stage::DensitySecond } else { Stage::DensityHigher }, if second { Stage::IndirectFirst } else { Stage::IndirectHigher }, multiple]);
+    }
+    if settings.precision == TablePrecision::Half {
+        stages.push(Stage::PackHalf);
     }
     let mut steps = Vec::new();
     for stage in stages {
@@ -503,6 +511,9 @@ mod tests {
             build_steps(&PrecomputedSettings { orders, ..Default::default() }, 1).iter().map(|s| s.stage).filter(|s| matches!(s, Stage::Multiple | Stage::MultipleLast)).collect()
         };
         assert!(multiple(1).is_empty());
+        let last = |precision| build_steps(&PrecomputedSettings { precision, ..Default::default() }, 1).last().map(|s| s.stage);
+        assert_eq!(last(TablePrecision::Single), Some(Stage::MultipleLast));
+        assert_eq!(last(TablePrecision::Half), Some(Stage::PackHalf), "packing comes after every order");
         // Order 2 alone has no order below it to take a ratio with.
         assert_eq!(multiple(2), [Stage::Multiple]);
         assert_eq!(multiple(4), [Stage::Multiple, Stage::Multiple, Stage::MultipleLast]);
