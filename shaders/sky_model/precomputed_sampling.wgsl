@@ -234,31 +234,43 @@ fn pre_geometry(atm: Atmosphere, h: PrecomputedHeader, index: u32) -> PreGeometr
     return PreGeometry(r, mu, mu_s, nu, half_index == 0u);
 }
 
-// Corner `corner` (bits: nu, mu_s, mu, r) of the 16 around `c`: its texel index in a 4D table
-// and its weight.
+// The cell of the 4D tables around `c`: its first corner, the fractions towards the last, and the
+// texels per axis (mu within its half).
+struct PreCell {
+    first: vec4<u32>,
+    f: vec4<f32>,
+    n: vec4<u32>,
+    half_index: u32,
+};
+
+fn pre_cell(h: PrecomputedHeader, c: PreCoords) -> PreCell {
+    let n = vec4<u32>(h.sizes_4d.x, h.sizes_4d.y, h.sizes_4d.z / 2u, h.sizes_4d.w);
+    let p = c.x * vec4<f32>(n - vec4<u32>(1u));
+    let i = min(vec4<u32>(floor(p)), n - vec4<u32>(2u));
+    return PreCell(i, p - vec4<f32>(i), n, c.half_index);
+}
+
+// Corner `corner` (bits: nu, mu_s, mu, r) of `cell`: its texel index in a 4D table and its weight.
 struct PreCorner {
     index: u32,
     weight: f32,
 };
 
-fn pre_corner(h: PrecomputedHeader, c: PreCoords, corner: u32) -> PreCorner {
-    let n = vec4<u32>(h.sizes_4d.x, h.sizes_4d.y, h.sizes_4d.z / 2u, h.sizes_4d.w);
-    let p = c.x * vec4<f32>(n - vec4<u32>(1u));
-    let i = min(vec4<u32>(floor(p)), n - vec4<u32>(2u));
-    let f = p - vec4<f32>(i);
+fn pre_corner(h: PrecomputedHeader, cell: PreCell, corner: u32) -> PreCorner {
     let o = vec4<u32>(corner & 1u, (corner >> 1u) & 1u, (corner >> 2u) & 1u, (corner >> 3u) & 1u);
-    let w4 = select(vec4<f32>(1.0) - f, f, o == vec4<u32>(1u));
-    let k = i + o;
-    let mu_index = c.half_index * n.z + k.z;
-    return PreCorner(((k.w * h.sizes_4d.z + mu_index) * n.y + k.y) * n.x + k.x, w4.x * w4.y * w4.z * w4.w);
+    let w4 = select(vec4<f32>(1.0) - cell.f, cell.f, o == vec4<u32>(1u));
+    let k = cell.first + o;
+    let mu_index = cell.half_index * cell.n.z + k.z;
+    return PreCorner(((k.w * h.sizes_4d.z + mu_index) * cell.n.y + k.y) * cell.n.x + k.x, w4.x * w4.y * w4.z * w4.w);
 }
 
 // Quadrilinear read of 4D table `table` at `c`.
 fn pre_read_4d(h: PrecomputedHeader, table: u32, c: PreCoords) -> vec3<f32> {
     let base = pre_offset_4d(h, table);
+    let cell = pre_cell(h, c);
     var sum = vec3<f32>(0.0);
     for (var corner = 0u; corner < 16u; corner++) {
-        let k = pre_corner(h, c, corner);
+        let k = pre_corner(h, cell, corner);
         sum += precomputed_tables[base + k.index].xyz * k.weight;
     }
     return sum;
@@ -316,9 +328,8 @@ fn pre_pack_half(s: vec3<f32>, m: vec3<f32>) -> vec4<f32> {
 
 fn pre_unpack_half(t: vec4<f32>) -> PreScattering {
     let u = bitcast<vec4<u32>>(t);
-    let v = vec3<u32>(u.x, u.y, u.z);
-    let lo = vec3<f32>(pre_half_value(v.x & 0xffffu), pre_half_value(v.y & 0xffffu), pre_half_value(v.z & 0xffffu));
-    let hi = vec3<f32>(pre_half_value(v.x >> 16u), pre_half_value(v.y >> 16u), pre_half_value(v.z >> 16u));
+    let lo = vec3<f32>(pre_half_value(u.x & 0xffffu), pre_half_value(u.y & 0xffffu), pre_half_value(u.z & 0xffffu));
+    let hi = vec3<f32>(pre_half_value(u.x >> 16u), pre_half_value(u.y >> 16u), pre_half_value(u.z >> 16u));
     return PreScattering(vec3<f32>(lo.x, hi.x, lo.y) / PRE_HALF_SCALE, vec3<f32>(hi.y, lo.z, hi.z) / PRE_HALF_SCALE);
 }
 
@@ -326,10 +337,11 @@ fn pre_unpack_half(t: vec4<f32>) -> PreScattering {
 // the packed half-precision one.
 fn pre_read_scattering(h: PrecomputedHeader, c: PreCoords) -> PreScattering {
     var out = PreScattering(vec3<f32>(0.0), vec3<f32>(0.0));
+    let cell = pre_cell(h, c);
     if (h.steps.w == 1u) {
         let base = pre_offset_4d(h, PRE_PACKED);
         for (var corner = 0u; corner < 16u; corner++) {
-            let k = pre_corner(h, c, corner);
+            let k = pre_corner(h, cell, corner);
             let t = pre_unpack_half(precomputed_tables[base + k.index]);
             out.rayleigh += t.rayleigh * k.weight;
             out.mie += t.mie * k.weight;
@@ -339,7 +351,7 @@ fn pre_read_scattering(h: PrecomputedHeader, c: PreCoords) -> PreScattering {
     let base_r = pre_offset_4d(h, PRE_SCATTERING);
     let base_m = pre_offset_4d(h, PRE_SINGLE_MIE);
     for (var corner = 0u; corner < 16u; corner++) {
-        let k = pre_corner(h, c, corner);
+        let k = pre_corner(h, cell, corner);
         out.rayleigh += precomputed_tables[base_r + k.index].xyz * k.weight;
         out.mie += precomputed_tables[base_m + k.index].xyz * k.weight;
     }

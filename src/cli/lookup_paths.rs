@@ -14,6 +14,7 @@ use skytune::atmosphere::reference::Case;
 use skytune::atmosphere::Rgb;
 use skytune::measure::model_points::{Evaluator, Method, Point, SunRow};
 use skytune::measure::sky_view_map::SkyViewMap;
+use skytune::measure::validation::median;
 use skytune::render::frame::pass::SharedResources;
 
 /// Accuracy and cost of one way of drawing a point.
@@ -32,11 +33,6 @@ pub struct PathRow {
     pub psnr_db: f64,
     /// Mean relative RMSE (r, g, b averaged) per regime, in `Regime::ALL` order.
     pub rel_rmse: [f64; 3],
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
 /// Compass azimuths of the sun the map is measured with: between two texel columns (the map's
