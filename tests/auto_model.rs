@@ -11,6 +11,21 @@ use skytune::render::{AdapterChoice, GpuContext};
 use skytune::sky::resolved::Budget;
 use skytune::sky::Sky;
 
+/// One evaluator for the tests of this file, so that `precomputed` tables built for one test's
+/// candidates serve the others' (every committed sky has the default atmosphere; a default-size
+/// build takes minutes on lavapipe). The tests take turns with it.
+fn evaluator() -> std::sync::MutexGuard<'static, Evaluator<'static>> {
+    static SHARED: std::sync::OnceLock<std::sync::Mutex<Evaluator<'static>>> = std::sync::OnceLock::new();
+    SHARED
+        .get_or_init(|| {
+            let ctx: &'static GpuContext = Box::leak(Box::new(GpuContext::headless(AdapterChoice::Cpu).expect("lavapipe")));
+            std::sync::Mutex::new(Evaluator::new(ctx).expect("probe"))
+        })
+        .lock()
+        // A test that failed holding it leaves a usable evaluator.
+        .unwrap_or_else(|e| e.into_inner())
+}
+
 fn committed_skies() -> Vec<Sky> {
     let mut skies = vec![skytune::sky::builtin::default_sky()];
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("skies");
@@ -24,8 +39,7 @@ fn committed_skies() -> Vec<Sky> {
 
 #[test]
 fn auto_pick_meets_its_budget_against_the_reference_on_every_committed_sky() {
-    let ctx = GpuContext::headless(AdapterChoice::Cpu).expect("lavapipe");
-    let ev = Evaluator::new(&ctx).expect("probe");
+    let ev = evaluator();
     let budget = Budget { de2000: 2.0 };
     // An independent check: 4 x 6 directions offset from the benchmark's, another seed, the
     // sky's own sun at hours of its day that are not the table's sun elevations, and enough paths
@@ -67,8 +81,7 @@ fn auto_pick_meets_its_budget_against_the_reference_on_every_committed_sky() {
 
 #[test]
 fn tighter_budgets_never_pick_cheaper_models_and_picks_are_reproducible() {
-    let ctx = GpuContext::headless(AdapterChoice::Cpu).expect("lavapipe");
-    let ev = Evaluator::new(&ctx).expect("probe");
+    let ev = evaluator();
     let sky = skytune::sky::builtin::default_sky();
     let scored = auto_model::score(&sky, &ev, &skytune::support::progress::Job::new()).expect("scored");
     assert_eq!(scored, auto_model::score(&sky, &ev, &skytune::support::progress::Job::new()).expect("scored again"), "same inputs, same scores");
@@ -121,8 +134,7 @@ fn sky_file_keys_of_auto() {
 /// committed one is seen from the ground), so the errors it reports are not the ground's.
 #[test]
 fn auto_measures_at_the_skys_camera_altitude() {
-    let ctx = GpuContext::headless(AdapterChoice::Cpu).expect("lavapipe");
-    let ev = Evaluator::new(&ctx).expect("probe");
+    let ev = evaluator();
     let ground = skytune::sky::builtin::default_sky();
     assert_eq!(ground.model.ground(), dome::Ground::BENCH, "the default sky is seen from the benchmark's ground: the committed reference serves it");
     let mut high = ground.clone();

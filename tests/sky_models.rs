@@ -273,5 +273,9 @@ fn half_precision_tables_read_as_single_precision_ones() {
         // The single-precision tables stay in the buffer after packing: rounding shows that the
         // lookup read the packed one.
         assert!(a != b, "half precision read the single-precision tables");
+        // Both stay kept: going back to single precision builds nothing, and reads the same.
+        let builds = probe.precomputed_builds.get();
+        assert_eq!(probe.precomputed(&ctx, &atm, &single, &cases).unwrap(), a, "the kept single-precision tables read as before");
+        assert_eq!(probe.precomputed_builds.get(), builds, "tables built before another set are kept");
     }
 }

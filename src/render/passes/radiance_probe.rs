@@ -9,7 +9,7 @@ use crate::atmosphere::reference::Case;
 use crate::atmosphere::{Atmosphere, LutSettings, PrecomputedSettings, SingleSettings};
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders;
-use crate::render::passes::precomputed_tables::{PrecomputedBuilder, PrecomputedHeader, PrecomputedTables};
+use crate::render::passes::precomputed_tables::{table_bytes, PrecomputedBuilder, PrecomputedHeader, PrecomputedTables};
 use crate::render::passes::sky_model::{storage_entry, AtmosphereUniform, LutBuilder, LutTables, LutUniform, SingleUniform};
 use crate::render::{GpuContext, ShaderLibrary};
 
@@ -26,15 +26,22 @@ pub struct RadianceProbe {
     precomputed_builder: PrecomputedBuilder,
     /// Stands in for the `precomputed` tables when another model runs.
     no_tables: PrecomputedTables,
-    /// The last `precomputed` tables built and what they were built for: evaluations that share
-    /// an atmosphere, settings and ground albedo build them once.
-    precomputed_cache: std::cell::RefCell<Option<(PrecomputedKey, PrecomputedTables)>>,
+    /// The `precomputed` tables built so far and what each was built for, least recently used
+    /// first, at most [`PRECOMPUTED_CACHE_BYTES`] together: evaluations that share an atmosphere,
+    /// settings and ground albedo build them once, even with other tables built in between (`auto`
+    /// measures every candidate for one weather step after another, and skies share atmospheres).
+    precomputed_cache: std::cell::RefCell<Vec<(PrecomputedKey, PrecomputedTables)>>,
     /// `precomputed` table builds so far (tests).
     pub precomputed_builds: std::cell::Cell<u64>,
 }
 
 /// What `precomputed` tables depend on.
 type PrecomputedKey = (AtmosphereUniform, PrecomputedHeader, u32);
+
+/// How much memory the kept `precomputed` tables may hold together, bytes: a few default-size
+/// sets (about 100 MB each), so that `auto`'s candidates and weather steps do not evict each
+/// other. The most recent set is kept whatever its size.
+pub const PRECOMPUTED_CACHE_BYTES: u64 = 512 << 20;
 
 /// Which entry point evaluates the cases.
 #[derive(Clone, Copy)]
@@ -114,7 +121,7 @@ impl RadianceProbe {
 
     /// Drops the kept `precomputed` tables: the next evaluation builds them (timing a build).
     pub fn forget_precomputed(&self) {
-        self.precomputed_cache.borrow_mut().take();
+        self.precomputed_cache.borrow_mut().clear();
     }
 
     /// Radiance of the `precomputed` model for every case (tables built per distinct ground
@@ -125,19 +132,33 @@ impl RadianceProbe {
             let header = PrecomputedHeader::new(settings, subset[0].albedo as f32);
             let key = (AtmosphereUniform::from(atmosphere), header, settings.orders);
             let mut cache = self.precomputed_cache.borrow_mut();
-            let fresh = !matches!(&*cache, Some((k, _)) if *k == key);
-            if fresh {
-                let tables = match cache.take() {
-                    Some((_, t)) if t.holds(settings) => t,
-                    _ => PrecomputedTables::new(&ctx.device, settings),
-                };
-                ctx.queue.write_buffer(&tables.buffer, 0, bytemuck::bytes_of(&header));
-                *cache = Some((key, tables));
-                self.precomputed_builds.set(self.precomputed_builds.get() + 1);
-            }
-            let tables = &cache.as_ref().expect("just filled").1;
+            let fresh = match cache.iter().position(|(k, _)| *k == key) {
+                Some(at) => {
+                    let hit = cache.remove(at);
+                    cache.push(hit);
+                    false
+                }
+                None => {
+                    let needed = table_bytes(settings);
+                    let mut reusable = None;
+                    while !cache.is_empty() && cache.iter().map(|(_, t)| t.bytes).sum::<u64>() + needed > PRECOMPUTED_CACHE_BYTES {
+                        reusable = Some(cache.remove(0).1).filter(|t| t.holds(settings));
+                    }
+                    let tables = reusable.unwrap_or_else(|| PrecomputedTables::new(&ctx.device, settings));
+                    ctx.queue.write_buffer(&tables.buffer, 0, bytemuck::bytes_of(&header));
+                    cache.push((key, tables));
+                    self.precomputed_builds.set(self.precomputed_builds.get() + 1);
+                    true
+                }
+            };
+            let tables = &cache.last().expect("just filled").1;
             let build = if fresh { Build::Precomputed(settings, tables) } else { Build::Nothing };
-            let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Precomputed, build, &[], Some(tables))?;
+            let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Precomputed, build, &[], Some(tables));
+            // Tables whose build did not finish must not be looked up as built next time.
+            if result.is_err() && fresh {
+                cache.pop();
+            }
+            let result = result?;
             for (i, r) in index.into_iter().zip(result) {
                 out[i] = r;
             }
