@@ -2,6 +2,8 @@
 //! (`DisplayCurves` of the fill strategy) and compared with the sRGB definition in double
 //! precision: `pow` to float precision, the fitted polynomials within their documented error.
 
+mod common;
+
 use skytune::render::plan::strategy::DisplayCurves;
 use skytune::render::{AdapterChoice, GpuContext, ShaderLibrary};
 
@@ -39,50 +41,9 @@ fn decode(display: f64) -> f64 {
 
 /// (encoded, decoded) at each of `POINTS` points on [0, 1], by the shader built with `curves`.
 fn shader_curves(ctx: &GpuContext, curves: DisplayCurves) -> Vec<[f32; 2]> {
-    let device = &ctx.device;
-    let library = ShaderLibrary::embedded();
-    let source = library.source("sky_model/tone").expect("tone.wgsl") + PROBE;
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("tone_curves::module"), source: wgpu::ShaderSource::Wgsl(source.into()) });
-    let constants = [("CURVES_KIND", f64::from(curves.shader_kind()))];
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("tone_curves::pipeline"),
-        layout: None,
-        module: &module,
-        entry_point: Some("cs_curves"),
-        compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
-        cache: None,
-    });
-    let bytes = u64::from(POINTS) * 8;
-    let out = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("tone_curves::out"),
-        size: bytes,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let read = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("tone_curves::read"),
-        size: bytes,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("tone_curves::bind_group"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[wgpu::BindGroupEntry { binding: 15, resource: out.as_entire_binding() }],
-    });
-    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("tone_curves::encoder") });
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("tone_curves::pass"), timestamp_writes: None });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(POINTS.div_ceil(64), 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&out, 0, &read, 0, bytes);
-    ctx.queue.submit([encoder.finish()]);
-    read.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("mapping the curves"));
-    ctx.wait_idle().expect("waiting for the curves");
-    let view = read.slice(..).get_mapped_range().expect("the curves' buffer");
-    bytemuck::cast_slice::<u8, [f32; 2]>(&view).to_vec()
+    let source = ShaderLibrary::embedded().source("sky_model/tone").expect("tone.wgsl") + PROBE;
+    let bytes = common::run_compute_probe(ctx, source, "cs_curves", &[("CURVES_KIND", f64::from(curves.shader_kind()))], None, POINTS, 8);
+    bytemuck::cast_slice::<u8, [f32; 2]>(&bytes).to_vec()
 }
 
 /// Largest encoding error in levels of 255, and largest decoding error relative to the value

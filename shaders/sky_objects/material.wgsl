@@ -97,7 +97,7 @@ fn over_model_sky(c: vec4<f32>, shade: f32, dir: vec3<f32>, view_map: texture_2d
     if c.a < 1e-3 || (BLEND_KIND >= 2u && max(c.r, max(c.g, c.b)) <= 0.0) {
         return c;
     }
-    let sky = textureSampleLevel(view_map, view_sampler, sky_view_uv(normalize(dir)), 0.0).rgb;
+    let sky = textureSampleLevel(view_map, view_sampler, sky_view_uv(dir), 0.0).rgb;
     let tone = frame_tone_mapper();
     let under = display_from_exposed(sky, tone);
     if BLEND_KIND >= 2u {
@@ -227,7 +227,7 @@ fn material(
     // stage's colour then counts as white in its term.
     var view = vec3<f32>(1.0);
     if view_stage(l, d) < 4u {
-        view = textureSample(view_map, view_sampler, sky_view_uv(normalize(at.world_dir))).rgb;
+        view = textureSample(view_map, view_sampler, sky_view_uv(at.world_dir)).rgb;
     }
     var acc = Terms(vec4<f32>(0.0), vec4<f32>(0.0), false, false);
     if count > 0u { acc = fold_stage(l, d, acc, 0u, stage_sample(l, d, 0u, t0, s0, at), view); }

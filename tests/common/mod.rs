@@ -160,3 +160,54 @@ pub fn read_xwd(bytes: &[u8]) -> Result<image::RgbaImage, String> {
     }
     Ok(img)
 }
+
+/// Runs compute entry point `entry` of WGSL `source` (a shader module with a probe appended)
+/// over `count` invocations in workgroups of 64, with the pipeline-overridable `constants` and,
+/// where given, `input` bound read-only at `@group(0) @binding(16)`; returns what it wrote to
+/// `@group(0) @binding(15)`: `count` items of `item_bytes` bytes.
+pub fn run_compute_probe(ctx: &GpuContext, source: String, entry: &str, constants: &[(&str, f64)], input: Option<&[u8]>, count: u32, item_bytes: u64) -> Vec<u8> {
+    let device = &ctx.device;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("compute_probe::module"), source: wgpu::ShaderSource::Wgsl(source.into()) });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("compute_probe::pipeline"),
+        layout: None,
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions { constants, ..Default::default() },
+        cache: None,
+    });
+    let bytes = u64::from(count) * item_bytes;
+    let out = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("compute_probe::out"),
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let read = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("compute_probe::read"),
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let input = input.map(|bytes| {
+        use wgpu::util::DeviceExt;
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("compute_probe::input"), contents: bytes, usage: wgpu::BufferUsages::STORAGE })
+    });
+    let mut entries = vec![wgpu::BindGroupEntry { binding: 15, resource: out.as_entire_binding() }];
+    entries.extend(input.iter().map(|b| wgpu::BindGroupEntry { binding: 16, resource: b.as_entire_binding() }));
+    let bind_group =
+        device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("compute_probe::bind_group"), layout: &pipeline.get_bind_group_layout(0), entries: &entries });
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("compute_probe::encoder") });
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("compute_probe::pass"), timestamp_writes: None });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups(count.div_ceil(64), 1, 1);
+    }
+    encoder.copy_buffer_to_buffer(&out, 0, &read, 0, bytes);
+    ctx.queue.submit([encoder.finish()]);
+    read.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("mapping the probe's output"));
+    ctx.wait_idle().expect("waiting for the probe");
+    let view = read.slice(..).get_mapped_range().expect("the probe's buffer");
+    view.to_vec()
+}
