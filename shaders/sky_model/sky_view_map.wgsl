@@ -12,9 +12,9 @@ fn sky_view_uv(dir: vec3<f32>) -> vec2<f32> {
 }
 
 // atan2(y, x) within 4e-6 radians (a two-thousandth of a map texel): an odd polynomial of the
-// smaller ratio (the Cg reference's) and three selects. A software rasteriser's `atan2` and
-// `asin`, with the normalisation before them, cost the layers matched over a physical sky about a
-// tenth of their frame on lavapipe (docs/performance-notes.md).
+// smaller ratio (the Cg reference's) and three selects, on the direction as given: cheaper than
+// `atan2`, `asin` and the normalisation before them, though on lavapipe only by about 1% of a
+// physical frame (docs/performance-notes.md).
 fn fast_atan2(y: f32, x: f32) -> f32 {
     let ax = abs(x);
     let ay = abs(y);
