@@ -690,6 +690,45 @@ fn a_moving_sun_spreads_the_map_over_frames_and_a_still_shows_it_exactly() {
 }
 
 #[test]
+fn a_sun_at_the_games_pace_leaves_the_map_idle_between_updates() {
+    // 0.0002 h a frame (0.003 degrees of sun; a game hour in about 80 s at 60 frames a second):
+    // a map is begun only once the sun it would be computed for lies more than
+    // SUN_RESOLVED_DEG from the newest map's, so most frames compute nothing, and every frame
+    // stays within 2 levels of what a fresh still at its hour draws.
+    use skytune::render::plan::map_updates::MapUpdates;
+    let sky = default_sky();
+    let at = |hour: f32| lut_input(&sky, hour, 0.0);
+    let options = RenderOptions::default();
+    let MapUpdates::Spread { slices } = options.strategy.map_updates else { panic!("the software strategy spreads maps") };
+    let mut moving = common::headless(W, H);
+    moving.set_sky(&sky).unwrap();
+    let mut hour = 17.0;
+    moving.render(&sky, &at(hour), &camera(), &options).unwrap();
+    let frames = 4 * slices;
+    let mut computing = 0;
+    for _ in 0..frames {
+        hour += 0.0002;
+        moving.frame(&sky, &at(hour), &camera(), &options, 0.0);
+        if moving.renderer.stats.map_texels > 0 {
+            computing += 1;
+        }
+    }
+    eprintln!("{computing} of {frames} frames computed part of a map");
+    assert!(computing > 0 && computing * 2 <= frames, "{computing} of {frames} frames computed part of a map");
+    moving.frame(&sky, &at(hour + 0.0002), &camera(), &options, 0.0);
+    let shown = moving.target.read(&moving.ctx).unwrap();
+    let mut fresh = common::headless(W, H);
+    fresh.set_sky(&sky).unwrap();
+    let exact = fresh.render(&sky, &at(hour + 0.0002), &camera(), &options).unwrap();
+    // Within 2 levels (the sun has moved on by up to SUN_RESOLVED_DEG from the map's).
+    let (d, _) = common::diff(&shown, &exact, 2);
+    eprintln!("the idle map's frame against a fresh still: {d:?}");
+    assert!(d.differing == 0.0 && d.mean < 0.5, "the idle map's frame against a fresh still: {d:?}");
+    fresh.ctx.wait_idle().unwrap();
+    moving.ctx.wait_idle().unwrap();
+}
+
+#[test]
 fn a_display_referred_night_matches_the_hdr_one() {
     // At night the matched layers and billboards are drawn over a nearly black sky, where matching
     // is exact: the moon's lit side shaded in radiance as on the HDR target (shaded in display

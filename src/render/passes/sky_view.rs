@@ -597,7 +597,7 @@ impl Pass for SkyViewPass {
 impl SkyViewPass {
     /// Decides what this frame computes and shows of the map, and writes its inputs.
     fn prepare_map(&mut self, cx: &FrameContext<'_>) {
-        use crate::render::plan::map_updates::{lead_frames, sun_ahead, MapChange, MapFrame, MapUpdates, SPREAD_MAX_STEP_DEG};
+        use crate::render::plan::map_updates::{lead_frames, sun_ahead, sun_change, MapChange, MapFrame, MapUpdates, SPREAD_MAX_STEP_DEG};
         let model = &cx.frame.sky_model;
         self.step = MapFrame::default();
         self.skipped = false;
@@ -634,29 +634,31 @@ impl SkyViewPass {
         } else if model.kind.on_cpu() && !self.cells_ready(cx, model, key) {
             return;
         }
+        let (w, h) = SharedResources::SKY_VIEW_SIZE;
+        let updates = if model.kind.on_cpu() { MapUpdates::Whole } else { cx.options.strategy.map_updates };
+        // The sun a map begun this frame is computed for: a spread map, for the frame that will
+        // show it alone.
+        let sun = |k: &Key| glam::Vec3::from_slice(&k.params.towards_sun[..3]);
+        let ahead = last_key.map_or(sun(&key), |last| sun_ahead(sun(&last), sun(&key), lead_frames(updates)));
         let change = match self.computed {
             _ if unchanged => MapChange::Same,
-            // The sun still moving by a small step, nothing else changed: the spread goes on.
+            // The sun still moving by a small step, nothing else changed: the spread goes on, or
+            // the map stays while the sun is within what it resolves.
             Some(newest)
                 if last_key != Some(key)
                     && !model.kind.on_cpu()
                     && sun_moved(&newest, &key).is_some()
                     && last_key.and_then(|l| sun_moved(&l, &key)).is_some_and(|deg| deg <= SPREAD_MAX_STEP_DEG) =>
             {
-                MapChange::SunStep
+                sun_change(sun(&newest).angle_between(ahead).to_degrees(), self.schedule.computing())
             }
             // Anything else, the sun stopped away from the newest map included: whole, exactly.
             _ => MapChange::Other,
         };
-        let (w, h) = SharedResources::SKY_VIEW_SIZE;
-        let updates = if model.kind.on_cpu() { MapUpdates::Whole } else { cx.options.strategy.map_updates };
         self.step = self.schedule.step(change, updates, w * h);
         self.skipped = self.step.is_idle();
         let mut key = key;
-        if let (true, MapChange::SunStep, Some(last)) = (self.step.exposure, change, last_key) {
-            // A spread map is computed for the sun of the frame that will show it alone.
-            let sun = |k: &Key| glam::Vec3::from_slice(&k.params.towards_sun[..3]);
-            let ahead = sun_ahead(sun(&last), sun(&key), lead_frames(updates));
+        if self.step.exposure && change == MapChange::SunStep {
             key.params.towards_sun = ahead.extend(key.params.towards_sun[3]).to_array();
         }
         if self.step.exposure {

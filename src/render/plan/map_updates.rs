@@ -8,7 +8,10 @@
 //! blended by how far the slices have come, so the sky moves smoothly. Shown that way, a map
 //! computed for the sun of the frame that began it would trail the sun by [`lead_frames`]; it is
 //! computed instead for the sun that many frames on, turning as it turned over the last frame
-//! ([`sun_ahead`]), so a steady time-lapse shows the sky where the sun is. A still (the sun where
+//! ([`sun_ahead`]), so a steady time-lapse shows the sky where the sun is. A sun slower than
+//! the map resolves (a clock at the game's pace) begins a map only once the sun it would be
+//! computed for lies more than [`SUN_RESOLVED_DEG`] from the newest map's ([`sun_change`]), and
+//! leaves the map idle in between. A still (the sun where
 //! the work map's is), a jump of the sun, or any other change computes the whole map at once for
 //! the frame's own sun and shows it exactly.
 
@@ -29,6 +32,25 @@ pub enum MapUpdates {
 /// Largest move of the sun between two frames, degrees, that a spread update follows; a larger
 /// one (a scrubbed slider, a new still) computes the whole map at once.
 pub const SPREAD_MAX_STEP_DEG: f32 = 1.0;
+
+/// How far, degrees, the sun a map begun this frame would be computed for may lie from the one
+/// the newest map was computed for, while the sun moves, before another map is begun: a fifth of
+/// the map's finest texel (its rows near the horizon are half a degree apart), which the map does
+/// not resolve. A sun slower than this over a spread (a clock at the game's own pace) leaves the
+/// map idle between updates; a time-lapse goes past it every frame.
+pub const SUN_RESOLVED_DEG: f32 = 0.1;
+
+/// What a sun that moved by a small step (at most [`SPREAD_MAX_STEP_DEG`], nothing else changed)
+/// asks of the map: `from_newest_deg` is the angle between the sun the newest map was computed for
+/// and the one a map begun this frame would be (ahead by the spread's lead); `computing`, whether a
+/// work map is under way (it goes on).
+pub fn sun_change(from_newest_deg: f32, computing: bool) -> MapChange {
+    if computing || from_newest_deg > SUN_RESOLVED_DEG {
+        MapChange::SunStep
+    } else {
+        MapChange::SunWithin
+    }
+}
 
 /// Frames from the one that begins a spread map to the one that shows it alone: its slices, then
 /// as many frames blending towards it from the map before (0 for whole maps, shown at once).
@@ -57,8 +79,12 @@ pub fn sun_ahead(previous: glam::Vec3, current: glam::Vec3, frames: u32) -> glam
 pub enum MapChange {
     /// The same: nothing new to compute.
     Same,
-    /// Only the sun moved, by at most [`SPREAD_MAX_STEP_DEG`].
+    /// Only the sun moved, by at most [`SPREAD_MAX_STEP_DEG`]: a map is begun or goes on.
     SunStep,
+    /// Only the sun moved, by a small step, and a map begun now would lie within
+    /// [`SUN_RESOLVED_DEG`] of the newest ([`sun_change`]): nothing is computed, and the shown
+    /// map goes on towards the newest as a step would take it.
+    SunWithin,
     /// Anything else: the model, the atmosphere, the exposure, a jump of the sun, no map yet.
     Other,
 }
@@ -115,6 +141,8 @@ impl MapSchedule {
             _ => 1,
         };
         let slice = |i: u32| (i * texels / slices)..((i + 1) * texels / slices);
+        // A work map under way is finished whatever the sun (`sun_change` says so too).
+        let change = if change == MapChange::SunWithin && self.done.is_some() { MapChange::SunStep } else { change };
         let whole = MapFrame { exposure: true, texels: Some(0..texels), finish: true, whole: true, show: Some(1.0) };
         // Whole: any other change, or a spread no longer asked for (a work map under way included).
         if change == MapChange::Other || (slices == 1 && (change == MapChange::SunStep || self.done.is_some())) {
@@ -148,7 +176,11 @@ impl MapSchedule {
                 self.shown = 1.0;
                 MapFrame { show: Some(1.0), ..MapFrame::default() }
             }
-            (MapChange::Same, None) | (MapChange::Other, _) => MapFrame::default(),
+            (MapChange::SunWithin, _) if self.shown < 1.0 => {
+                self.shown = (self.shown + 1.0 / slices as f32).min(1.0);
+                MapFrame { show: Some(self.shown), ..MapFrame::default() }
+            }
+            (MapChange::Same | MapChange::SunWithin, _) | (MapChange::Other, _) => MapFrame::default(),
         }
     }
 }
@@ -276,6 +308,42 @@ mod tests {
         }
         let still = glam::Vec3::new(0.3, 0.5, -0.8).normalize();
         assert_eq!(sun_ahead(still, still, 11), still);
+    }
+
+    #[test]
+    fn a_slow_sun_leaves_the_map_idle_until_it_has_moved_more_than_the_map_resolves() {
+        assert_eq!(sun_change(SUN_RESOLVED_DEG * 0.5, false), MapChange::SunWithin);
+        assert_eq!(sun_change(SUN_RESOLVED_DEG * 1.5, false), MapChange::SunStep);
+        assert_eq!(sun_change(0.0, true), MapChange::SunStep, "a work map under way goes on");
+        // A sun a twentieth of the tolerance a frame, from a fresh map: a map begun every 21
+        // frames, spread over its four slices, and the shown blend moving on after it.
+        let mut s = MapSchedule::default();
+        s.step(MapChange::Other, SPREAD, TEXELS);
+        let mut newest_at = 0.0f32;
+        let (mut computing_frames, mut idle_frames, mut shown) = (0, 0, Vec::new());
+        for frame in 1..=60 {
+            let sun = frame as f32 * SUN_RESOLVED_DEG / 20.0;
+            let change = sun_change(sun - newest_at, s.computing());
+            let f = s.step(change, SPREAD, TEXELS);
+            if f.exposure {
+                newest_at = sun;
+            }
+            if f.texels.is_some() {
+                computing_frames += 1;
+            }
+            if f.is_idle() {
+                idle_frames += 1;
+            }
+            shown.extend(f.show);
+        }
+        assert_eq!(computing_frames, 2 * 4, "two maps of four slices in 60 frames");
+        assert!(idle_frames >= 40, "{idle_frames} idle frames");
+        // The blend never jumps back: it rises to 1, and starts from 0 only where a map finishes.
+        assert!(shown.windows(2).all(|w| w[1] >= w[0] || w[1] == 0.0), "{shown:?}");
+        // Whole updates leave the map as it is too.
+        let mut whole = MapSchedule::default();
+        whole.step(MapChange::Other, MapUpdates::Whole, TEXELS);
+        assert!(whole.step(MapChange::SunWithin, MapUpdates::Whole, TEXELS).is_idle());
     }
 
     #[test]
