@@ -176,8 +176,14 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
     let (scene_worst, scene_med) = (scene_ratios.iter().copied().fold(0.0, f64::max), median(&scene_ratios));
     let stand_in_ms = median(&cases.iter().filter(|c| c.view == "horizon").map(|c| c.with_scene_ms - c.sky_ms).collect::<Vec<_>>());
 
-    // Per object: the built-in sky at dusk, horizon view, each object left out in turn.
-    let (per_object, nothing, all) = per_object_costs(&ctx, &skies[0].1, (&mut plain, Headless::new(untimed, w, h)?), (&options, &views[0].1), frames)?;
+    // Per object: the built-in sky at dusk, horizon view, each object left out in turn; and the
+    // same for each of its copies with another skydome colour source (`--sky-models`), so that a
+    // physical sky's costs read beside the painted one's.
+    let mut per_object = Vec::new();
+    for (_, sky) in skies.iter().filter(|(n, _)| *n == skies[0].0) {
+        let costs = per_object_costs(&ctx, sky, (&mut plain, Headless::new(untimed.clone(), w, h)?), (&options, &views[0].1), frames)?;
+        per_object.push((sky.model.kind, costs));
+    }
 
     // CPU: evaluating a sky of 50 objects.
     let (eval_us, objects) = evaluation_cost(if args.quick { 200 } else { 2000 })?;
@@ -202,7 +208,6 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
         per_strategy,
         cases: all_cases,
         per_object,
-        frame_ms: (nothing, all),
         evaluation: (eval_us, objects),
         particles,
         latency: (latency.0, latency.1, shader_ms),
@@ -315,7 +320,7 @@ fn measure_cases(ctx: &GpuContext, floor: &Baseline, (skies, views): (&[(String,
 }
 
 /// Each object's cost (name, ms), the frame with no object and the median frame with every object.
-type ObjectCosts = (Vec<(String, f64)>, f64, f64);
+pub type ObjectCosts = (Vec<(String, f64)>, f64, f64);
 
 /// What each object of the built-in sky costs at dusk, looking at the horizon: frames with every
 /// object against frames with that one left out, in pairs; returns each object's cost (ms), the
@@ -336,6 +341,10 @@ fn per_object_costs(
     // objects made frames slower by about 0.8 ms whatever was left out (an object outside the
     // frame, which draws nothing, showed that much), which is not what either frame costs alone.
     other.set_sky(builtin)?;
+    // A still on each first: a physical model's map (and `precomputed`'s tables) ready, untimed.
+    for hl in [&mut *plain, &mut other] {
+        hl.render(builtin, &dusk, &camera, options)?;
+    }
     let every = builtin.evaluate(&dusk);
     let mut paired = |hl: &mut Headless, input: &FrameInput| -> anyhow::Result<(f64, f64, f64)> {
         let frame = builtin.evaluate(input);

@@ -4,7 +4,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::{median, Case, ParticleCost, PhysicalRatios};
+use super::{median, Case, ObjectCosts, ParticleCost, PhysicalRatios};
+use skytune::sky::model::SkyModelKind;
 
 /// Everything one run of `skytune bench frame` measured.
 pub(super) struct FrameReport<'a> {
@@ -35,10 +36,10 @@ pub(super) struct FrameReport<'a> {
     pub per_strategy: Vec<(&'a str, f64, f64, f64)>,
     /// Every case of every strategy.
     pub cases: Vec<Case>,
-    /// Each object's cost in the built-in sky at dusk, ms.
-    pub per_object: Vec<(String, f64)>,
-    /// That frame with every object left out and with all of them, ms.
-    pub frame_ms: (f64, f64),
+    /// Each object's cost in the built-in sky at dusk (ms), that frame with every object left out
+    /// and with all of them (ms): the sky as it is, then each of its copies with another skydome
+    /// colour source.
+    pub per_object: Vec<(SkyModelKind, ObjectCosts)>,
     /// `Sky::evaluate`: median microseconds and the object count.
     pub evaluation: (f64, usize),
     /// Particle simulation on the CPU and the GPU.
@@ -140,11 +141,22 @@ impl FrameReport<'_> {
 
     /// Per object, the CPU's evaluation, particles and hot-reload latency.
     fn other_costs(&self, md: &mut String) {
-        let (nothing, all) = self.frame_ms;
-        let _ = writeln!(md, "\n## Where the time goes\n\nThe built-in sky alone at 18.5 h, weather 0.3, horizon view: {all:.2} ms a frame; with every object left out {nothing:.2} ms. Each object's cost is the median difference between a frame with every object and one without it, the two alternating, each drawn by a renderer of its own (leaving one out can also change how the others are drawn: which layers join, which draw is the background):\n");
-        let _ = writeln!(md, "| object | ms | share of the frame |\n|---|---:|---:|");
-        for (name, ms) in &self.per_object {
-            let _ = writeln!(md, "| {name} | {ms:.2} | {:.0}% |", 100.0 * ms / all);
+        let frames: Vec<String> = self
+            .per_object
+            .iter()
+            .map(|(kind, (_, nothing, all))| format!("{all:.2} ms a frame with the skydome's {} colours, {nothing:.2} ms with every object left out", kind.name()))
+            .collect();
+        let _ = writeln!(md, "\n## Where the time goes\n\nThe built-in sky alone at 18.5 h, weather 0.3, horizon view: {}. Each object's cost is the median difference between a frame with every object and one without it, the two alternating, each drawn by a renderer of its own (leaving one out can also change how the others are drawn: which layers join, which draw is the background):\n", frames.join("; "));
+        let header: String = self.per_object.iter().map(|(kind, _)| format!(" {} ms | share |", kind.name())).collect();
+        let _ = writeln!(md, "| object |{header}\n|---|{}", "---:|---:|".repeat(self.per_object.len()));
+        let names: Vec<&String> = self.per_object.first().map(|(_, (objects, _, _))| objects.iter().map(|(n, _)| n).collect()).unwrap_or_default();
+        for name in names {
+            let cells: String = self
+                .per_object
+                .iter()
+                .map(|(_, (objects, _, all))| objects.iter().find(|(n, _)| n == name).map_or(" - | - |".to_string(), |(_, ms)| format!(" {ms:.2} | {:.0}% |", 100.0 * ms / all)))
+                .collect();
+            let _ = writeln!(md, "| {name} |{cells}");
         }
         let (eval_us, objects) = self.evaluation;
         let _ = writeln!(md, "\n## CPU: evaluating the sky\n\n`Sky::evaluate` for a sky of {objects} objects (the built-in sky plus billboards on its paths): median {eval_us:.1} us per frame (target: 50 us).\n");
@@ -175,7 +187,9 @@ impl FrameReport<'_> {
         for p in &self.particles {
             println!("particles {}: CPU + upload {:.3} ms ({} alive), GPU {:.3} ms ({} alive)", p.cap, p.cpu_ms, p.cpu_alive, p.gpu_ms, p.gpu_alive);
         }
-        println!("per object (built-in sky, dusk, horizon): {}", self.per_object.iter().map(|(n, ms)| format!("{n} {ms:.2} ms")).collect::<Vec<_>>().join(", "));
+        for (kind, (objects, _, _)) in &self.per_object {
+            println!("per object (built-in sky, {}, dusk, horizon): {}", kind.name(), objects.iter().map(|(n, ms)| format!("{n} {ms:.2} ms")).collect::<Vec<_>>().join(", "));
+        }
         let (eval_us, objects) = self.evaluation;
         let (files, bitmaps, shaders) = &self.latency;
         println!(
