@@ -650,7 +650,7 @@ impl SkyViewPass {
                     && sun_moved(&newest, &key).is_some()
                     && last_key.and_then(|l| sun_moved(&l, &key)).is_some_and(|deg| deg <= SPREAD_MAX_STEP_DEG) =>
             {
-                sun_change(sun(&newest).angle_between(ahead).to_degrees(), self.schedule.computing())
+                sun_change(sun(&newest).angle_between(ahead).to_degrees())
             }
             // Anything else, the sun stopped away from the newest map included: whole, exactly.
             _ => MapChange::Other,

@@ -42,10 +42,10 @@ pub const SUN_RESOLVED_DEG: f32 = 0.1;
 
 /// What a sun that moved by a small step (at most [`SPREAD_MAX_STEP_DEG`], nothing else changed)
 /// asks of the map: `from_newest_deg` is the angle between the sun the newest map was computed for
-/// and the one a map begun this frame would be (ahead by the spread's lead); `computing`, whether a
-/// work map is under way (it goes on).
-pub fn sun_change(from_newest_deg: f32, computing: bool) -> MapChange {
-    if computing || from_newest_deg > SUN_RESOLVED_DEG {
+/// and the one a map begun this frame would be (ahead by the spread's lead). A work map under way
+/// goes on either way ([`MapSchedule::step`]).
+pub fn sun_change(from_newest_deg: f32) -> MapChange {
+    if from_newest_deg > SUN_RESOLVED_DEG {
         MapChange::SunStep
     } else {
         MapChange::SunWithin
@@ -141,7 +141,7 @@ impl MapSchedule {
             _ => 1,
         };
         let slice = |i: u32| (i * texels / slices)..((i + 1) * texels / slices);
-        // A work map under way is finished whatever the sun (`sun_change` says so too).
+        // A work map under way is finished whatever the sun.
         let change = if change == MapChange::SunWithin && self.done.is_some() { MapChange::SunStep } else { change };
         let whole = MapFrame { exposure: true, texels: Some(0..texels), finish: true, whole: true, show: Some(1.0) };
         // Whole: any other change, or a spread no longer asked for (a work map under way included).
@@ -312,9 +312,13 @@ mod tests {
 
     #[test]
     fn a_slow_sun_leaves_the_map_idle_until_it_has_moved_more_than_the_map_resolves() {
-        assert_eq!(sun_change(SUN_RESOLVED_DEG * 0.5, false), MapChange::SunWithin);
-        assert_eq!(sun_change(SUN_RESOLVED_DEG * 1.5, false), MapChange::SunStep);
-        assert_eq!(sun_change(0.0, true), MapChange::SunStep, "a work map under way goes on");
+        assert_eq!(sun_change(SUN_RESOLVED_DEG * 0.5), MapChange::SunWithin);
+        assert_eq!(sun_change(SUN_RESOLVED_DEG * 1.5), MapChange::SunStep);
+        // A work map under way goes on, its next slice, whatever the sun.
+        let mut under_way = MapSchedule::default();
+        under_way.step(MapChange::Other, SPREAD, TEXELS);
+        under_way.step(MapChange::SunStep, SPREAD, TEXELS);
+        assert_eq!(under_way.step(MapChange::SunWithin, SPREAD, TEXELS).texels, Some(25..50), "a work map under way goes on");
         // A sun a twentieth of the tolerance a frame, from a fresh map: a map begun every 21
         // frames, spread over its four slices, and the shown blend moving on after it.
         let mut s = MapSchedule::default();
@@ -323,7 +327,7 @@ mod tests {
         let (mut computing_frames, mut idle_frames, mut shown) = (0, 0, Vec::new());
         for frame in 1..=60 {
             let sun = frame as f32 * SUN_RESOLVED_DEG / 20.0;
-            let change = sun_change(sun - newest_at, s.computing());
+            let change = sun_change(sun - newest_at);
             let f = s.step(change, SPREAD, TEXELS);
             if f.exposure {
                 newest_at = sun;
