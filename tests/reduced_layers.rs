@@ -421,7 +421,6 @@ fn two_alpha_layers_drawn_at_once_give_the_same_picture() {
         ("storm at the horizon, no scene", FrameInput::new(15.0, 1.0), horizon, alone),
         ("storm looking up", FrameInput::new(15.0, 1.0), up, alone),
         ("lut on the HDR target, looking up", lut.clone(), up, RenderOptions { strategy: alone.strategy.with_hdr(), ..alone }),
-        ("lut display-referred, looking up", lut, up, alone),
     ] {
         let one = h.render(&sky, &input, &camera, &options).expect("rendered");
         let s = h.renderer.stats.clone();
@@ -431,6 +430,21 @@ fn two_alpha_layers_drawn_at_once_give_the_same_picture() {
         // One blend rounds once where two rounded twice.
         let (d, _) = common::diff(&one, &two, 2);
         assert!(d.differing < 0.001, "{what}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
+    }
+    // On a display-referred physical frame the pair is matched to the HDR picture as one layer:
+    // the HDR path's two blends over the model's sky, tone-mapped once, where one by one each
+    // layer is matched as if over the bare sky. So where the layers stack the pair is the HDR
+    // picture, and closer to it than the layers one by one.
+    for (what, input) in [("afternoon", lut.clone()), ("dusk", FrameInput { sky_model: lut.sky_model, ..FrameInput::new(18.5, 0.4) })] {
+        let hdr = h.render(&sky, &input, &up, &RenderOptions { strategy: alone.strategy.with_hdr(), ..alone }).expect("rendered");
+        let paired = h.render(&sky, &input, &up, &alone).expect("rendered");
+        assert!(h.renderer.stats.layers_paired >= 1, "{what}: a pair drawn at once");
+        let one_by_one = h.render(&sky, &input, &up, &RenderOptions { strategy: FillStrategy { pairs: LayerPairs::OneByOne, ..alone.strategy }, ..alone }).expect("rendered");
+        let (p, _) = common::diff(&paired, &hdr, 10);
+        let (o, _) = common::diff(&one_by_one, &hdr, 10);
+        eprintln!("{what}: against the HDR frame, paired {p:?}, one by one {o:?}");
+        assert!(p.mean <= o.mean && p.differing <= o.differing, "{what}: paired {p:?} further from the HDR frame than one by one {o:?}");
+        assert!(p.mean < 1.0 && p.differing < 0.01, "{what}: paired {p:?} against the HDR frame");
     }
 }
 

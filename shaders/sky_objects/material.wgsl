@@ -82,31 +82,23 @@ fn view_on_display(l: u32, d: Draw) -> bool {
     return view_stage(l, d) < 4u && on_display_target();
 }
 
-// A blended layer's colour `c` (display values, alpha its coverage) on a display-referred
-// physical frame (`OVER_MODEL_SKY`), as what its blend onto the model's sky along `dir` must write
-// so that the pixel ends as the HDR path would leave it there: the layer's exposed radiance
-// blended with the sky's, then tone-mapped. Exact over the bare sky; over other layers it is the
-// display-space blend of a colour chosen for the sky. Alpha (BLEND_KIND 1): the colour that
-// leaves H = T(a E(c) + (1 - a) R) over D = T(R), with the coverage raised where that colour
-// would pass 1 (the target clamps it); additive (2 and 3): H - D with the sky's radiance R under
-// the layer's added radiance.
-// `shade` scales the layer's radiance (the moon's lit side, which the HDR path applies to radiance).
-fn over_model_sky(c: vec4<f32>, shade: f32, dir: vec3<f32>, view_map: texture_2d<f32>, view_sampler: sampler) -> vec4<f32> {
-    // Nothing over the sky here (most of a cloud layer's pixels): written as it is. First, so that
-    // a software rasteriser skips the rest where a whole block of pixels is clear.
-    if c.a < 1e-3 || (BLEND_KIND >= 2u && max(c.r, max(c.g, c.b)) <= 0.0) {
-        return c;
-    }
+// The model's sky along `dir` on a display-referred physical frame: its exposed radiance, and
+// that radiance tone-mapped (what the layer holding the map leaves under the layers above it).
+struct ModelSky {
+    radiance: vec3<f32>,
+    display: vec3<f32>,
+};
+
+fn model_sky(dir: vec3<f32>, view_map: texture_2d<f32>, view_sampler: sampler) -> ModelSky {
     let sky = textureSampleLevel(view_map, view_sampler, sky_view_uv(dir), 0.0).rgb;
-    let tone = frame_tone_mapper();
-    let under = display_from_exposed(sky, tone);
-    if BLEND_KIND >= 2u {
-        var weight = 1.0;
-        if BLEND_KIND == 2u { weight = c.a; }
-        return vec4<f32>(display_from_exposed(sky + weight * shade * exposed_from_display(c.rgb), tone) - under, 1.0);
-    }
-    let over = display_from_exposed(c.a * shade * exposed_from_display(c.rgb) + (1.0 - c.a) * sky, tone);
-    var a = c.a;
+    return ModelSky(sky, display_from_exposed(sky, frame_tone_mapper()));
+}
+
+// The colour and coverage (straight alpha, display values) whose alpha blend over `under` leaves
+// `over`, for a layer covering `coverage`: the coverage is raised where that colour would pass 1
+// in some channel (the target clamps it).
+fn matched_alpha_blend(over: vec3<f32>, under: vec3<f32>, coverage: f32) -> vec4<f32> {
+    var a = coverage;
     let rgb = (over - (1.0 - a) * under) / a;
     if max(rgb.r, max(rgb.g, rgb.b)) > 1.0 {
         // Coverage a' with (over - (1 - a') under) / a' <= 1 in every channel.
@@ -114,6 +106,31 @@ fn over_model_sky(c: vec4<f32>, shade: f32, dir: vec3<f32>, view_map: texture_2d
         a = clamp(max(need.r, max(need.g, need.b)), a, 1.0);
     }
     return vec4<f32>(clamp((over - (1.0 - a) * under) / a, vec3<f32>(0.0), vec3<f32>(1.0)), a);
+}
+
+// A blended layer's colour `c` (display values, alpha its coverage) on a display-referred
+// physical frame (`OVER_MODEL_SKY`), as what its blend onto the model's sky along `dir` must write
+// so that the pixel ends as the HDR path would leave it there: the layer's exposed radiance
+// blended with the sky's, then tone-mapped. Exact over the bare sky; over other layers it is the
+// display-space blend of a colour chosen for the sky. Alpha (BLEND_KIND 1): the colour that
+// leaves H = T(a E(c) + (1 - a) R) over D = T(R) (`matched_alpha_blend`); additive (2 and 3):
+// H - D with the sky's radiance R under the layer's added radiance.
+// `shade` scales the layer's radiance (the moon's lit side, which the HDR path applies to radiance).
+fn over_model_sky(c: vec4<f32>, shade: f32, dir: vec3<f32>, view_map: texture_2d<f32>, view_sampler: sampler) -> vec4<f32> {
+    // Nothing over the sky here (most of a cloud layer's pixels): written as it is. First, so that
+    // a software rasteriser skips the rest where a whole block of pixels is clear.
+    if c.a < 1e-3 || (BLEND_KIND >= 2u && max(c.r, max(c.g, c.b)) <= 0.0) {
+        return c;
+    }
+    let sky = model_sky(dir, view_map, view_sampler);
+    let tone = frame_tone_mapper();
+    if BLEND_KIND >= 2u {
+        var weight = 1.0;
+        if BLEND_KIND == 2u { weight = c.a; }
+        return vec4<f32>(display_from_exposed(sky.radiance + weight * shade * exposed_from_display(c.rgb), tone) - sky.display, 1.0);
+    }
+    let over = display_from_exposed(c.a * shade * exposed_from_display(c.rgb) + (1.0 - c.a) * sky.radiance, tone);
+    return matched_alpha_blend(over, sky.display, c.a);
 }
 
 // Adds one term of the material (display values, times the diffuse colour) to the sum. On the

@@ -29,19 +29,25 @@ fn vs_pair(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> Pair
 // (`OVER_SEED`), written as it is, with the transmittance left.
 @fragment
 fn fs_pair(in: PairOut) -> @location(0) vec4<f32> {
-    var own = material(LAYER_OWN, draw, tex0, tex1, tex2, tex3, samp0, samp1, samp2, samp3, sky_view, sky_view_sampler, Place(in.world_dir, in.mesh_uv01, in.mesh_uv23));
-    var up = material(
+    let own = material(LAYER_OWN, draw, tex0, tex1, tex2, tex3, samp0, samp1, samp2, samp3, sky_view, sky_view_sampler, Place(in.world_dir, in.mesh_uv01, in.mesh_uv23));
+    let up = material(
         LAYER_UPPER, upper, upper_tex0, upper_tex1, upper_tex2, upper_tex3, upper_samp0, upper_samp1, upper_samp2, upper_samp3, upper_sky_view, upper_sky_view_sampler,
         Place(in.world_dir, in.upper_uv01, in.upper_uv23),
     );
-    if OVER_MODEL_SKY {
-        // Each as over the bare sky, as the two draws one by one would (exact for the lower layer
-        // where it lies on the sky).
-        own = over_model_sky(own, 1.0, in.world_dir, sky_view, sky_view_sampler);
-        up = over_model_sky(up, 1.0, in.world_dir, sky_view, sky_view_sampler);
+    var rgb = up.a * up.rgb + (1.0 - up.a) * own.a * own.rgb;
+    var through = (1.0 - own.a) * (1.0 - up.a);
+    // On a display-referred physical frame, the pair as one layer over the model's sky: the HDR
+    // path's two blends in radiance, tone-mapped once, as `over_model_sky` matches one layer
+    // (exact where the pair lies on the bare sky, as the HDR frame leaves it; one map sample and
+    // one tone curve for the two). Skipped first where the pair is clear, as there.
+    if OVER_MODEL_SKY && max(own.a, up.a) >= 1e-3 {
+        let sky = model_sky(in.world_dir, sky_view, sky_view_sampler);
+        let lower = own.a * exposed_from_display(own.rgb) + (1.0 - own.a) * sky.radiance;
+        let radiance = up.a * exposed_from_display(up.rgb) + (1.0 - up.a) * lower;
+        let matched = matched_alpha_blend(display_from_exposed(radiance, frame_tone_mapper()), sky.display, 1.0 - through);
+        rgb = matched.rgb * matched.a;
+        through = 1.0 - matched.a;
     }
-    let rgb = up.a * up.rgb + (1.0 - up.a) * own.a * own.rgb;
-    let through = (1.0 - own.a) * (1.0 - up.a);
     if OVER_SEED {
         return vec4<f32>(rgb + through * run_at_seeded(in.clip.xy).rgb, through);
     }
