@@ -36,6 +36,15 @@ fn fs_pair(in: PairOut) -> @location(0) vec4<f32> {
     );
     var rgb = up.a * up.rgb + (1.0 - up.a) * own.a * own.rgb;
     var through = (1.0 - own.a) * (1.0 - up.a);
+    if OVER_MODEL_SKY && OVER_SEED {
+        // Over the seed, what lies under the pair is known: the two blends in radiance over it.
+        let seed = run_at_seeded(in.clip.xy).rgb;
+        if max(own.a, up.a) < 1e-3 {
+            return vec4<f32>(rgb + through * seed, through);
+        }
+        let over = up.a * exposed_from_display(up.rgb) + (1.0 - up.a) * own.a * exposed_from_display(own.rgb);
+        return over_seed_in_radiance(over, through, seed);
+    }
     // On a display-referred physical frame, the pair as one layer over the model's sky: the HDR
     // path's two blends in radiance, tone-mapped once, as `over_model_sky` matches one layer
     // (exact where the pair lies on the bare sky, as the HDR frame leaves it; one map sample and

@@ -1,4 +1,4 @@
-//! requires: reduced/run
+//! requires: reduced/run, sky_model/tone
 // Where a draw goes on the frame, as its pipeline sees it (`Slot` in
 // src/render/sky_objects/variants.rs): the switches of a `Placement` and what each does to
 // the draw's colour against the run buffers (group 2).
@@ -27,6 +27,16 @@ fn over_seed(color: vec4<f32>, pixel: vec2<f32>) -> vec4<f32> {
         case 1u: { return vec4<f32>(color.a * color.rgb + (1.0 - color.a) * seed, 1.0 - color.a); }
         default: { return vec4<f32>(seed + color.a * color.rgb, 1.0); }
     }
+}
+
+// The first layer of a seeded buffer on a display-referred physical frame (`OVER_SEED` with
+// `OVER_MODEL_SKY`): the lower run's colour `seed` is what lies under the layer, so the layer's
+// exposed radiance `over` (premultiplied by its coverage) is added to the radiance of what `seed`
+// shows, weighed by the transmittance `through`, and tone-mapped, as the HDR path's blend would
+// leave it there (exact over whatever the lower run holds, not only over the model's sky: no
+// sample of the map, no matching of the colour to it). Written with the transmittance left.
+fn over_seed_in_radiance(over: vec3<f32>, through: f32, seed: vec3<f32>) -> vec4<f32> {
+    return vec4<f32>(display_from_exposed(over + through * exposed_from_display(seed), frame_tone_mapper()), through);
 }
 
 // What an additive draw writes as the frame's background (`BACKGROUND`): the run's colour C plus

@@ -100,8 +100,9 @@ pub enum PhysicalTarget {
     /// Onto the display target as a painted sky is, with no HDR target and no display phase: the
     /// layer holding the model's map sums its terms in radiance and tone-maps them itself, and
     /// each blended layer above it writes what the HDR path's blend over the model's sky would
-    /// leave (exact over the bare sky). The HDR picture within a few levels, at the cost of two
-    /// tone curves per blended fragment. A frame that must read radiance back (an HDR export)
+    /// leave (exact over the bare sky; over what lies under it, the seed, where the first layer
+    /// of a seeded buffer is drawn over the seed). The HDR picture within a few levels, at the
+    /// cost of two tone curves and an inverse per blended fragment. A frame that must read radiance back (an HDR export)
     /// asks for [`Self::Hdr`].
     DisplayMatched,
     /// As `DisplayMatched` for the map's layer, and the layers above it blend in display values
