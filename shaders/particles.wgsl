@@ -8,8 +8,9 @@ fn vs_main(@builtin(vertex_index) vi: u32, p: Particle) -> ParticleOut {
     var out = sprite_vertex(vi, p);
     let corner = out.local;
     if (p.misc.x == 5u) {
-        // Flash: a triangle strip over the whole screen.
+        // Flash: a triangle strip over the whole screen, one colour (`flash_blend`).
         out.clip = vec4<f32>(corner * 3.0 - vec2<f32>(1.0), 0.5, 1.0);
+        out.color = flash_blend(p.color.rgb * p.color.a);
         return out;
     }
     let view = normalize(p.position.xyz);
@@ -22,20 +23,37 @@ fn vs_main(@builtin(vertex_index) vi: u32, p: Particle) -> ParticleOut {
 
 // The fragment stages of the sprites are particle/shape.wgsl's.
 
-// The flash: the instance's colour over the whole sky, additive. Its own pipeline, so that no
-// sprite shape is evaluated over the screen (a SIMD rasteriser runs every branch of fs_main).
+// What the flash writes (premultiplied: colour + (1 - alpha) x target, `FLASH_BLEND` and
+// `FLASH_RUN_BLEND` in src/render/passes/particles.rs) for the display value `add` it adds over
+// the sky. Added as it is, or as exposed radiance on the HDR target. On a display-referred
+// physical frame matched to the HDR picture, where the HDR path's sum over a pixel showing d is
+// g(d) = T(E(d) + E(add)): the line through g at the sky's mean m (globals.cloud_ambient, the
+// map's mean radiance as a display value) with g's mean slope there, clamped to [0, 1], so the
+// flash washes the sky out and flattens its contrast as the HDR frame does, exact at m. Constant
+// over the frame: computed per vertex.
+fn flash_blend(add: vec3<f32>) -> vec4<f32> {
+    if globals.output.z > 0.5 {
+        let m = globals.cloud_ambient.rgb;
+        let tone = frame_tone_mapper();
+        let flash = exposed_from_display(add);
+        let at_mean = display_from_exposed(exposed_from_display(m) + flash, tone);
+        // A secant over a tenth of the display range about m (within [0, 1]): g's slope where
+        // the sky lies, without the toe's kink at black.
+        let lo = max(m - vec3<f32>(0.05), vec3<f32>(0.0));
+        let hi = min(m + vec3<f32>(0.05), vec3<f32>(1.0));
+        let slopes = (display_from_exposed(exposed_from_display(hi) + flash, tone) - display_from_exposed(exposed_from_display(lo) + flash, tone)) / max(hi - lo, vec3<f32>(1e-4));
+        let slope = clamp((slopes.r + slopes.g + slopes.b) / 3.0, 0.0, 1.0);
+        return vec4<f32>(max(at_mean - slope * m, vec3<f32>(0.0)), 1.0 - slope);
+    }
+    return vec4<f32>(to_target(add), 0.0);
+}
+
+// The flash: its colour over the whole sky (`flash_blend`, from the vertices). Its own pipeline,
+// so that no sprite shape is evaluated over the screen (a SIMD rasteriser runs every branch of
+// fs_main).
 @fragment
 fn fs_flash(in: ParticleOut) -> @location(0) vec4<f32> {
-    let add = in.color.rgb * in.color.a;
-    if globals.output.z > 0.5 {
-        // A display-referred physical frame matched to the HDR picture: what the HDR path's sum
-        // leaves over the model's sky, taken at its mean (globals.cloud_ambient, the map's mean
-        // radiance as a display value) for one colour over the frame.
-        let under = globals.cloud_ambient.rgb;
-        let tone = frame_tone_mapper();
-        return vec4<f32>(display_from_exposed(exposed_from_display(under) + exposed_from_display(add), tone) - under, 1.0);
-    }
-    return vec4<f32>(to_target(add), 1.0);
+    return in.color;
 }
 
 // Dome emitters' particles drawn after the composite of the run of reduced layers above them

@@ -189,6 +189,22 @@ pub fn draw_emitter(rpass: &mut wgpu::RenderPass<'_>, pipelines: [&wgpu::RenderP
     1
 }
 
+/// The flash's blend over the frame (`fs_flash` in shaders/particles.wgsl): its premultiplied
+/// colour plus the target times one less its alpha (0 where the flash is only added; on a
+/// display-referred physical frame one less the slope of the HDR sum it matches); the frame's
+/// alpha kept.
+const FLASH_BLEND: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha, operation: wgpu::BlendOperation::Add },
+    alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
+};
+
+/// [`FLASH_BLEND`] into a run's reduced buffer: the run's transmittance scaled as its colour is,
+/// so what is drawn under the run later (`Placement::UnderRun`) is flattened by the flash too.
+const FLASH_RUN_BLEND: wgpu::BlendState = wgpu::BlendState {
+    color: FLASH_BLEND.color,
+    alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha, operation: wgpu::BlendOperation::Add },
+};
+
 /// Draw key of the lightning flash.
 const FLASH_KEY: usize = usize::MAX;
 
@@ -229,17 +245,13 @@ impl ParticlesPass {
                 l,
                 "particles",
                 "Particles::pipeline",
-                [
-                    ("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"),
-                    ("fs_main", crate::render::ADDITIVE_ALPHA, "additive"),
-                    ("fs_flash", crate::render::ADDITIVE_ALPHA, "flash"),
-                ],
+                [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", crate::render::ADDITIVE_ALPHA, "additive"), ("fs_flash", FLASH_BLEND, "flash")],
                 Some(wgpu::CompareFunction::Less),
             )
         })?;
         // The flash added to a run of reduced dome layers ([`FlashPlacement::InRun`](crate::render::plan::strategy::FlashPlacement::InRun)).
         let reduced = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| {
-            build_entries(b, l, "particles", "Particles::reduced_pipeline", [("fs_flash", crate::render::passes::reduced_layers::REDUCED_BLENDS[2], "flash")], None)
+            build_entries(b, l, "particles", "Particles::reduced_pipeline", [("fs_flash", FLASH_RUN_BLEND, "flash")], None)
         })?;
         let first = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| {
             build_entries(b, l, "particles", "Particles::first_pipeline", [("fs_main", crate::render::ADDITIVE_ALPHA, "additive")], Some(wgpu::CompareFunction::Always))
