@@ -89,6 +89,7 @@ struct ModelSky {
     display: vec3<f32>,
 };
 
+// The model's sky along `dir`, from the sky-view map.
 fn model_sky(dir: vec3<f32>, view_map: texture_2d<f32>, view_sampler: sampler) -> ModelSky {
     let sky = textureSampleLevel(view_map, view_sampler, sky_view_uv(dir), 0.0).rgb;
     return ModelSky(sky, display_from_exposed(sky, frame_tone_mapper()));

@@ -102,8 +102,8 @@ pub enum PhysicalTarget {
     /// each blended layer above it writes what the HDR path's blend over the model's sky would
     /// leave (exact over the bare sky; over what lies under it, the seed, where the first layer
     /// of a seeded buffer is drawn over the seed). The HDR picture within a few levels, at the
-    /// cost of two tone curves and an inverse per blended fragment. A frame that must read radiance back (an HDR export)
-    /// asks for [`Self::Hdr`].
+    /// cost of two tone curves and an inverse per blended fragment. A frame that must read
+    /// radiance back (an HDR export) asks for [`Self::Hdr`].
     DisplayMatched,
     /// As `DisplayMatched` for the map's layer, and the layers above it blend in display values
     /// as over a painted sky (the NeL look of 2005): no tone curve per cloud fragment, but
