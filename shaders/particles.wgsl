@@ -34,18 +34,23 @@ fn vs_main(@builtin(vertex_index) vi: u32, p: Particle) -> ParticleOut {
 fn flash_blend(add: vec3<f32>) -> vec4<f32> {
     if globals.output.z > 0.5 {
         let m = globals.cloud_ambient.rgb;
-        let tone = frame_tone_mapper();
         let flash = exposed_from_display(add);
-        let at_mean = display_from_exposed(exposed_from_display(m) + flash, tone);
+        let at_mean = flashed(m, flash);
         // A secant over a tenth of the display range about m (within [0, 1]): g's slope where
         // the sky lies, without the toe's kink at black.
         let lo = max(m - vec3<f32>(0.05), vec3<f32>(0.0));
         let hi = min(m + vec3<f32>(0.05), vec3<f32>(1.0));
-        let slopes = (display_from_exposed(exposed_from_display(hi) + flash, tone) - display_from_exposed(exposed_from_display(lo) + flash, tone)) / max(hi - lo, vec3<f32>(1e-4));
+        let slopes = (flashed(hi, flash) - flashed(lo, flash)) / max(hi - lo, vec3<f32>(1e-4));
         let slope = clamp((slopes.r + slopes.g + slopes.b) / 3.0, 0.0, 1.0);
         return vec4<f32>(max(at_mean - slope * m, vec3<f32>(0.0)), 1.0 - slope);
     }
     return vec4<f32>(to_target(add), 0.0);
+}
+
+// g(d) of `flash_blend`: the HDR path's sum of the flash's exposed radiance `flash` over a pixel
+// showing display value `d`, tone-mapped.
+fn flashed(d: vec3<f32>, flash: vec3<f32>) -> vec3<f32> {
+    return display_from_exposed(exposed_from_display(d) + flash, frame_tone_mapper());
 }
 
 // The flash: its colour over the whole sky (`flash_blend`, from the vertices). Its own pipeline,

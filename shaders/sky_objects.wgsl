@@ -54,14 +54,10 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         if !OVER_MODEL_SKY { rgb *= shade; }
         color = vec4<f32>(rgb, color.a * coverage * step(r2, 1.0));
     }
-    if OVER_MODEL_SKY && OVER_SEED && BLEND_KIND == 1u {
-        // Where clear, as `over_seed` leaves it; first, so that a software rasteriser skips the
-        // rest where a whole block of pixels is.
-        let seed = run_at_seeded(in.clip.xy).rgb;
-        if color.a < 1e-3 {
-            return vec4<f32>(color.a * color.rgb + (1.0 - color.a) * seed, 1.0 - color.a);
-        }
-        return over_seed_in_radiance(color.a * shade * exposed_from_display(color.rgb), 1.0 - color.a, seed);
+    // Over the seed, what lies under the layer is known: blended in radiance over it. Where
+    // clear, left to `over_seed` below, as `over_model_sky` leaves a clear colour.
+    if OVER_MODEL_SKY && OVER_SEED && BLEND_KIND == 1u && color.a >= 1e-3 {
+        return over_seed_in_radiance(color.a * shade * exposed_from_display(color.rgb), 1.0 - color.a, run_at_seeded(in.clip.xy).rgb);
     }
     if OVER_MODEL_SKY {
         color = over_model_sky(color, shade, in.world_dir, sky_view, sky_view_sampler);

@@ -36,24 +36,19 @@ fn fs_pair(in: PairOut) -> @location(0) vec4<f32> {
     );
     var rgb = up.a * up.rgb + (1.0 - up.a) * own.a * own.rgb;
     var through = (1.0 - own.a) * (1.0 - up.a);
-    if OVER_MODEL_SKY && OVER_SEED {
-        // Over the seed, what lies under the pair is known: the two blends in radiance over it.
-        let seed = run_at_seeded(in.clip.xy).rgb;
-        if max(own.a, up.a) < 1e-3 {
-            return vec4<f32>(rgb + through * seed, through);
-        }
-        let over = up.a * exposed_from_display(up.rgb) + (1.0 - up.a) * own.a * exposed_from_display(own.rgb);
-        return over_seed_in_radiance(over, through, seed);
-    }
-    // On a display-referred physical frame, the pair as one layer over the model's sky: the HDR
-    // path's two blends in radiance, tone-mapped once, as `over_model_sky` matches one layer
-    // (exact where the pair lies on the bare sky, as the HDR frame leaves it; one map sample and
-    // one tone curve for the two). Skipped first where the pair is clear, as there.
+    // On a display-referred physical frame, where the pair covers anything (skipped first where
+    // it is clear, as `over_model_sky` skips a clear layer): over the seed, what lies under the
+    // pair is known, so the two blends are made in radiance over it (`over_seed_in_radiance`);
+    // elsewhere the pair is matched as one layer over the model's sky: the HDR path's two blends
+    // in radiance, tone-mapped once, as `over_model_sky` matches one layer (exact where the pair
+    // lies on the bare sky; one map sample and one tone curve for the two).
     if OVER_MODEL_SKY && max(own.a, up.a) >= 1e-3 {
+        let over = up.a * exposed_from_display(up.rgb) + (1.0 - up.a) * own.a * exposed_from_display(own.rgb);
+        if OVER_SEED {
+            return over_seed_in_radiance(over, through, run_at_seeded(in.clip.xy).rgb);
+        }
         let sky = model_sky(in.world_dir, sky_view, sky_view_sampler);
-        let lower = own.a * exposed_from_display(own.rgb) + (1.0 - own.a) * sky.radiance;
-        let radiance = up.a * exposed_from_display(up.rgb) + (1.0 - up.a) * lower;
-        let matched = matched_alpha_blend(display_from_exposed(radiance, frame_tone_mapper()), sky.display, 1.0 - through);
+        let matched = matched_alpha_blend(display_from_exposed(over + through * sky.radiance, frame_tone_mapper()), sky.display, 1.0 - through);
         rgb = matched.rgb * matched.a;
         through = 1.0 - matched.a;
     }
