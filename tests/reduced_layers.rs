@@ -4,7 +4,7 @@
 
 mod common;
 
-use skytune::render::plan::strategy::{FlashPlacement, LayerPairs, RunJoining, UnderBackground};
+use skytune::render::plan::strategy::{CostlyLayers, FlashPlacement, LayerPairs, RunJoining, UnderBackground};
 use skytune::render::{Camera, Divisor, DomeResolution, FillStrategy, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::particles::ParticleClock;
@@ -481,5 +481,40 @@ fn a_physical_night_sky_drawn_in_parts_is_the_one_drawn_whole() {
         assert!(h.renderer.stats.objects_reduced > 0, "the skydome drawn in parts");
         let (d, _) = common::diff(&parts, &whole, 2);
         assert!(d.mean < 0.1 && d.differing < 0.001, "hour {hour}: {d:?}");
+    }
+}
+
+#[test]
+fn a_costly_layer_drawn_apart_gives_the_same_picture() {
+    // On a display-referred physical frame the fog's band is matched over the model's sky (a
+    // sample of the map and three tone curves per fragment) and needs an eighth of the frame's
+    // resolution, but shares the clouds' much finer buffer: drawn apart at its own resolution
+    // (`CostlyLayers::OwnBuffer`) and composited into the clouds' buffer, against drawn there.
+    // Looking at the horizon, where the band covers most of the frame.
+    let horizon = Camera { yaw_deg: 180.0, pitch_deg: 10.0, ..Camera::default() };
+    let apart = RenderOptions { glare: false, ..Default::default() };
+    let in_run = RenderOptions { strategy: FillStrategy { costly_layers: CostlyLayers::InRun, ..apart.strategy }, ..apart };
+    let lakes = skytune::sky::load_sky_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("skies/lakes/sky.toml")).expect("the lakes sky loads");
+    let mut h = common::headless(1280, 720);
+    for (what, sky, hour, weather) in [("built-in sky at dusk", default_sky(), 18.5, 0.3), ("lakes at noon", lakes.clone(), 12.0, 0.0), ("lakes at night", lakes, 23.0, 0.0)] {
+        h.set_sky(&sky).expect("uploaded");
+        let input = FrameInput { sky_model: Some(SkyModel { kind: SkyModelKind::Lut, ..sky.model }), ..FrameInput::new(hour, weather) };
+        let one = h.render(&sky, &input, &horizon, &apart).expect("rendered");
+        let s = h.renderer.stats.clone();
+        assert_eq!(s.own_buffers, 1, "{what}: the fog drawn apart ({s:?})");
+        let two = h.render(&sky, &input, &horizon, &in_run).expect("rendered");
+        assert_eq!(h.renderer.stats.own_buffers, 0, "{what}");
+        let hdr = h.render(&sky, &input, &horizon, &RenderOptions { strategy: apart.strategy.with_hdr(), ..apart }).expect("rendered");
+        // The band's match follows the map at the map's resolution; upsampled, its soft parts
+        // move by a level or two. (Its hard lower edge, 20 degrees below the horizon, lies
+        // behind the scene; drawn alone over nothing it softens over a pixel or two, as any
+        // layer drawn at its own resolution does.)
+        let (d2, _) = common::diff(&one, &two, 2);
+        let (d8, _) = common::diff(&one, &two, 8);
+        let (a, _) = common::diff(&one, &hdr, 10);
+        let (b, _) = common::diff(&two, &hdr, 10);
+        eprintln!("{what}: apart against in the run {d2:?} (>8: {d8:?}); against the HDR frame, apart {a:?}, in the run {b:?}");
+        assert!(d2.mean < 0.5 && d2.differing < 0.02 && d8.differing < 0.001, "{what}: apart {d2:?}, >8 {d8:?}");
+        assert!(a.mean <= b.mean + 0.1 && a.differing <= b.differing + 0.001, "{what}: apart {a:?} further from the HDR frame than in the run {b:?}");
     }
 }

@@ -80,7 +80,7 @@ fn skipped(ui: &mut egui::Ui, info: &UiInfo<'_>) {
 /// now against the median when they were last all on.
 fn switches(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     let s = info.stats;
-    use crate::render::plan::strategy::{FlashPlacement, LayerPairs, PhysicalTarget, RunJoining, SparseStages, UnderBackground, PRESETS};
+    use crate::render::plan::strategy::{CostlyLayers, FlashPlacement, LayerPairs, PhysicalTarget, RunJoining, SparseStages, UnderBackground, PRESETS};
     let st = &mut c.options.strategy;
     ui.horizontal_wrapped(|ui| {
         ui.label(format!("fill strategy: {} (preset", st.name()));
@@ -122,6 +122,12 @@ fn switches(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         &[(FlashPlacement::OverFrame, "over the frame"), (FlashPlacement::InRun, "in a run")],
     );
     choice(ui, &format!("alpha layers ({} pairs)", s.layers_paired), &mut st.pairs, &[(LayerPairs::OneByOne, "one by one"), (LayerPairs::AtOnce, "two at once")]);
+    choice(
+        ui,
+        &format!("costly layers ({} apart)", s.own_buffers),
+        &mut st.costly_layers,
+        &[(CostlyLayers::InRun, "in their run"), (CostlyLayers::OwnBuffer, "apart, at their resolution")],
+    );
     choice(
         ui,
         "physical skies",

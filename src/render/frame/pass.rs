@@ -253,6 +253,21 @@ pub struct Caps {
     /// The pass's next item (its key) in priority order, and whether the two can be drawn at once
     /// as [`Placement::Pair`]: plain (index 0) and over a seed (index 1).
     pub pair_next: Option<(usize, [bool; 2])>,
+    /// [`RunInput::Own`](crate::render::plan::RunInput::Own) (reduced items): its fragments cost
+    /// many reads of a buffer each (an alpha layer matched over the model's sky), so where its
+    /// run's buffer is much finer than it needs it may be drawn beforehand into a buffer of its
+    /// own, which is then composited into the run's buffer in its place.
+    pub own_buffer: Option<OwnBuffer>,
+}
+
+/// A buffer of its own for a costly layer drawn apart from its run ([`Caps::own_buffer`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OwnBuffer {
+    /// Frame pixels per buffer pixel.
+    pub divisor: Divisor,
+    /// Frame pixels (x, y, width, height) that hold every pixel the layer covers (a band's rows),
+    /// where its composite into the run's buffer is confined; None: the whole frame.
+    pub covers: Option<[u32; 4]>,
 }
 
 /// How one draw reaches the frame: chosen by the frame plan, carried out by [`Pass::draw`].

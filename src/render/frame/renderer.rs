@@ -155,6 +155,9 @@ pub struct FrameStats {
     pub seed_folded: bool,
     /// Pairs of reduced layers drawn at once ([`AtOnce`](crate::render::plan::strategy::LayerPairs::AtOnce)).
     pub layers_paired: u32,
+    /// Costly layers drawn apart from their runs into buffers of their own
+    /// ([`OwnBuffer`](crate::render::plan::strategy::CostlyLayers::OwnBuffer)).
+    pub own_buffers: u32,
     /// Triangles of texel polygons drawn in place of a sparse stage's sample
     /// ([`TexelPolygons`](crate::render::plan::strategy::SparseStages::TexelPolygons)).
     pub texel_triangles: u32,
@@ -421,10 +424,11 @@ impl SkyRenderer {
         stats.background_fused = matches!(plan.background, Some(plan::Background::Fused { .. }));
         stats.seed_folded = plan.seed_folded;
         stats.layers_paired = plan.layers_paired;
+        stats.own_buffers = plan.own_buffers.len() as u32;
         stats.clears_skipped = u32::from(!plan.clear_color) + u32::from(!plan.clear_depth);
         if let (false, Some(layers)) = (plan.runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
             let joining = if plan.seeded { Joining::Seeded } else { Joining::Combined(&plan.combined) };
-            layers.ensure(&ctx.device, &ctx.queue, (w, h), kind, &plan.divisors(), joining);
+            layers.ensure(&ctx.device, &ctx.queue, ((w, h), kind), &plan.divisors(), joining, &plan.own_buffers.iter().map(|o| o.divisor).collect::<Vec<_>>());
         }
         if let Some(t) = self.timer.as_mut() {
             t.begin_frame();
@@ -589,6 +593,8 @@ impl SkyRenderer {
             RunInput::None => None,
             RunInput::Upper(j) => layers.upper_bind_group(j),
             RunInput::Seed => layers.seed_source(),
+            // Composited by the run's pass itself (`record_runs`), never read by a draw.
+            RunInput::Own(_) => None,
         }
     }
 
@@ -618,7 +624,19 @@ impl SkyRenderer {
         let mut calls = 0;
         let n = plan.runs.len();
         for (r, run) in plan.runs.iter().enumerate() {
-            let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(r == 0, r + 1 == n && (!plan.joined() || plan.seeded)));
+            // The layers the run composites from buffers of their own, drawn into those first.
+            let mut first_pass = r == 0;
+            for step in &run.draws {
+                let RunInput::Own(p) = step.input else { continue };
+                let writes = self.timer.as_mut().and_then(|t| t.reduced_writes(first_pass, false));
+                first_pass = false;
+                let Some(layers) = reduced_layers(&self.passes) else { return calls };
+                let Some(mut rpass) = layers.begin_own(encoder, p, writes) else { continue };
+                rpass.set_bind_group(0, &self.globals.bind_group, &[]);
+                let (i, it) = &plan.items[step.item];
+                calls += self.passes[*i].draw(&mut rpass, it.key, kind, Placement::Reduced, None);
+            }
+            let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(first_pass, r + 1 == n && (!plan.joined() || plan.seeded)));
             let Some(layers) = reduced_layers(&self.passes) else { return calls };
             let Some(mut rpass) = layers.begin(encoder, r, run_writes) else { continue };
             match run.seeding {
@@ -628,7 +646,10 @@ impl SkyRenderer {
             }
             rpass.set_bind_group(0, &self.globals.bind_group, &[]);
             for step in &run.draws {
-                calls += self.record_step(&mut rpass, kind, plan, step);
+                calls += match step.input {
+                    RunInput::Own(p) => layers.composite_own(&mut rpass, &self.globals.bind_group, kind, (p, plan.own_buffers[p].covers), run.divisor),
+                    _ => self.record_step(&mut rpass, kind, plan, step),
+                };
             }
         }
         if let (true, false) = (plan.joined(), plan.seeded) {

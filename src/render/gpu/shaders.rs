@@ -126,10 +126,10 @@ pub fn fullscreen_pipeline(
     format: wgpu::TextureFormat,
 ) -> RenderResult<wgpu::RenderPipeline> {
     let module = module(device, library, name)?;
-    fullscreen_pipeline_of(device, &module, "fs_main", layout, label, format)
+    fullscreen_pipeline_of(device, &module, "fs_main", layout, label, format, None)
 }
 
-/// As [`fullscreen_pipeline`], from a module already made and with fragment entry `entry`.
+/// As [`fullscreen_pipeline`], from a module already made, with fragment entry `entry` and `blend`.
 pub fn fullscreen_pipeline_of(
     device: &wgpu::Device,
     module: &wgpu::ShaderModule,
@@ -137,6 +137,7 @@ pub fn fullscreen_pipeline_of(
     layout: &wgpu::PipelineLayout,
     label: &str,
     format: wgpu::TextureFormat,
+    blend: Option<wgpu::BlendState>,
 ) -> RenderResult<wgpu::RenderPipeline> {
     validated(device, label, || {
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -149,7 +150,7 @@ pub fn fullscreen_pipeline_of(
             fragment: Some(wgpu::FragmentState {
                 module,
                 entry_point: Some(entry),
-                targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
+                targets: &[Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL })],
                 compilation_options: Default::default(),
             }),
             multiview_mask: None,

@@ -48,6 +48,14 @@ const COMPOSITE_BLEND: wgpu::BlendState = wgpu::BlendState {
     alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
 };
 
+/// The blend of a buffer composited into a run's buffer ([`ReducedLayersPass::composite_own`]):
+/// colour + transmittance x the run's colour, and the transmittances multiplied, as the layers
+/// in that buffer would have left the run's buffer drawn there.
+const INTO_RUN_BLEND: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::SrcAlpha, operation: wgpu::BlendOperation::Add },
+    alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::SrcAlpha, operation: wgpu::BlendOperation::Add },
+};
+
 /// Indices of [`ReducedLayersPass`]'s composite pipelines.
 const COMPOSITE: usize = 0;
 const BACKGROUND: usize = 1;
@@ -96,8 +104,9 @@ pub struct ReducedLayersPass {
     /// Combines two runs into one buffer, the upper over the lower (runs joined across the
     /// billboards between them: [`ReducedLayersPass::record_combined`]): the background's
     /// combination (keeping the upper's transmittance) and one above it (the product); and the
-    /// seed of an upper run's buffer with the lower run ([`ReducedLayersPass::seed`]).
-    combine: Pipelines<[wgpu::RenderPipeline; 3]>,
+    /// seed of an upper run's buffer with the lower run ([`ReducedLayersPass::seed`]); and the
+    /// composite of a layer's own buffer into its run's ([`ReducedLayersPass::composite_own`]).
+    combine: Pipelines<[wgpu::RenderPipeline; 4]>,
     /// Bound as `run_lower` where a buffer was not seeded: black, so nothing is taken off.
     black: wgpu::TextureView,
     /// The composite's uniform (frame pixel to texture coordinates, any divisor).
@@ -113,6 +122,8 @@ pub struct ReducedLayersPass {
     /// This frame joins two runs by seeding the upper's buffer with the lower: the upper's
     /// buffer ends as their combination, and `combined` is empty.
     seeded: bool,
+    /// The buffers of layers drawn apart from their runs (`RunInput::Own` in the frame plan).
+    own: Vec<RunBuffer>,
     /// What the composite uniform holds.
     uniform_written: CompositeUniform,
 }
@@ -160,6 +171,7 @@ impl ReducedLayersPass {
             buffers: Vec::new(),
             combined: Vec::new(),
             seeded: false,
+            own: Vec::new(),
             uniform_written: CompositeUniform { uv_from_pixel: [0.0; 4] },
         })
     }
@@ -177,14 +189,15 @@ impl ReducedLayersPass {
         ])
     }
 
-    fn build_combine(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 3]> {
+    fn build_combine(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<[wgpu::RenderPipeline; 4]> {
         let module = shaders::module(b.device, b.library, "reduced_layers")?;
         let format = reduced_format(b.target);
         Ok([
-            shaders::fullscreen_pipeline_of(b.device, &module, "fs_combine", layout, "ReducedLayers::combine_pipeline", format)?,
-            shaders::fullscreen_pipeline_of(b.device, &module, "fs_combine_above", layout, "ReducedLayers::combine_above_pipeline", format)?,
+            shaders::fullscreen_pipeline_of(b.device, &module, "fs_combine", layout, "ReducedLayers::combine_pipeline", format, None)?,
+            shaders::fullscreen_pipeline_of(b.device, &module, "fs_combine_above", layout, "ReducedLayers::combine_above_pipeline", format, None)?,
             // The lower run's colour, transmittance 1: what the upper run's layers then go over.
-            shaders::fullscreen_pipeline_of(b.device, &module, "fs_background", layout, "ReducedLayers::seed_pipeline", format)?,
+            shaders::fullscreen_pipeline_of(b.device, &module, "fs_background", layout, "ReducedLayers::seed_pipeline", format, None)?,
+            shaders::fullscreen_pipeline_of(b.device, &module, "fs_main", layout, "ReducedLayers::into_run_pipeline", format, Some(INTO_RUN_BLEND))?,
         ])
     }
 
@@ -193,9 +206,10 @@ impl ReducedLayersPass {
         (divisor.buffer_len(width), divisor.buffer_len(height))
     }
 
-    /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, and how the joined
-    /// runs are combined (`joining`), for the frame size and target.
-    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, size: (u32, u32), target: Target, divisors: &[Divisor], joining: Joining<'_>) {
+    /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, how the joined runs
+    /// are combined (`joining`), and the buffers of layers drawn apart from their runs (`own`),
+    /// for the frame size and target.
+    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, (size, target): ((u32, u32), Target), divisors: &[Divisor], joining: Joining<'_>, own: &[Divisor]) {
         let (combined, seeded) = match joining {
             Joining::Combined(divisors) => (divisors, false),
             Joining::Seeded => (&[][..], true),
@@ -203,6 +217,7 @@ impl ReducedLayersPass {
         if self.made_for != (size, target) {
             self.buffers.clear();
             self.combined.clear();
+            self.own.clear();
             self.made_for = (size, target);
         }
         // Each buffer holds the whole frame (its viewport is the whole buffer, even where the
@@ -230,6 +245,10 @@ impl ReducedLayersPass {
         combinations.truncate(combined.len());
         self.fit(device, &mut combinations, "ReducedLayers::combined", combined);
         self.combined = combinations;
+        let mut apart = std::mem::take(&mut self.own);
+        apart.truncate(own.len());
+        self.fit(device, &mut apart, "ReducedLayers::own", own);
+        self.own = apart;
     }
 
     /// Makes `list[k]` a buffer at `divisors[k]` for every k, keeping those already at theirs;
@@ -291,7 +310,7 @@ impl ReducedLayersPass {
     /// need run 1's own colour, take C0 off again (`run_alone_at` in shaders/reduced/run.wgsl).
     pub fn seed(&self, rpass: &mut wgpu::RenderPass<'_>, globals: &wgpu::BindGroup, target: Target) -> u32 {
         let Some(lower) = self.buffers.first().filter(|_| self.seeded) else { return 0 };
-        let [_, _, seed] = self.combine.for_target(target);
+        let [_, _, seed, _] = self.combine.for_target(target);
         rpass.set_pipeline(seed);
         rpass.set_bind_group(0, globals, &[]);
         rpass.set_bind_group(1, &lower.bind_group, &[]);
@@ -309,19 +328,11 @@ impl ReducedLayersPass {
 
     /// [`Self::seed`] confined to the buffer pixels under frame pixels `[x, y, width, height]`
     /// (rounded outwards): where the first layer drawn over the seed does not reach.
-    pub fn seed_within(&self, rpass: &mut wgpu::RenderPass<'_>, globals: &wgpu::BindGroup, target: Target, [x, y, w, h]: [u32; 4]) -> u32 {
+    pub fn seed_within(&self, rpass: &mut wgpu::RenderPass<'_>, globals: &wgpu::BindGroup, target: Target, gap: [u32; 4]) -> u32 {
         let Some(upper) = self.buffers.get(1) else { return 0 };
         let (bw, bh) = Self::buffer_size(self.made_for.0, upper.divisor);
-        let (fw, fh) = self.made_for.0;
-        // Buffer pixel b covers frame pixels [b fw / bw, (b + 1) fw / bw).
-        let lo = |p: u32, frame: u32, buffer: u32| (u64::from(p) * u64::from(buffer) / u64::from(frame.max(1))) as u32;
-        let hi = |p: u32, frame: u32, buffer: u32| (u64::from(p) * u64::from(buffer)).div_ceil(u64::from(frame.max(1))) as u32;
-        let (x0, y0) = (lo(x, fw, bw).min(bw), lo(y, fh, bh).min(bh));
-        let (x1, y1) = (hi(x + w, fw, bw).min(bw), hi(y + h, fh, bh).min(bh));
-        if x1 <= x0 || y1 <= y0 {
-            return 0;
-        }
-        rpass.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
+        let Some([x0, y0, w, h]) = self.buffer_rect(upper.divisor, gap) else { return 0 };
+        rpass.set_scissor_rect(x0, y0, w, h);
         let n = self.seed(rpass, globals, target);
         rpass.set_scissor_rect(0, 0, bw, bh);
         n
@@ -338,7 +349,7 @@ impl ReducedLayersPass {
         target: Target,
         mut timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> u32 {
-        let [background, above, _] = self.combine.for_target(target);
+        let [background, above, _, _] = self.combine.for_target(target);
         let mut draws = 0;
         for (j, out) in self.combined.iter().enumerate().rev() {
             let (Some(lower), Some(upper)) = (self.buffers.get(j), self.upper_bind_group(j + 1)) else { return draws };
@@ -367,6 +378,46 @@ impl ReducedLayersPass {
             None if j == self.combined.len() => self.buffers.get(j).map(|b| &b.bind_group),
             None => None,
         }
+    }
+
+    /// Begins the render pass that draws a layer into own buffer `p` (cleared to nothing in
+    /// front), before the pass of the run it belongs to.
+    pub fn begin_own<'e>(&self, encoder: &'e mut wgpu::CommandEncoder, p: usize, timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>) -> Option<wgpu::RenderPass<'e>> {
+        Some(self.begin_into(encoder, self.own.get(p)?, "ReducedLayers::own", timestamp_writes))
+    }
+
+    /// Composites own buffer `p` into the run's buffer whose pass `rpass` is, in the place of the
+    /// layer drawn into it: one full-screen triangle, upsampled bilinearly, blended as the
+    /// layer's own blend would have left the run's buffer ([`INTO_RUN_BLEND`]), confined to the
+    /// buffer pixels under frame pixels `covers` where given. The caller sets the bind groups of
+    /// the run's next draw again.
+    pub fn composite_own(&self, rpass: &mut wgpu::RenderPass<'_>, globals: &wgpu::BindGroup, target: Target, (p, covers): (usize, Option<[u32; 4]>), run: Divisor) -> u32 {
+        let Some(own) = self.own.get(p) else { return 0 };
+        let (bw, bh) = Self::buffer_size(self.made_for.0, run);
+        let Some([x, y, w, h]) = covers.map_or(Some([0, 0, bw, bh]), |c| self.buffer_rect(run, c)) else { return 0 };
+        let [_, _, _, into_run] = self.combine.for_target(target);
+        rpass.set_pipeline(into_run);
+        rpass.set_bind_group(0, globals, &[]);
+        rpass.set_bind_group(1, &own.bind_group, &[]);
+        // Not read; the layout has the group.
+        rpass.set_bind_group(2, &own.bind_group, &[]);
+        rpass.set_scissor_rect(x, y, w, h);
+        rpass.draw(0..3, 0..1);
+        rpass.set_scissor_rect(0, 0, bw, bh);
+        1
+    }
+
+    /// The pixels of a buffer at `divisor` under frame pixels `[x, y, width, height]` (rounded
+    /// outwards), as a scissor rectangle; None when empty.
+    fn buffer_rect(&self, divisor: Divisor, [x, y, w, h]: [u32; 4]) -> Option<[u32; 4]> {
+        let (bw, bh) = Self::buffer_size(self.made_for.0, divisor);
+        let (fw, fh) = self.made_for.0;
+        // Buffer pixel b covers frame pixels [b fw / bw, (b + 1) fw / bw).
+        let lo = |p: u32, frame: u32, buffer: u32| (u64::from(p) * u64::from(buffer) / u64::from(frame.max(1))) as u32;
+        let hi = |p: u32, frame: u32, buffer: u32| (u64::from(p) * u64::from(buffer)).div_ceil(u64::from(frame.max(1))) as u32;
+        let (x0, y0) = (lo(x, fw, bw).min(bw), lo(y, fh, bh).min(bh));
+        let (x1, y1) = (hi(x + w, fw, bw).min(bw), hi(y + h, fh, bh).min(bh));
+        (x1 > x0 && y1 > y0).then_some([x0, y0, x1 - x0, y1 - y0])
     }
 
     /// Begins the render pass that draws run `run` into its buffer (cleared to nothing in front:
@@ -427,6 +478,7 @@ impl Pass for ReducedLayersPass {
         if self.made_for.0 != cx.size {
             self.buffers.clear();
             self.combined.clear();
+            self.own.clear();
             self.made_for = ((0, 0), Target::Display);
         }
     }

@@ -12,7 +12,8 @@
 //!    ([`RunJoining`](crate::render::plan::strategy::RunJoining)); two joined runs seeded rather than combined.
 //! 4. What goes under the background ([`UnderBackground`](crate::render::plan::strategy::UnderBackground)):
 //!    the additive draws after it, and one of them as the background itself.
-//! 5. Inside each run: the seeding of a seeded buffer, its first layer over the seed, pairs.
+//! 5. Inside each run: the seeding of a seeded buffer, its first layer over the seed, pairs, and
+//!    costly layers drawn apart at their own resolution and composited into the run's buffer.
 //! 6. Which clears the frame can skip.
 
 pub mod map_updates;
@@ -23,7 +24,7 @@ pub mod visibility;
 
 use std::ops::Range;
 
-use crate::render::frame::pass::{DrawItem, Placement, Target};
+use crate::render::frame::pass::{DrawItem, OwnBuffer, Placement, Target};
 use crate::render::plan::resolution::Divisor;
 use crate::render::plan::strategy::FillStrategy;
 
@@ -66,6 +67,10 @@ pub enum RunInput {
     Upper(usize),
     /// The seeded buffer's lower run (`ReducedLayersPass::seed_source`).
     Seed,
+    /// Own buffer `p` of the frame ([`SkyPlan::own_buffers`]): the step's item is drawn
+    /// beforehand into it (at [`Placement::Reduced`]), and in its place in the run that buffer is
+    /// composited into the run's ([`crate::render::frame::pass::Caps::own_buffer`]).
+    Own(usize),
 }
 
 /// One draw of the plan: item `item` of [`SkyPlan::items`] at `placement`.
@@ -165,6 +170,8 @@ pub struct SkyPlan {
     pub seed_folded: bool,
     /// Pairs of reduced layers drawn at once.
     pub layers_paired: u32,
+    /// The buffers of layers drawn apart from their runs ([`RunInput::Own`]).
+    pub own_buffers: Vec<OwnBuffer>,
 }
 
 impl SkyPlan {
@@ -254,12 +261,13 @@ pub fn plan(mut items: Vec<(usize, DrawItem)>, strategy: &FillStrategy, facts: F
     });
     let mut seed_folded = false;
     let mut layers_paired = 0;
+    let mut own_buffers = Vec::new();
     let run_plans: Vec<RunPlan> = runs
         .iter()
         .zip(&divisors)
         .enumerate()
         .map(|(r, (&(start, end), &divisor))| {
-            let (seeding, draws, folded) = run_draws(&items, start..end, strategy, r == 1 && seeded);
+            let (seeding, draws, folded) = run_draws(&items, (start..end, divisor), strategy, (r == 1 && seeded, &mut own_buffers));
             seed_folded |= folded;
             layers_paired += draws.iter().filter(|s| matches!(s.placement, Placement::Pair { .. })).count() as u32;
             RunPlan { range: start..end, divisor, seeding, draws }
@@ -285,6 +293,7 @@ pub fn plan(mut items: Vec<(usize, DrawItem)>, strategy: &FillStrategy, facts: F
         clear_depth: !depth_clean,
         seed_folded,
         layers_paired,
+        own_buffers,
     }
 }
 
@@ -304,9 +313,21 @@ fn under_background(items: &[(usize, DrawItem)], runs: &[(usize, usize)], allowe
     }
 }
 
-/// The seeding and draws of the run `range`; `seeded`: the seeded second buffer. Also whether
-/// its first layer went over the seed itself.
-fn run_draws(items: &[(usize, DrawItem)], range: Range<usize>, strategy: &FillStrategy, seeded: bool) -> (Seeding, Vec<Step>, bool) {
+/// A run's buffer is at least this many times finer along each side than a costly layer needs
+/// before the layer goes to a buffer of its own ([`RunInput::Own`]): its fragments then cost a
+/// quarter as many or fewer, and the composite into the run's buffer costs about what a plain
+/// layer's fragment does.
+const OWN_BUFFER_RATIO: f32 = 2.0;
+
+/// The seeding and draws of the run `range` at `divisor`; `seeded`: the seeded second buffer.
+/// Also whether its first layer went over the seed itself. Layers drawn apart from the run get
+/// buffers in `own` ([`RunInput::Own`]).
+fn run_draws(
+    items: &[(usize, DrawItem)],
+    (range, divisor): (Range<usize>, Divisor),
+    strategy: &FillStrategy,
+    (seeded, own): (bool, &mut Vec<OwnBuffer>),
+) -> (Seeding, Vec<Step>, bool) {
     let (start, end) = (range.start, range.end);
     let pair = |k: usize, over_seed: bool| pair_at(items, k, end, over_seed).filter(|_| strategy.pairs_layers());
     let mut draws = Vec::new();
@@ -341,7 +362,15 @@ fn run_draws(items: &[(usize, DrawItem)], range: Range<usize>, strategy: &FillSt
                 k += 2;
             }
             None => {
-                draws.push(Step { item: k, placement: Placement::Reduced, input: RunInput::None });
+                let apart = items[k].1.caps.own_buffer.filter(|o| strategy.own_buffers() && o.divisor.get() >= OWN_BUFFER_RATIO * divisor.get());
+                let input = match apart {
+                    Some(o) => {
+                        own.push(o);
+                        RunInput::Own(own.len() - 1)
+                    }
+                    None => RunInput::None,
+                };
+                draws.push(Step { item: k, placement: Placement::Reduced, input });
                 k += 1;
             }
         }

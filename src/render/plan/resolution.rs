@@ -140,6 +140,13 @@ impl ResolutionFacts {
     pub fn reduces(&self) -> bool {
         self.finest > Divisor::FULL
     }
+
+    /// The coarsest buffer that still resolves a physical model's sky-view map
+    /// ([`SKY_VIEW_TEXELS_PER_DEG`]): what a layer whose colour follows the map (the map's own,
+    /// or one matched over it) may be drawn at.
+    pub fn map_divisor(&self) -> Divisor {
+        Divisor::at_most(self.frame_px_per_deg / SKY_VIEW_TEXELS_PER_DEG, self.finest, self.coarsest)
+    }
 }
 
 /// Texels per degree a physical model's sky-view map holds, for the buffer its layer goes to:
@@ -245,6 +252,7 @@ mod tests {
         assert_eq!(resolution(&layer(&[0.5, 3.0], &[0, 1], BlendMode::Opaque), &f), Resolution::Reduced(Divisor::whole(4)));
         let physical = LayerStages { physical: true, ..layer(&[0.5], &[0], BlendMode::Opaque) };
         assert_eq!(resolution(&physical, &f), Resolution::Reduced(Divisor::whole(6)));
+        assert_eq!(f.map_divisor(), Divisor::whole(6));
         let physical_dense = LayerStages { physical: true, ..layer(&[4.0], &[0], BlendMode::Opaque) };
         assert_eq!(resolution(&physical_dense, &f), Resolution::Reduced(Divisor::whole(3)));
         // Fixed resolutions keep their divisor.

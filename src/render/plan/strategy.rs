@@ -90,6 +90,19 @@ pub enum LayerPairs {
     AtOnce,
 }
 
+/// Where a layer whose fragments cost many reads of a buffer each (an alpha layer matched over a
+/// physical model's sky: a sample of its map and three tone curves) is drawn, when its run's
+/// buffer is much finer than the layer needs (the fog's band in the clouds' buffer).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CostlyLayers {
+    /// In its run's buffer, at the run's resolution.
+    InRun,
+    /// With dome layers in reduced buffers: beforehand, at its own resolution, into a buffer of
+    /// its own, which is then composited into its run's buffer in its place (the same blend;
+    /// the costly fragments on a fraction of the pixels, one read of a buffer on the others).
+    OwnBuffer,
+}
+
 /// Where a frame with a physical sky model is drawn and how its radiance reaches the display.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PhysicalTarget {
@@ -151,6 +164,8 @@ pub struct FillStrategy {
     pub flash: FlashPlacement,
     /// How two neighbouring alpha-blended layers of a run are drawn.
     pub pairs: LayerPairs,
+    /// Where a costly layer of a finer run is drawn.
+    pub costly_layers: CostlyLayers,
     /// How the `precomputed` model's tables are built: at once, or over frames.
     pub table_builds: crate::render::passes::precomputed_tables::TableBuilds,
     /// Where physical-model frames are drawn.
@@ -162,12 +177,13 @@ pub struct FillStrategy {
 }
 
 /// The named presets, for the command line and reports.
-pub const PRESETS: [(&str, FillStrategy); 5] = [
+pub const PRESETS: [(&str, FillStrategy); 6] = [
     ("software", FillStrategy::software()),
     ("plain", FillStrategy::plain()),
     ("software-hdr", FillStrategy::software().with_hdr()),
     ("software-as-painted", FillStrategy { physical_target: PhysicalTarget::DisplayAsPainted, ..FillStrategy::software() }),
     ("software-exact-curves", FillStrategy { display_curves: DisplayCurves::Exact, ..FillStrategy::software() }),
+    ("software-costly-in-run", FillStrategy { costly_layers: CostlyLayers::InRun, ..FillStrategy::software() }),
 ];
 
 impl FillStrategy {
@@ -181,6 +197,7 @@ impl FillStrategy {
             sparse_stages: SparseStages::TexelPolygonsOnBands,
             flash: FlashPlacement::InRun,
             pairs: LayerPairs::AtOnce,
+            costly_layers: CostlyLayers::OwnBuffer,
             // One r-layer of a default table per frame: about half a second each on lavapipe.
             table_builds: crate::render::passes::precomputed_tables::TableBuilds::Spread { slices: 32 },
             // The HDR target and its display phase were 17 to 20 ms of a 25 ms frame at 1280x720.
@@ -204,6 +221,7 @@ impl FillStrategy {
             sparse_stages: SparseStages::Sampled,
             flash: FlashPlacement::OverFrame,
             pairs: LayerPairs::OneByOne,
+            costly_layers: CostlyLayers::InRun,
             table_builds: crate::render::passes::precomputed_tables::TableBuilds::AtOnce,
             physical_target: PhysicalTarget::Hdr,
             map_updates: crate::render::plan::map_updates::MapUpdates::Whole,
@@ -292,6 +310,11 @@ impl FillStrategy {
     /// Whether neighbouring alpha-blended layers of a run are drawn at once.
     pub fn pairs_layers(&self) -> bool {
         self.pairs == LayerPairs::AtOnce
+    }
+
+    /// Whether a costly layer of a finer run is drawn into a buffer of its own.
+    pub fn own_buffers(&self) -> bool {
+        self.costly_layers == CostlyLayers::OwnBuffer
     }
 }
 

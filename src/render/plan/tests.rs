@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::render::frame::pass::Caps;
-use crate::render::plan::strategy::{LayerPairs, RunJoining, UnderBackground};
+use crate::render::plan::strategy::{CostlyLayers, LayerPairs, RunJoining, UnderBackground};
 
 fn item(key: usize, reduced: bool, additive: bool) -> (usize, DrawItem) {
     (0, DrawItem { reduced, additive, divisor: if reduced { Divisor::HALF } else { Divisor::FULL }, ..DrawItem::new(0, key) })
@@ -249,4 +249,31 @@ fn physical_skies_go_to_the_hdr_target_only_when_the_strategy_asks() {
     assert!(matches_hdr_picture(true, &FillStrategy::software()));
     assert!(!matches_hdr_picture(true, &FillStrategy::software().with_hdr()), "on the HDR target the blend itself is the HDR path's");
     assert!(!matches_hdr_picture(true, &FillStrategy { physical_target: PhysicalTarget::DisplayAsPainted, ..FillStrategy::software() }));
+}
+
+#[test]
+fn a_costly_layer_much_coarser_than_its_run_is_drawn_apart() {
+    // The night sky with a matched fog band after the clouds: an eighth's buffer would do for it
+    // (covering the frame's lower 120 rows); the clouds' buffer is a half's.
+    let own = OwnBuffer { divisor: Divisor::EIGHTH, covers: Some([0, 60, 320, 120]) };
+    let mut items = night(true);
+    items.insert(5, (0, DrawItem { priority: 4, reduced: true, divisor: Divisor::EIGHTH, caps: Caps { own_buffer: Some(own), ..Caps::default() }, ..DrawItem::new(4, 6) }));
+    let p = plan(items.clone(), &FillStrategy::software(), FACTS);
+    assert_eq!(p.runs[1].range, 3..6);
+    assert_eq!(p.runs[1].draws[1], Step { item: 5, placement: Placement::Reduced, input: RunInput::Own(0) });
+    assert_eq!(p.own_buffers, [own]);
+    // Its pipeline is the reduced one, drawn into its own buffer.
+    assert!(p.uses().contains(&(0, 6, Placement::Reduced)));
+    // In its run where the strategy says so, or where the run's buffer is less than twice as
+    // fine along each side.
+    let in_run = FillStrategy { costly_layers: CostlyLayers::InRun, ..FillStrategy::software() };
+    let p = plan(items.clone(), &in_run, FACTS);
+    assert!(p.own_buffers.is_empty() && p.runs[1].draws[1].input == RunInput::None);
+    let near = OwnBuffer { divisor: Divisor::whole(3), ..own };
+    items[5].1.caps.own_buffer = Some(near);
+    let p = plan(items.clone(), &FillStrategy::software(), FACTS);
+    assert!(p.own_buffers.is_empty());
+    // A plain layer (no buffer of its own offered) stays in its run.
+    items[5].1.caps.own_buffer = None;
+    assert!(plan(items, &FillStrategy::software(), FACTS).own_buffers.is_empty());
 }

@@ -37,7 +37,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 
 use self::texel_quads::{GpuTexelMesh, TexelSource, TexelVertex};
 use crate::render::frame::camera::Camera;
-use crate::render::frame::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
+use crate::render::frame::pass::{Caps, DrawItem, FrameContext, OwnBuffer, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
 use crate::render::frame::renderer::FrameStats;
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::mesh::{outline_mesh, shape_key, shape_mesh, GpuMesh, SkyVertex};
@@ -80,6 +80,9 @@ pub struct SkyObjectsPass {
     /// Dome layers may go to reduced buffers this frame (placements other than their own are
     /// offered only then).
     reduces: bool,
+    /// The coarsest buffer this frame that resolves a physical model's map
+    /// ([`ResolutionFacts::map_divisor`]): the most a matched layer's own buffer may be.
+    map_divisor: Divisor,
     /// Sparse stages are drawn texel by texel this frame ([`crate::render::plan::strategy::SparseStages::TexelPolygons`]).
     texels_on: bool,
     /// The rest of such a draw goes as bands where the polygons stand for the stage
@@ -198,6 +201,7 @@ impl SkyObjectsPass {
             texel_pipelines: HashMap::new(),
             fullscreen_pipelines: HashMap::new(),
             reduces: false,
+            map_divisor: Divisor::FULL,
             texels_on: false,
             bands_on: false,
             missing_pipelines: std::cell::Cell::new(0),
@@ -264,7 +268,24 @@ impl SkyObjectsPass {
             background: [false, true].map(|joined| dome && self.can_place(key, target, Slot::background(joined))),
             background_gap: self.background_gap(key),
             pair_next: next.map(|upper| (upper, [false, true].map(|over_seed| self.can_pair(key, upper, target, over_seed)))),
+            own_buffer: self.own_buffer(key, target),
         }
+    }
+
+    /// The divisor of a buffer of its own for reduced item `key` when its fragments are costly: a
+    /// layer matched over the model's sky (`OVER_MODEL_SKY`: a sample of the map and three tone
+    /// curves each), at its own divisor but no coarser than the map needs, since its colour
+    /// follows the map.
+    fn own_buffer(&self, key: usize, target: Target) -> Option<OwnBuffer> {
+        let e = self.visible.get(key).filter(|e| e.reduced && !e.on_top)?;
+        self.entry_key(e, target, Slot::Plain).filter(|k| k.over_model)?;
+        // A band covers the rows below its top (with the margin of its chords' sag).
+        let top_deg = match self.draws.current.as_ref()?.objects[e.index][e.version].shape {
+            Shape::DomeBand { top_deg, .. } => Some(top_deg.get() + 0.5),
+            _ => None,
+        };
+        let covers = top_deg.filter(|&t| t < self.frame_elevations_deg.1).and_then(|t| self.frame_camera.pixels_below_elevation(self.frame_size, t));
+        Some(OwnBuffer { divisor: e.divisor.min(self.map_divisor), covers })
     }
 
     /// Pixels item `key` leaves uncovered as the background or over a seed: below the dome's
@@ -502,6 +523,7 @@ impl Pass for SkyObjectsPass {
             }
         }
         self.reduces = resolution_facts.reduces();
+        self.map_divisor = resolution_facts.map_divisor();
     }
 
     fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
