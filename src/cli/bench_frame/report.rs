@@ -207,6 +207,8 @@ impl FrameReport<'_> {
         if let Some(p) = &self.physical {
             println!("physical_ratio worst={:.2} median={:.2}", p.still.0, p.still.1);
             println!("physical_ratio_sun_moving worst={:.2} median={:.2}", p.moving.0, p.moving.1);
+            println!("physical_ratio_over_floors worst={:.2} median={:.2}", p.over_floors[0].0, p.over_floors[0].1);
+            println!("physical_ratio_sun_moving_over_floors worst={:.2} median={:.2}", p.over_floors[1].0, p.over_floors[1].1);
         }
         println!("fill_limit_ratio worst={worst:.2} median={med:.2}");
     }
