@@ -222,7 +222,8 @@ fn joined_runs_give_the_same_picture_with_one_composite_less() {
             let combined = h.render(sky, &input, &camera, &RenderOptions { strategy: FillStrategy { runs: RunJoining::Combined, ..joined.strategy }, ..joined }).expect("rendered");
             assert!(!h.renderer.stats.seeded, "{what}");
             let (d, _) = common::diff(&one, &combined, 2);
-            let (share, largest) = over_seed_limits(what);
+            let physical = input.sky_model.map_or(sky.model.kind, |m| m.kind).is_physical();
+            let (share, largest) = over_seed_limits(skytune::render::plan::matches_hdr_picture(physical, &joined.strategy));
             assert!(d.differing < share && d.max <= largest, "{what}: seeded against combined, {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
         }
     }
@@ -274,17 +275,19 @@ fn folded_and_not(h: &mut skytune::render::Headless, sky: &skytune::sky::Sky, wh
     assert!(s.seeded && s.seed_folded, "{what}: folded ({s:?})");
     assert!(t.seeded && !t.seed_folded, "{what}: not folded ({t:?})");
     let (d, _) = common::diff(&one, &two, 2);
-    let (share, largest) = over_seed_limits(what);
+    let physical = input.sky_model.map_or(sky.model.kind, |m| m.kind).is_physical();
+    let (share, largest) = over_seed_limits(skytune::render::plan::matches_hdr_picture(physical, &options.strategy));
     assert!(d.differing < share && d.max <= largest, "{what}: {:.4} of the pixels differ by more than 2 levels (largest {})", d.differing, d.max);
 }
 
 /// How far a frame whose seeded buffer's first layer is drawn over the seed may be from the same
 /// frame drawn otherwise: the share of pixels more than 2 levels off, and the largest difference.
-/// On a display-referred physical frame that layer is blended in radiance over what the seed
-/// shows (`over_seed_in_radiance`), where drawn otherwise it is matched over the model's map: the
-/// seed's 8-bit colour taken back through the tone curve moves a few dark pixels by up to 4 levels.
-fn over_seed_limits(what: &str) -> (f64, u8) {
-    if what.contains("display-referred") {
+/// On a display-referred physical frame matched to the HDR picture (`matched`) that layer is
+/// blended in radiance over what the seed shows (`over_seed_in_radiance`), where drawn otherwise
+/// it is matched over the model's map: the seed's 8-bit colour taken back through the tone curve
+/// moves a few dark pixels by up to 4 levels.
+fn over_seed_limits(matched: bool) -> (f64, u8) {
+    if matched {
         (0.005, 6)
     } else {
         (0.001, 255)
