@@ -272,10 +272,10 @@ impl SkyObjectsPass {
         }
     }
 
-    /// The divisor of a buffer of its own for reduced item `key` when its fragments are costly: a
-    /// layer matched over the model's sky (`OVER_MODEL_SKY`: a sample of the map and three tone
-    /// curves each), at its own divisor but no coarser than the map needs, since its colour
-    /// follows the map.
+    /// A buffer of its own for reduced item `key` when its fragments are costly: a layer matched
+    /// over the model's sky (`OVER_MODEL_SKY`: a sample of the map and three tone curves each).
+    /// Its divisor is the item's own but no coarser than the map needs, since its colour follows
+    /// the map; a band covers the rows below its top.
     fn own_buffer(&self, key: usize, target: Target) -> Option<OwnBuffer> {
         let e = self.visible.get(key).filter(|e| e.reduced && !e.on_top)?;
         self.entry_key(e, target, Slot::Plain).filter(|k| k.over_model)?;
