@@ -140,7 +140,7 @@ fn ms_ground_irradiance(region: u32, atm: Atmosphere, mu_s: f32) -> vec3<f32> {
 // at a point, which changes slowly along a ray (the air's density, which changes fast, is still
 // taken per sample), and its bilinear read, 24 values, is most of a sample's cost on a software
 // rasteriser. Read once for two samples, where they meet, the sky moves by at most 0.7% over 2730
-// cases (cameras 0.2 to 30 km, sun -8 to 89 degrees; docs/sky-models.md) and its map takes 0.6 of
+// cases (cameras 0.2 to 30 km, sun -8 to 89 degrees; docs/sky-models.md) and its map takes 0.71 of
 // the time on lavapipe.
 const MS_SAMPLES_PER_READ: u32 = 2u;
 
