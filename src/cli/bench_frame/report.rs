@@ -76,7 +76,7 @@ impl FrameReport<'_> {
         );
         let _ = writeln!(
             md,
-            "- method: each frame is recorded, submitted and waited for (wall time: on lavapipe the rasterisation itself). The floor is one render pass that clears the same target (rgba8) and draws one full-screen triangle sampling one 128 x 128 texture (`shaders/baseline.wgsl`); floor and sky frames alternate within each case, and the ratio is sky over floor of the same case. The sky is drawn alone, filling the frame (`scene` off: the goal is the sky's cost); the frame with the main-scene stand-in in front of it (terrain and buildings at the horizon: {stand_in_ms:.1} ms more there, median over the horizon cases) is measured in the same alternation, for reference. The timed frames come from a renderer that records no GPU timestamps (the floor records none, and lavapipe charges a sky frame's timestamps about 3% of its time); the phase columns are timestamp medians of the same sky-alone frame drawn by a second renderer that records them, in the same alternation."
+            "- method: each frame is recorded, submitted and waited for (wall time: on lavapipe the rasterisation itself). The floor is one render pass that clears the same target (rgba8) and draws one full-screen triangle sampling one 128 x 128 texture (`shaders/baseline.wgsl`); floor and sky frames alternate within each case, and the ratio is sky over floor of the same case. A sky's copies with physical models (`--sky-models`) are measured with it, their frames in turn, so that each physical frame is measured beside its painted twin; `physical_ratio` is, per case, the median of those pairs' ratios. The sky is drawn alone, filling the frame (`scene` off: the goal is the sky's cost); the frame with the main-scene stand-in in front of it (terrain and buildings at the horizon: {stand_in_ms:.1} ms more there, median over the horizon cases) is measured in the same alternation, for reference. The timed frames come from a renderer that records no GPU timestamps (the floor records none, and lavapipe charges a sky frame's timestamps about 3% of its time); the phase columns are timestamp medians of the same sky-alone frame drawn by a second renderer that records them, in the same alternation."
         );
         let ((worst, med), (scene_worst, scene_med)) = (self.fill, self.scene);
         let _ = writeln!(
@@ -207,8 +207,6 @@ impl FrameReport<'_> {
         if let Some(p) = &self.physical {
             println!("physical_ratio worst={:.2} median={:.2}", p.still.0, p.still.1);
             println!("physical_ratio_sun_moving worst={:.2} median={:.2}", p.moving.0, p.moving.1);
-            println!("physical_ratio_over_floors worst={:.2} median={:.2}", p.over_floors[0].0, p.over_floors[0].1);
-            println!("physical_ratio_sun_moving_over_floors worst={:.2} median={:.2}", p.over_floors[1].0, p.over_floors[1].1);
         }
         println!("fill_limit_ratio worst={worst:.2} median={med:.2}");
     }
