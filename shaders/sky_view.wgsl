@@ -84,7 +84,7 @@ fn cs_exposure(@builtin(local_invocation_index) i: u32) {
     let phi = 2.0 * PI * (f32(i % 8u) + 0.5) / 8.0;
     let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
     let dir = vec3<f32>(sin_theta * cos(phi), cos_theta, sin_theta * sin(phi));
-    radiance_samples[i] = model_radiance(dir, texel_index(sky_view_uv(dir), size));
+    radiance_samples[i] = model_radiance(dir, texel_index(sky_view_uv(dir, params.towards_sun.xyz), size));
     workgroupBarrier();
     if (i == 0u) {
         var mean = vec3<f32>(0.0);
@@ -129,7 +129,7 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let id = vec2<u32>(texel % size.x, texel / size.x);
     let uv = (vec2<f32>(id) + 0.5) / vec2<f32>(size);
-    let dir = sky_view_direction(uv);
+    let dir = sky_view_direction(uv, params.towards_sun.xyz);
     let radiance = model_radiance(dir, texel);
     // Finite in half precision (65504) whatever the exposure.
     work[texel] = vec4<f32>(clamp(radiance * sky_light[0].x, vec3<f32>(0.0), vec3<f32>(60000.0)), 1.0);

@@ -91,7 +91,7 @@ struct ModelSky {
 
 // The model's sky along `dir`, from the sky-view map.
 fn model_sky(dir: vec3<f32>, view_map: texture_2d<f32>, view_sampler: sampler) -> ModelSky {
-    let sky = textureSampleLevel(view_map, view_sampler, sky_view_uv(dir), 0.0).rgb;
+    let sky = textureSampleLevel(view_map, view_sampler, sky_view_uv(dir, globals.towards_sun.xyz), 0.0).rgb;
     return ModelSky(sky, display_from_exposed(sky, frame_tone_mapper()));
 }
 
@@ -245,7 +245,7 @@ fn material(
     // stage's colour then counts as white in its term.
     var view = vec3<f32>(1.0);
     if view_stage(l, d) < 4u {
-        view = textureSample(view_map, view_sampler, sky_view_uv(at.world_dir)).rgb;
+        view = textureSample(view_map, view_sampler, sky_view_uv(at.world_dir, globals.towards_sun.xyz)).rgb;
     }
     var acc = Terms(vec4<f32>(0.0), vec4<f32>(0.0), false, false);
     if count > 0u { acc = fold_stage(l, d, acc, 0u, stage_sample(l, d, 0u, t0, s0, at), view); }

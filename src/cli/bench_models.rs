@@ -186,7 +186,7 @@ fn measure_draws(ctx: &GpuContext, (w, h): (u32, u32), sky: &Sky, draws: &[Draw]
         .collect())
 }
 
-/// CPU ms to fill the 192 x 108 sky-view map from a prepared CPU point (one thread).
+/// CPU ms to fill the sky-view map from a prepared CPU point (one thread).
 fn cpu_fill_ms(ev: &Evaluator<'_>, prepared: &Prepared) -> anyhow::Result<f64> {
     if matches!(prepared, Prepared::Gpu(_) | Prepared::Analytic(..) | Prepared::Baked(_)) {
         return Ok(0.0);
@@ -445,6 +445,7 @@ fn report(
     (w, h): (u32, u32),
     seconds: f64,
 ) -> String {
+    let (mw, mh) = skytune::render::frame::pass::SharedResources::SKY_VIEW_SIZE;
     let mut md = String::new();
     let _ = writeln!(md, "# Sky models: speed against accuracy\n");
     let _ = writeln!(
@@ -498,7 +499,7 @@ fn report(
     let _ = writeln!(
         md,
         "- cost, every point in the same run, in {} interleaved rounds ({} measured frames per point and case, medians):\n  \
-         - **model**: what the model itself costs per frame, the GPU time (timestamp queries) of the compute phase of a {w}x{h} frame that draws only the skydome: its sky-view map, and for `lut` its tables, recomputed when the sun moves, reused when it is still; plus the CPU time of CPU paths when the sun moves (filling the 192x108 sky-view map on one thread);\n  \
+         - **model**: what the model itself costs per frame, the GPU time (timestamp queries) of the compute phase of a {w}x{h} frame that draws only the skydome: its sky-view map, and for `lut` its tables, recomputed when the sun moves, reused when it is still; plus the CPU time of CPU paths when the sun moves (filling the {mw}x{mh} sky-view map on one thread);\n  \
          - **frame**: a whole {w}x{h} frame of the built-in sky drawn with the model (every layer, no scene stand-in, as `skytune bench frame`), wall time (lavapipe rasterises on the CPU), as a multiple of the fill-rate floor measured alternately in the same run (`shaders/baseline.wgsl`: one full-screen triangle sampling one texture); the CPU time above is added when the sun moves;\n  \
          - one-off: building tables (`lut`, `precomputed`: tables + one case, wall; `precomputed` frames are measured once, with the small tables, since every size is looked up alike), solving (`cells`), fitting (analytic models), baking. `kind = \"auto\"` ranks candidates by the whole frame with the sun moving.\n",
         3,

@@ -35,12 +35,6 @@ pub struct PathRow {
     pub rel_rmse: [f64; 3],
 }
 
-/// Compass azimuths of the sun the map is measured with: between two texel columns (the map's
-/// texel centres straddle azimuth 0) and on one.
-fn sun_azimuths_deg(map_width: usize) -> [f64; 2] {
-    [0.0, 180.0 / map_width as f64]
-}
-
 /// Per-pixel and through-the-map rows of each `auto` candidate among `points` that is a
 /// `precomputed` setting, over the default atmosphere at `suns`; `by_sun` holds the per-pixel
 /// errors already measured (the probe looks the model up per direction).
@@ -57,12 +51,10 @@ pub fn measure(ev: &Evaluator<'_>, reference: &ReferenceDome, suns: &[f64], poin
         let mut errors = Vec::new();
         for &s in suns {
             let r = reference.sun(Haze::Default, s).with_context(|| format!("the reference has no default sun {s}"))?;
-            for sun_az in sun_azimuths_deg(size.0) {
-                let cases: Vec<Case> = texels.iter().map(|(e, a)| case(s, *e, a - sun_az)).collect();
-                let map = SkyViewMap::new(size, &ev.gpu(&p.method, &atm, 0.0, &cases)?);
-                let model: Vec<Rgb> = dirs.iter().map(|d| map.sample(d.elev_deg, sun_az + d.rel_az_deg)).collect();
-                errors.push((s, dome::dome_error(&dirs, &r.radiance, &model)));
-            }
+            let cases: Vec<Case> = texels.iter().map(|(e, a)| case(s, *e, *a)).collect();
+            let map = SkyViewMap::new(size, &ev.gpu(&p.method, &atm, 0.0, &cases)?);
+            let model: Vec<Rgb> = dirs.iter().map(|d| map.sample(d.elev_deg, d.rel_az_deg)).collect();
+            errors.push((s, dome::dome_error(&dirs, &r.radiance, &model)));
         }
         let per_pixel: Vec<(f64, dome::DomeError)> =
             by_sun.iter().filter(|r| r.id == p.id && r.haze == Haze::Default.name() && suns.contains(&r.sun_elev_deg)).map(|r| (r.sun_elev_deg, r.error)).collect();
@@ -107,7 +99,7 @@ pub fn markdown(rows: &[PathRow], frame: (u32, u32)) -> String {
     let _ = writeln!(md, "\n## Per-pixel lookup against the sky-view map (`precomputed`)\n");
     let _ = writeln!(
         md,
-        "Frames draw `precomputed` through the {mw}x{mh} sky-view map: the model is looked up at the map's texels and the skydome samples the map (rgba16float, bilinear). The alternative is a lookup per pixel. Accuracy: the default atmosphere over the dome at every sun elevation of this run; through the map, the map is filled on the radiance probe, stored as half floats and sampled bilinearly on the CPU (`skytune::measure::sky_view_map`, a twin of the shader's layout), with the sun's azimuth between two texel columns and on one (mean of both). Cost: wall ms of the lookups on the radiance probe for the map's texels and for a {}x{} frame's pixels, the sun at 30 degrees, median of 3 interleaved (including moving the cases and the results, which grow alike).\n",
+        "Frames draw `precomputed` through the {mw}x{mh} sky-view map: the model is looked up at the map's texels and the skydome samples the map (rgba16float, bilinear). The alternative is a lookup per pixel. Accuracy: the default atmosphere over the dome at every sun elevation of this run; through the map, the map is filled on the radiance probe, stored as half floats and sampled bilinearly on the CPU (`skytune::measure::sky_view_map`, a twin of the shader's layout: azimuth from the sun's over half the circle). Cost: wall ms of the lookups on the radiance probe for the map's texels and for a {}x{} frame's pixels, the sun at 30 degrees, median of 3 interleaved (including moving the cases and the results, which grow alike).\n",
         frame.0, frame.1
     );
     let _ = write!(md, "| point | drawn | lookups per frame | lookup wall ms | PSNR dB |");

@@ -4,20 +4,22 @@
 
 use crate::atmosphere::Rgb;
 
-/// (u, v) of the direction at `elev_deg` above the horizon and compass azimuth `azimuth_deg`
-/// (-180..180): u the azimuth (wraps), v the elevation with the horizon at 0.5 and v - 0.5 going
-/// as the square root of the elevation. Keep in sync with `sky_view_uv` in
-/// shaders/sky_model/sky_view_map.wgsl.
-pub fn map_uv(elev_deg: f64, azimuth_deg: f64) -> (f64, f64) {
+/// (u, v) of the direction at `elev_deg` above the horizon and `rel_azimuth_deg` from the sun's
+/// azimuth (either way; any angle): u the azimuth from the sun's over half the circle (0 towards
+/// the sun, 1 away from it: the sky is symmetric about the sun's vertical plane), v the elevation
+/// with the horizon at 0.5 and v - 0.5 going as the square root of the elevation. Keep in sync with
+/// `sky_view_uv` in shaders/sky_model/sky_view_map.wgsl.
+pub fn map_uv(elev_deg: f64, rel_azimuth_deg: f64) -> (f64, f64) {
     let e = elev_deg.signum() * (elev_deg.abs() / 90.0).sqrt();
-    (azimuth_deg / 360.0 + 0.5, 0.5 - 0.5 * e)
+    let from_sun = (rel_azimuth_deg + 180.0).rem_euclid(360.0) - 180.0;
+    (from_sun.abs() / 180.0, 0.5 - 0.5 * e)
 }
 
-/// The direction (elevation, compass azimuth; degrees) at (u, v): the inverse of [`map_uv`]
-/// (`sky_view_direction` in the shader).
+/// The direction (elevation, azimuth from the sun's, 0 to 180; degrees) at (u, v): the inverse
+/// of [`map_uv`] (`sky_view_direction` in the shader).
 pub fn map_direction(u: f64, v: f64) -> (f64, f64) {
     let e = (0.5 - v) * 2.0;
-    (e.signum() * e * e * 90.0, (u - 0.5) * 360.0)
+    (e.signum() * e * e * 90.0, u * 180.0)
 }
 
 /// `x` rounded to the nearest half float, as an rgba16float texel stores it (the map holds
@@ -38,8 +40,8 @@ pub struct SkyViewMap {
 }
 
 impl SkyViewMap {
-    /// Directions (elevation, compass azimuth; degrees) of the texel centres of a `size` map,
-    /// row-major: what a model is evaluated at to fill it.
+    /// Directions (elevation, azimuth from the sun's; degrees) of the texel centres of a `size`
+    /// map, row-major: what a model is evaluated at to fill it.
     pub fn texel_directions(size: (usize, usize)) -> Vec<(f64, f64)> {
         let (w, h) = size;
         (0..w * h).map(|k| map_direction(((k % w) as f64 + 0.5) / w as f64, ((k / w) as f64 + 0.5) / h as f64)).collect()
@@ -51,16 +53,16 @@ impl SkyViewMap {
         Self { size, texels: radiance.iter().map(|c| c.map(round_to_half)).collect() }
     }
 
-    /// The map sampled bilinearly at a direction, as the skydome's linear sampler does (u
-    /// repeats, v clamps to the edge).
-    pub fn sample(&self, elev_deg: f64, azimuth_deg: f64) -> Rgb {
+    /// The map sampled bilinearly at a direction (elevation, azimuth from the sun's; degrees), as
+    /// the skydome's linear sampler does (both axes clamp to the edge).
+    pub fn sample(&self, elev_deg: f64, rel_azimuth_deg: f64) -> Rgb {
         let (w, h) = self.size;
-        let (u, v) = map_uv(elev_deg, azimuth_deg);
-        let x = u * w as f64 - 0.5;
+        let (u, v) = map_uv(elev_deg, rel_azimuth_deg);
+        let x = (u * w as f64 - 0.5).clamp(0.0, (w - 1) as f64);
         let y = (v * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
-        let col = |i: f64| (i as i64).rem_euclid(w as i64) as usize;
+        let col = |i: f64| (i as usize).min(w - 1);
         let row = |j: f64| (j as usize).min(h - 1);
         let at = |i: f64, j: f64| self.texels[row(j) * w + col(i)];
         let (a, b, c, d) = (at(x0, y0), at(x0 + 1.0, y0), at(x0, y0 + 1.0), at(x0 + 1.0, y0 + 1.0));
@@ -74,13 +76,17 @@ mod tests {
 
     #[test]
     fn uv_and_direction_are_inverse_and_the_horizon_is_the_middle() {
-        for (e, a) in [(0.0, 0.0), (1.0, -170.0), (-4.0, 33.0), (45.0, 90.0), (89.0, 179.0)] {
+        for (e, a) in [(0.0, 0.0), (1.0, 170.0), (-4.0, 33.0), (45.0, 90.0), (89.0, 179.0)] {
             let (u, v) = map_uv(e, a);
             let (e2, a2) = map_direction(u, v);
             assert!((e - e2).abs() < 1e-9 && (a - a2).abs() < 1e-9, "{e} {a} -> {e2} {a2}");
         }
-        assert_eq!(map_uv(0.0, 0.0), (0.5, 0.5));
-        assert_eq!(map_uv(90.0, -180.0), (0.0, 0.0));
+        assert_eq!(map_uv(0.0, 0.0), (0.0, 0.5), "towards the sun, at the horizon");
+        assert_eq!(map_uv(90.0, 180.0), (1.0, 0.0), "away from the sun, overhead");
+        // Either side of the sun's plane, and any turn, reads the same texel.
+        for a in [-33.0, 327.0, -393.0] {
+            assert!((map_uv(10.0, a).0 - map_uv(10.0, 33.0).0).abs() < 1e-12, "{a}");
+        }
     }
 
     #[test]
@@ -108,8 +114,9 @@ mod tests {
         let a1 = dirs[3].1;
         let mid = map.sample(e, 0.5 * (a0 + a1));
         assert!((mid[0] - 3.5).abs() < 1e-9, "{mid:?}");
-        // Past the last column, u wraps to the first.
-        let wrap = map.sample(e, 179.99);
-        assert!(wrap[0] > 1.0 && wrap[0] < 8.0, "{wrap:?}");
+        // Past the last column's centre, towards 180 degrees, the last column (the sky is
+        // symmetric about it); the same before the first.
+        assert!((map.sample(e, 179.99)[0] - 8.0).abs() < 1e-9);
+        assert!((map.sample(e, 0.01)[0] - 1.0).abs() < 1e-9);
     }
 }

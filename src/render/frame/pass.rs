@@ -111,13 +111,15 @@ pub struct SharedResources {
     pub sky_view: wgpu::Texture,
     /// Its view.
     pub sky_view_view: wgpu::TextureView,
-    /// Its sampler: azimuth wraps, elevation clamps.
+    /// Its sampler: both clamp (the azimuth's ends, towards the sun and away from it, are the
+    /// sky's planes of symmetry).
     pub sky_view_sampler: wgpu::Sampler,
 }
 
 impl SharedResources {
-    /// Size of the sky-view map, texels (Hillaire 2020's sky-view LUT size).
-    pub const SKY_VIEW_SIZE: (u32, u32) = (192, 108);
+    /// Size of the sky-view map, texels: Hillaire 2020's sky-view LUT's 192 x 108 over half the
+    /// circle of azimuth (shaders/sky_model/sky_view_map.wgsl), 1.9 degrees a column.
+    pub const SKY_VIEW_SIZE: (u32, u32) = (96, 108);
     /// Format of the sky-view map: linear radiance above 1 near the sun must survive.
     pub const SKY_VIEW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
@@ -137,7 +139,7 @@ impl SharedResources {
         let sky_view_view = sky_view.create_view(&Default::default());
         let sky_view_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("SkyView::sampler"),
-            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_u: wgpu::AddressMode::ClampToEdge,
             address_mode_v: wgpu::AddressMode::ClampToEdge,
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,

@@ -22,7 +22,7 @@ use crate::atmosphere::reference::{Case, Reference, ReferenceSettings};
 use crate::atmosphere::Atmosphere;
 use crate::sky::resolved::{SkyModel, SkyModelKind};
 
-/// Maps of CPU models kept (each 192 x 108 texels of 16 bytes: 330 KiB).
+/// Maps of CPU models kept (each 96 x 108 texels of 16 bytes: 165 KiB).
 const CPU_CACHE_MAPS: usize = 16;
 
 /// Bytes of one sky-view texel ([`SharedResources::SKY_VIEW_FORMAT`]).
@@ -147,14 +147,14 @@ impl CpuWorker {
                             cells = Some(CellModel::solve(job.atmosphere, job.albedo, settings));
                         }
                         let Some(m) = cells.as_ref() else { continue };
-                        sky_view_radiance([SharedResources::SKY_VIEW_SIZE.0, SharedResources::SKY_VIEW_SIZE.1], &shared, |dir| {
+                        sky_view_radiance([SharedResources::SKY_VIEW_SIZE.0, SharedResources::SKY_VIEW_SIZE.1], job.towards_sun, &shared, |dir| {
                             m.radiance_towards(job.camera_km, dir, job.towards_sun)
                         })
                     }
                     CpuModel::Reference { paths, grid } => {
                         let reference = Reference::new(job.atmosphere, ReferenceSettings { paths, ..Default::default() });
                         let sun = job.towards_sun;
-                        let coarse = sky_view_radiance(grid, &shared, |dir| {
+                        let coarse = sky_view_radiance(grid, sun, &shared, |dir| {
                             let az = |d: glam::DVec3| d.x.atan2(-d.z);
                             let case = Case {
                                 camera_km: job.camera_km,
@@ -183,10 +183,11 @@ impl CpuWorker {
     }
 }
 
-/// Bilinear interpolation of a coarse map (texel centres, azimuth wrapping) onto the sky-view map.
+/// Bilinear interpolation of a coarse map (texel centres, both axes clamped at their ends, as the
+/// map's sampler does) onto the sky-view map.
 fn upsample(coarse: &[[f32; 4]], [gw, gh]: [u32; 2]) -> Vec<[f32; 4]> {
     let (w, h) = SharedResources::SKY_VIEW_SIZE;
-    let at = |x: i64, y: i64| coarse[(y.clamp(0, gh as i64 - 1) as u32 * gw + x.rem_euclid(gw as i64) as u32) as usize];
+    let at = |x: i64, y: i64| coarse[(y.clamp(0, gh as i64 - 1) as u32 * gw + x.clamp(0, gw as i64 - 1) as u32) as usize];
     (0..w * h)
         .map(|k| {
             let (u, v) = ((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
@@ -200,9 +201,11 @@ fn upsample(coarse: &[[f32; 4]], [gw, gh]: [u32; 2]) -> Vec<[f32; 4]> {
         .collect()
 }
 
-/// Radiance of every texel of a `w` x `h` sky-view map (the direction of a texel as in
-/// shaders/sky_model/sky_view_map.wgsl), rows split over the machine's cores; counts progress.
-fn sky_view_radiance([w, h]: [u32; 2], progress: &Progress, radiance: impl Fn(glam::DVec3) -> [f64; 3] + Sync) -> Vec<[f32; 4]> {
+/// Radiance of every texel of a `w` x `h` sky-view map with the sun towards `towards_sun` (the
+/// direction of a texel as `sky_view_direction` in shaders/sky_model/sky_view_map.wgsl), rows
+/// split over the machine's cores; counts progress.
+fn sky_view_radiance([w, h]: [u32; 2], towards_sun: glam::DVec3, progress: &Progress, radiance: impl Fn(glam::DVec3) -> [f64; 3] + Sync) -> Vec<[f32; 4]> {
+    let sun_azimuth = towards_sun.x.atan2(-towards_sun.z);
     let mut out = vec![[0.0f32; 4]; (w * h) as usize];
     progress.done.store(0, Ordering::Relaxed);
     progress.total.store(out.len(), Ordering::Relaxed);
@@ -216,7 +219,7 @@ fn sky_view_radiance([w, h]: [u32; 2], progress: &Progress, radiance: impl Fn(gl
                     let index = chunk_index * rows_per * w as usize + k;
                     let (x, y) = ((index % w as usize) as f64, (index / w as usize) as f64);
                     let (u, v) = ((x + 0.5) / w as f64, (y + 0.5) / h as f64);
-                    let azimuth = (u - 0.5) * std::f64::consts::TAU;
+                    let azimuth = sun_azimuth + u * std::f64::consts::PI;
                     let e = (0.5 - v) * 2.0;
                     let elevation = e.signum() * e * e * std::f64::consts::FRAC_PI_2;
                     let dir = glam::DVec3::new(azimuth.sin() * elevation.cos(), elevation.sin(), -azimuth.cos() * elevation.cos());

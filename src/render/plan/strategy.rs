@@ -202,7 +202,7 @@ impl FillStrategy {
             table_builds: crate::render::passes::precomputed_tables::TableBuilds::Spread { slices: 32 },
             // The HDR target and its display phase were 17 to 20 ms of a 25 ms frame at 1280x720.
             physical_target: PhysicalTarget::DisplayMatched,
-            // The `lut` map costs about 27 ms at 192 x 108 on lavapipe: a twelfth per frame. Each
+            // The `lut` map costs about 9 ms at 96 x 108 on lavapipe: a twelfth per frame. Each
             // map is computed for the sun of the frame that shows it alone, 23 frames on.
             map_updates: crate::render::plan::map_updates::MapUpdates::Spread { slices: 12 },
             // The matched layers' three curves per fragment cost about 3.6 ms at 1280x720 on
