@@ -232,9 +232,20 @@ pub fn run(args: &FrameBenchArgs) -> anyhow::Result<()> {
 const SUN_STEP_HOURS: f32 = 0.02;
 
 impl Case {
-    /// Whether `other` is the same sky, strategy, moment and view (the model aside).
+    /// Whether `other` is the same sky, moment and view (the model and strategy aside).
     fn same_view(&self, other: &Case) -> bool {
         (&self.sky, self.hour, self.weather, self.view) == (&other.sky, other.hour, other.weather, other.view)
+    }
+
+    /// A physical case's frames against its painted twin's among `cases` (same sky, strategy,
+    /// moment and view), frame by frame: the sun still and moving; `None` for a painted case or
+    /// one without a twin.
+    fn against_twin(&self, cases: &[Case]) -> Option<[f64; 2]> {
+        if !self.model.is_physical() {
+            return None;
+        }
+        let twin = cases.iter().find(|o| o.strategy == self.strategy && !o.model.is_physical() && o.same_view(self))?;
+        Some([0, 1].map(|k| paired_ratio(&self.samples[k], &twin.samples[k])))
     }
 }
 
@@ -456,18 +467,12 @@ fn paired_ratio(physical: &[f64], painted: &[f64]) -> f64 {
 
 /// The physical cases of `strategy` against their painted twins; `None` when there are none.
 fn physical_ratios(cases: &[Case], strategy: &str) -> Option<PhysicalRatios> {
-    let of = |c: &&Case| c.strategy == strategy;
-    let pairs: Vec<(&Case, &Case)> = cases
-        .iter()
-        .filter(of)
-        .filter(|c| c.model.is_physical())
-        .filter_map(|c| cases.iter().filter(of).find(|o| !o.model.is_physical() && o.same_view(c)).map(|o| (c, o)))
-        .collect();
+    let pairs: Vec<(&Case, [f64; 2])> = cases.iter().filter(|c| c.strategy == strategy).filter_map(|c| c.against_twin(cases).map(|r| (c, r))).collect();
     if pairs.is_empty() {
         return None;
     }
     let worst_median = |v: Vec<f64>| (v.iter().copied().fold(0.0, f64::max), median(&v));
-    let [still, moving] = [0, 1].map(|k| worst_median(pairs.iter().map(|(p, b)| paired_ratio(&p.samples[k], &b.samples[k])).collect()));
+    let [still, moving] = [0, 1].map(|k| worst_median(pairs.iter().map(|(_, r)| r[k]).collect()));
     Some(PhysicalRatios { still, moving, floor: worst_median(pairs.iter().map(|(p, _)| p.sky_ms / p.floor_ms).collect()), count: pairs.len() })
 }
 

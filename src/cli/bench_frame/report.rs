@@ -94,8 +94,9 @@ impl FrameReport<'_> {
         md
     }
 
-    /// One row per case, with a column for every phase any case drew (rain's and the compute
-    /// phase's only in some), in the order met.
+    /// One row per case (a physical one also against its painted twin, frame by frame), with a
+    /// column for every phase any case drew (rain's and the compute phase's only in some), in the
+    /// order met.
     fn case_table(&self, md: &mut String) {
         let mut phase_names: Vec<&str> = Vec::new();
         for (n, _) in self.cases.iter().flat_map(|c| &c.phases) {
@@ -103,11 +104,14 @@ impl FrameReport<'_> {
                 phase_names.push(n);
             }
         }
-        let _ = write!(md, "| sky | model | strategy | hour | weather | view | frame ms | sun moving ms | floor ms | ratio | with scene ms | ratio with scene |");
+        let _ = write!(
+            md,
+            "| sky | model | strategy | hour | weather | view | frame ms | sun moving ms | floor ms | ratio | with scene ms | ratio with scene | against painted, still / moving |"
+        );
         for n in &phase_names {
             let _ = write!(md, " {n} ms |");
         }
-        let _ = write!(md, "\n|---|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|");
+        let _ = write!(md, "\n|---|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|");
         for _ in &phase_names {
             let _ = write!(md, "---:|");
         }
@@ -115,7 +119,7 @@ impl FrameReport<'_> {
         for c in &self.cases {
             let _ = write!(
                 md,
-                "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} | {:.1} |",
+                "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} | {:.1} | {} |",
                 c.sky,
                 c.model.name(),
                 c.strategy,
@@ -127,7 +131,8 @@ impl FrameReport<'_> {
                 c.floor_ms,
                 c.sky_ms / c.floor_ms,
                 c.with_scene_ms,
-                c.with_scene_ms / c.floor_ms
+                c.with_scene_ms / c.floor_ms,
+                c.against_twin(&self.cases).map_or_else(|| "-".to_string(), |[s, m]| format!("{s:.2} / {m:.2}"))
             );
             for n in &phase_names {
                 let _ = match c.phases.iter().find(|(m, _)| m == n) {
