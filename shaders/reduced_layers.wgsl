@@ -1,4 +1,4 @@
-//! requires: reduced/run
+//! requires: reduced/run, sky_model/tone
 // Composite of a run of dome layers drawn at reduced resolution (src/render/passes/reduced_layers.rs).
 // The run's buffer holds premultiplied colour and, in alpha, the transmittance of the run over
 // what lies behind it; upsampled bilinearly, it goes over the frame as target = colour +
@@ -57,4 +57,14 @@ fn fs_combine_above(in: CompositeOut) -> @location(0) vec4<f32> {
     let lower = textureSampleLevel(layers, layers_sampler, in.uv, 0.0);
     let upper = textureSampleLevel(run_layers, run_sampler, in.uv, 0.0);
     return vec4<f32>(upper.rgb + upper.a * lower.rgb, upper.a * lower.a);
+}
+
+// The lower run of a seeded frame taken back to exposed radiance texel by texel, at its own
+// resolution, on a display-referred physical frame (`ReducedLayersPass::convert_seed`): what the
+// seeded buffer's first layer blends over in radiance (`over_seed_in_radiance`). One inverse curve
+// per texel of the lower run's buffer instead of one per pixel of the layer's finer one.
+@fragment
+fn fs_seed_radiance(in: CompositeOut) -> @location(0) vec4<f32> {
+    let c = textureLoad(layers, vec2<i32>(in.clip.xy), 0);
+    return vec4<f32>(exposed_from_display(c.rgb), c.a);
 }

@@ -57,7 +57,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     // Over the seed, what lies under the layer is known: blended in radiance over it. Where
     // clear, left to `over_seed` below, as `over_model_sky` leaves a clear colour.
     if OVER_MODEL_SKY && OVER_SEED && BLEND_KIND == 1u && color.a >= 1e-3 {
-        return over_seed_in_radiance(color.a * shade * exposed_from_display(color.rgb), 1.0 - color.a, run_at_seeded(in.clip.xy).rgb);
+        return over_seed_in_radiance(color.a * shade * exposed_from_display(color.rgb), 1.0 - color.a, run_radiance_at_seeded(in.clip.xy));
     }
     if OVER_MODEL_SKY {
         color = over_model_sky(color, shade, in.world_dir, sky_view, sky_view_sampler);

@@ -483,7 +483,10 @@ fn a_physical_night_sky_drawn_in_parts_is_the_one_drawn_whole() {
         let parts = h.render(&sky, &input, &camera, &common::hdr_options()).unwrap();
         assert!(h.renderer.stats.objects_reduced > 0, "the skydome drawn in parts");
         let (d, _) = common::diff(&parts, &whole, 2);
-        assert!(d.mean < 0.1 && d.differing < 0.001, "hour {hour}: {d:?}");
+        // Looking up, the skydome's run goes to an eighth (the map is that coarse there), where
+        // the galaxy's brightest knot comes out a few levels off full resolution, as on the
+        // painted frame (0.17% of the pixels by more than 2); 8 levels over the frame was the bug.
+        assert!(d.mean < 0.1 && d.differing < 0.004, "hour {hour}: {d:?}");
     }
 }
 

@@ -27,6 +27,13 @@ fn run_at_seeded(pixel: vec2<f32>) -> vec4<f32> {
     return textureSampleLevel(run_layers, run_sampler, pixel * run_composite.uv_from_pixel.zw, 0.0);
 }
 
+// The run's exposed radiance at pixel `pixel` of the buffer it seeds, on a display-referred
+// physical frame: its colour taken back to radiance once, at its own resolution
+// (`ReducedLayersPass::convert_seed`), and bound as `run_lower` of the seed's bind group.
+fn run_radiance_at_seeded(pixel: vec2<f32>) -> vec3<f32> {
+    return textureSampleLevel(run_lower, run_sampler, pixel * run_composite.uv_from_pixel.zw, 0.0).rgb;
+}
+
 // The run alone at frame pixel `pixel`, for draws that lie under it and read its colour: a seeded
 // buffer holds C + T x (the run below), which this takes off again (nothing where not seeded).
 fn run_alone_at(pixel: vec2<f32>) -> vec4<f32> {

@@ -45,7 +45,7 @@ fn fs_pair(in: PairOut) -> @location(0) vec4<f32> {
     if OVER_MODEL_SKY && max(own.a, up.a) >= 1e-3 {
         let over = up.a * exposed_from_display(up.rgb) + (1.0 - up.a) * own.a * exposed_from_display(own.rgb);
         if OVER_SEED {
-            return over_seed_in_radiance(over, through, run_at_seeded(in.clip.xy).rgb);
+            return over_seed_in_radiance(over, through, run_radiance_at_seeded(in.clip.xy));
         }
         let sky = model_sky(in.world_dir, sky_view, sky_view_sampler);
         let matched = matched_alpha_blend(display_from_exposed(over + through * sky.radiance, frame_tone_mapper()), sky.display, 1.0 - through);

@@ -30,13 +30,14 @@ fn over_seed(color: vec4<f32>, pixel: vec2<f32>) -> vec4<f32> {
 }
 
 // The first layer of a seeded buffer on a display-referred physical frame (`OVER_SEED` with
-// `OVER_MODEL_SKY`): the lower run's colour `seed` is what lies under the layer, so the layer's
-// exposed radiance `over` (premultiplied by its coverage) is added to the radiance of what `seed`
-// shows, weighed by the transmittance `through`, and tone-mapped, as the HDR path's blend would
-// leave it there (exact over whatever the lower run holds, not only over the model's sky: no
-// sample of the map, no matching of the colour to it). Written with the transmittance left.
+// `OVER_MODEL_SKY`): the lower run is what lies under the layer, so the layer's exposed radiance
+// `over` (premultiplied by its coverage) is added to the lower run's radiance `seed`
+// (`run_radiance_at_seeded`), weighed by the transmittance `through`, and tone-mapped, as the HDR
+// path's blend would leave it there (exact over whatever the lower run holds, not only over the
+// model's sky: no sample of the map, no matching of the colour to it). Written with the
+// transmittance left.
 fn over_seed_in_radiance(over: vec3<f32>, through: f32, seed: vec3<f32>) -> vec4<f32> {
-    return vec4<f32>(display_from_exposed(over + through * exposed_from_display(seed), frame_tone_mapper()), through);
+    return vec4<f32>(display_from_exposed(over + through * seed, frame_tone_mapper()), through);
 }
 
 // What an additive draw writes as the frame's background (`BACKGROUND`): the run's colour C plus

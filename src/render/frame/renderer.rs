@@ -428,7 +428,9 @@ impl SkyRenderer {
         stats.clears_skipped = u32::from(!plan.clear_color) + u32::from(!plan.clear_depth);
         if let (false, Some(layers)) = (plan.runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
             let joining = if plan.seeded { Joining::Seeded } else { Joining::Combined(&plan.combined) };
-            layers.ensure(&ctx.device, &ctx.queue, ((w, h), kind), &plan.divisors(), joining, &plan.own_buffers.iter().map(|o| o.divisor).collect::<Vec<_>>());
+            // Layers over the seed blend in radiance on a matched frame (`OVER_MODEL_SKY`).
+            let seed_radiance = plan.seed_folded && matched;
+            layers.ensure(&ctx.device, &ctx.queue, ((w, h), kind), &plan.divisors(), (joining, seed_radiance), &plan.own_buffers.iter().map(|o| o.divisor).collect::<Vec<_>>());
         }
         if let Some(t) = self.timer.as_mut() {
             t.begin_frame();
@@ -638,6 +640,9 @@ impl SkyRenderer {
             }
             let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(first_pass, r + 1 == n && (!plan.joined() || plan.seeded)));
             let Some(layers) = reduced_layers(&self.passes) else { return calls };
+            if run.draws.iter().any(|s| s.input == RunInput::Seed) {
+                calls += layers.convert_seed(encoder, &self.globals.bind_group);
+            }
             let Some(mut rpass) = layers.begin(encoder, r, run_writes) else { continue };
             match run.seeding {
                 Seeding::None => {}

@@ -93,6 +93,19 @@ struct RunBuffer {
     reads_lower: bool,
 }
 
+/// The lower run of a seeded frame as exposed radiance ([`ReducedLayersPass::convert_seed`]).
+struct SeedRadiance {
+    view: wgpu::TextureView,
+    /// Reads the lower run (`run_layers`) and its radiance (`run_lower`).
+    bind_group: wgpu::BindGroup,
+    /// The lower run's divisor it was made at.
+    divisor: Divisor,
+}
+
+/// Format of the lower run's radiance ([`ReducedLayersPass::convert_seed`]): exposed radiance
+/// goes above 1.
+const SEED_RADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
 /// The reduced buffers of a frame size and the composite pipelines.
 pub struct ReducedLayersPass {
     layout: wgpu::BindGroupLayout,
@@ -124,6 +137,11 @@ pub struct ReducedLayersPass {
     seeded: bool,
     /// The buffers of layers drawn apart from their runs (`RunInput::Own` in the frame plan).
     own: Vec<RunBuffer>,
+    /// Takes the lower run of a seeded frame back to exposed radiance ([`Self::convert_seed`]).
+    seed_radiance_pipeline: Pipelines<wgpu::RenderPipeline>,
+    /// The lower run's radiance, when this frame converts it, and the bind group that reads the
+    /// lower run with it as `run_lower` (the seed source then).
+    seed_radiance: Option<SeedRadiance>,
     /// What the composite uniform holds.
     uniform_written: CompositeUniform,
 }
@@ -138,7 +156,12 @@ impl ReducedLayersPass {
             bind_group_layouts: &[Some(b.globals_layout), Some(&layout)],
             immediate_size: 0,
         });
-        let pipelines = Pipelines::new_render(b, pipeline_layout, Self::build)?;
+        let pipelines = Pipelines::new_render(b, pipeline_layout.clone(), Self::build)?;
+        // Only display-referred frames convert their seed.
+        let seed_radiance_pipeline = Pipelines::new(b, pipeline_layout, |b, layout| {
+            let module = shaders::module(b.device, b.library, "reduced_layers")?;
+            shaders::fullscreen_pipeline_of(b.device, &module, "fs_seed_radiance", layout, "ReducedLayers::seed_radiance_pipeline", SEED_RADIANCE_FORMAT, None)
+        })?;
         // Two runs read at once (group 1 the lower, group 2 the upper).
         let pair_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("ReducedLayers::pair_pipeline_layout"),
@@ -172,6 +195,8 @@ impl ReducedLayersPass {
             combined: Vec::new(),
             seeded: false,
             own: Vec::new(),
+            seed_radiance_pipeline,
+            seed_radiance: None,
             uniform_written: CompositeUniform { uv_from_pixel: [0.0; 4] },
         })
     }
@@ -207,9 +232,18 @@ impl ReducedLayersPass {
     }
 
     /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, how the joined runs
-    /// are combined (`joining`), and the buffers of layers drawn apart from their runs (`own`),
-    /// for the frame size and target.
-    pub fn ensure(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, (size, target): ((u32, u32), Target), divisors: &[Divisor], joining: Joining<'_>, own: &[Divisor]) {
+    /// are combined (`joining`), the buffers of layers drawn apart from their runs (`own`), and
+    /// whether a seeded frame's lower run is taken back to radiance (`seed_radiance`), for the
+    /// frame size and target.
+    pub fn ensure(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        (size, target): ((u32, u32), Target),
+        divisors: &[Divisor],
+        (joining, seed_radiance): (Joining<'_>, bool),
+        own: &[Divisor],
+    ) {
         let (combined, seeded) = match joining {
             Joining::Combined(divisors) => (divisors, false),
             Joining::Seeded => (&[][..], true),
@@ -218,6 +252,7 @@ impl ReducedLayersPass {
             self.buffers.clear();
             self.combined.clear();
             self.own.clear();
+            self.seed_radiance = None;
             self.made_for = (size, target);
         }
         // Each buffer holds the whole frame (its viewport is the whole buffer, even where the
@@ -240,6 +275,12 @@ impl ReducedLayersPass {
         }
         self.buffers = buffers;
         self.seeded = seeded && self.buffers.len() >= 2;
+        let lower = self.buffers.first().filter(|_| self.seeded && seed_radiance);
+        self.seed_radiance = match (lower, self.seed_radiance.take()) {
+            (Some(lower), Some(kept)) if kept.divisor == lower.divisor && !first_changed => Some(kept),
+            (Some(lower), _) => Some(self.seed_radiance_of(device, lower)),
+            (None, _) => None,
+        };
         // Only the frame's combinations: their count is the chain's length.
         let mut combinations = std::mem::take(&mut self.combined);
         combinations.truncate(combined.len());
@@ -321,9 +362,55 @@ impl ReducedLayersPass {
     }
 
     /// The lower run's bind group, which a seeded buffer's first layer reads as group 2 when it
-    /// is drawn over the seed itself ([`crate::render::frame::pass::Placement::OverSeed`]); None unless seeded.
+    /// is drawn over the seed itself ([`crate::render::frame::pass::Placement::OverSeed`]), with
+    /// its radiance as `run_lower` where this frame converts it; None unless seeded.
     pub fn seed_source(&self) -> Option<&wgpu::BindGroup> {
-        self.buffers.first().filter(|_| self.seeded).map(|b| &b.bind_group)
+        let lower = self.buffers.first().filter(|_| self.seeded)?;
+        Some(self.seed_radiance.as_ref().map_or(&lower.bind_group, |r| &r.bind_group))
+    }
+
+    /// The radiance texture for the lower run's buffer `lower`, and the bind group that reads both.
+    fn seed_radiance_of(&self, device: &wgpu::Device, lower: &RunBuffer) -> SeedRadiance {
+        let (width, height) = Self::buffer_size(self.made_for.0, lower.divisor);
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("ReducedLayers::seed_radiance"),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: SEED_RADIANCE_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let bind_group = self.bind_group(device, "ReducedLayers::seed_radiance", &lower.view, Some(&view));
+        SeedRadiance { view, bind_group, divisor: lower.divisor }
+    }
+
+    /// Between a seeded frame's two runs, where [`Self::ensure`] was asked to: the lower run's
+    /// colour taken back to exposed radiance at its own resolution, which the seeded buffer's
+    /// first layer then blends over (`run_radiance_at_seeded` in shaders/reduced/run.wgsl)
+    /// instead of taking each of its finer pixels back itself. Returns the draws.
+    pub fn convert_seed(&self, encoder: &mut wgpu::CommandEncoder, globals: &wgpu::BindGroup) -> u32 {
+        let (Some(radiance), Some(lower)) = (&self.seed_radiance, self.buffers.first()) else { return 0 };
+        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("ReducedLayers::seed_radiance"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &radiance.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rpass.set_pipeline(self.seed_radiance_pipeline.get());
+        rpass.set_bind_group(0, globals, &[]);
+        rpass.set_bind_group(1, &lower.bind_group, &[]);
+        rpass.draw(0..3, 0..1);
+        1
     }
 
     /// [`Self::seed`] confined to the buffer pixels under frame pixels `[x, y, width, height]`
@@ -464,12 +551,14 @@ impl Pass for ReducedLayersPass {
 
     fn stage_pipelines(&mut self, b: &PassBuild<'_>) -> RenderResult<()> {
         self.pipelines.stage(b)?;
-        self.combine.stage(b)
+        self.combine.stage(b)?;
+        self.seed_radiance_pipeline.stage(b)
     }
 
     fn commit_pipelines(&mut self, accept: bool) {
         self.pipelines.commit(accept);
         self.combine.commit(accept);
+        self.seed_radiance_pipeline.commit(accept);
     }
 
     fn prepare(&mut self, cx: &FrameContext<'_>) {
@@ -479,6 +568,7 @@ impl Pass for ReducedLayersPass {
             self.buffers.clear();
             self.combined.clear();
             self.own.clear();
+            self.seed_radiance = None;
             self.made_for = ((0, 0), Target::Display);
         }
     }

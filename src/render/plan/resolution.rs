@@ -126,14 +126,23 @@ pub struct ResolutionFacts {
     pub coarsest: Divisor,
     /// The finest buffer an alpha-blended layer goes to whole ([`DomeResolution::finest_whole`]).
     pub finest_whole: Divisor,
+    /// Texels per degree the sky-view map holds where the frame shows it densest
+    /// ([`map_texels_per_deg`]).
+    pub map_texels_per_deg: f32,
 }
 
 impl ResolutionFacts {
     /// The facts of a frame `height_px` pixels high with a vertical field of view of
-    /// `fov_y_deg`, at `resolution`.
-    pub fn new(resolution: DomeResolution, height_px: u32, fov_y_deg: f32) -> Self {
+    /// `fov_y_deg`, showing elevations from `elevations_deg.0` to `.1`, at `resolution`.
+    pub fn new(resolution: DomeResolution, height_px: u32, fov_y_deg: f32, elevations_deg: (f32, f32)) -> Self {
         let (finest, coarsest) = resolution.divisors();
-        Self { frame_px_per_deg: height_px as f32 / fov_y_deg.max(1.0), finest, coarsest, finest_whole: resolution.finest_whole() }
+        Self {
+            frame_px_per_deg: height_px as f32 / fov_y_deg.max(1.0),
+            finest,
+            coarsest,
+            finest_whole: resolution.finest_whole(),
+            map_texels_per_deg: map_texels_per_deg(elevations_deg),
+        }
     }
 
     /// Whether any layer may go to a reduced buffer.
@@ -141,16 +150,28 @@ impl ResolutionFacts {
         self.finest > Divisor::FULL
     }
 
-    /// The coarsest buffer that still resolves a physical model's sky-view map
-    /// ([`SKY_VIEW_TEXELS_PER_DEG`]): what a layer whose colour follows the map (the map's own,
-    /// or one matched over it) may be drawn at.
+    /// The coarsest buffer that still resolves a physical model's sky-view map where the frame
+    /// shows it ([`map_texels_per_deg`]): what a layer whose colour follows the map (the map's
+    /// own, or one matched over it) may be drawn at.
     pub fn map_divisor(&self) -> Divisor {
-        Divisor::at_most(self.frame_px_per_deg / SKY_VIEW_TEXELS_PER_DEG, self.finest, self.coarsest)
+        Divisor::at_most(self.frame_px_per_deg / self.map_texels_per_deg, self.finest, self.coarsest)
     }
 }
 
-/// Texels per degree a physical model's sky-view map holds, for the buffer its layer goes to:
-/// its rows 2 degrees above the horizon (square-root spaced, 108 over the sphere) are half a
+/// Texels per degree the sky-view map holds at the elevation nearest the horizon among
+/// `elevations_deg` (lowest, highest in view): its rows, square-root spaced about the horizon
+/// (shaders/sky_model/sky_view_map.wgsl), lie `h / 4 / sqrt(90 e)` to a degree at `e` degrees
+/// from it, at most [`SKY_VIEW_TEXELS_PER_DEG`]. A frame looking up (every elevation above 35
+/// degrees at the zenith) sees a map of half a texel per degree; its columns crowd there only by
+/// the parametrisation, round the pole, not with the sky's detail.
+pub fn map_texels_per_deg((lowest, highest): (f32, f32)) -> f32 {
+    let nearest = if lowest <= 0.0 && highest >= 0.0 { 0.0 } else { lowest.abs().min(highest.abs()) };
+    let rows = crate::render::frame::pass::SharedResources::SKY_VIEW_SIZE.1 as f32;
+    (rows / 4.0 / (90.0 * nearest).max(1e-6).sqrt()).min(SKY_VIEW_TEXELS_PER_DEG)
+}
+
+/// Texels per degree a physical model's sky-view map holds near the horizon, for the buffer its
+/// layer goes to: its rows 2 degrees above the horizon (square-root spaced, 108 over the sphere) are half a
 /// degree apart, its columns 1.9 degrees (96 over half the circle, the other half its mirror). Nearer the horizon the rows
 /// crowd further; there the sky's colour changes over a degree or two, which a buffer pixel of
 /// half a degree still follows (docs/performance-notes.md measures the difference).
@@ -167,7 +188,8 @@ pub struct LayerStages {
     pub live: [bool; MAX_STAGES],
     /// The most texels per degree of view each stage's texture shows anywhere on the shape.
     pub texels_per_deg: [f32; MAX_STAGES],
-    /// A stage is fed by a physical sky model's map, which resolves [`SKY_VIEW_TEXELS_PER_DEG`].
+    /// A stage is fed by a physical sky model's map, which resolves
+    /// [`ResolutionFacts::map_texels_per_deg`].
     pub physical: bool,
     /// How the layer blends over what is below it.
     pub blend: BlendMode,
@@ -203,7 +225,7 @@ pub fn resolution(stages: &LayerStages, facts: &ResolutionFacts) -> Resolution {
     let any_coarse = (0..count).any(|k| coarse[k] && live[k]);
     // The most texels per degree among the stages sampled of `of`.
     let densest = |of: [bool; MAX_STAGES]| (0..count).filter(|&k| of[k] && live[k]).map(|k| stages.texels_per_deg[k]).fold(0.0, f32::max);
-    let density = if stages.physical { densest(coarse).max(SKY_VIEW_TEXELS_PER_DEG) } else { densest(coarse) };
+    let density = if stages.physical { densest(coarse).max(facts.map_texels_per_deg) } else { densest(coarse) };
     let divisor = Divisor::at_most(facts.frame_px_per_deg / density, facts.finest, facts.coarsest);
     match (any_fine, any_coarse, stages.blend) {
         (false, _, _) => Resolution::Reduced(divisor),
@@ -226,7 +248,7 @@ mod tests {
 
     /// 720 pixels over 60 degrees: 12 frame pixels per degree, 6 in a half-resolution buffer.
     fn auto() -> ResolutionFacts {
-        ResolutionFacts::new(DomeResolution::Auto, 720, 60.0)
+        ResolutionFacts::new(DomeResolution::Auto, 720, 60.0, (-20.0, 40.0))
     }
 
     fn layer(texels_per_deg: &[f32], terms: &[usize], blend: BlendMode) -> LayerStages {
@@ -256,9 +278,24 @@ mod tests {
         let physical_dense = LayerStages { physical: true, ..layer(&[4.0], &[0], BlendMode::Opaque) };
         assert_eq!(resolution(&physical_dense, &f), Resolution::Reduced(Divisor::whole(3)));
         // Fixed resolutions keep their divisor.
-        let half = ResolutionFacts::new(DomeResolution::Half, 720, 60.0);
+        let half = ResolutionFacts::new(DomeResolution::Half, 720, 60.0, (-20.0, 40.0));
         assert_eq!(resolution(&layer(&[0.5], &[0], BlendMode::Opaque), &half), Resolution::Reduced(Divisor::HALF));
-        assert!(!ResolutionFacts::new(DomeResolution::Full, 720, 60.0).reduces());
+        assert!(!ResolutionFacts::new(DomeResolution::Full, 720, 60.0, (-20.0, 40.0)).reduces());
+    }
+
+    #[test]
+    fn a_frame_looking_up_draws_the_map_as_coarsely_as_the_map_is_there() {
+        // Across the horizon, or just above it: the map's densest rows.
+        assert_eq!(map_texels_per_deg((-20.0, 40.0)), SKY_VIEW_TEXELS_PER_DEG);
+        assert_eq!(map_texels_per_deg((1.0, 60.0)), SKY_VIEW_TEXELS_PER_DEG);
+        // Rows 27 / sqrt(90 e) to a degree: half a texel at 32 degrees, whichever side.
+        assert!((map_texels_per_deg((32.4, 90.0)) - 0.5).abs() < 1e-3);
+        assert!((map_texels_per_deg((-90.0, -32.4)) - 0.5).abs() < 1e-3);
+        // Looking up, physical layers go to the coarsest buffer (12 / 0.5 = 24 frame pixels a texel).
+        let up = ResolutionFacts::new(DomeResolution::Auto, 720, 60.0, (32.4, 90.0));
+        assert_eq!(up.map_divisor(), Divisor::EIGHTH);
+        let physical = LayerStages { physical: true, ..layer(&[0.5], &[0], BlendMode::Opaque) };
+        assert_eq!(resolution(&physical, &up), Resolution::Reduced(Divisor::EIGHTH));
     }
 
     #[test]

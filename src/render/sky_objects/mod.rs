@@ -460,7 +460,7 @@ impl Pass for SkyObjectsPass {
         (self.frame_camera, self.frame_size) = (*cx.camera, cx.size);
         let scene_covers_below = cx.options.scene && cx.options.skips.below_horizon;
         let cull = CullFacts { camera: *cx.camera, aspect, elevations_deg: (lowest_deg, highest_deg), scene_covers_below, off_screen: cx.options.skips.off_screen };
-        let resolution_facts = ResolutionFacts::new(cx.options.strategy.dome_resolution, cx.size.1, cx.camera.fov_y_deg);
+        let resolution_facts = ResolutionFacts::new(cx.options.strategy.dome_resolution, cx.size.1, cx.camera.fov_y_deg, (lowest_deg, highest_deg));
         let mut shapes = Vec::new();
         for of in &cx.frame.objects {
             let versions = match &of.versions {
