@@ -313,6 +313,13 @@ impl ReducedLayersPass {
 
     /// A buffer of the whole frame at `divisor`, with the bind group that reads it.
     fn buffer(&self, device: &wgpu::Device, label: &str, divisor: Divisor) -> RunBuffer {
+        let view = self.texture(device, label, divisor, reduced_format(self.made_for.1));
+        let bind_group = self.bind_group(device, label, &view, None);
+        RunBuffer { view, bind_group, divisor, reads_lower: false }
+    }
+
+    /// A texture of the whole frame at `divisor` in `format`, drawn into and sampled.
+    fn texture(&self, device: &wgpu::Device, label: &str, divisor: Divisor, format: wgpu::TextureFormat) -> wgpu::TextureView {
         let (width, height) = Self::buffer_size(self.made_for.0, divisor);
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
@@ -320,13 +327,11 @@ impl ReducedLayersPass {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: reduced_format(self.made_for.1),
+            format,
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
-        let view = texture.create_view(&Default::default());
-        let bind_group = self.bind_group(device, label, &view, None);
-        RunBuffer { view, bind_group, divisor, reads_lower: false }
+        texture.create_view(&Default::default())
     }
 
     /// The bind group that reads buffer `view` ([`run_layout`]), with the buffer of the run
@@ -371,18 +376,7 @@ impl ReducedLayersPass {
 
     /// The radiance texture for the lower run's buffer `lower`, and the bind group that reads both.
     fn seed_radiance_of(&self, device: &wgpu::Device, lower: &RunBuffer) -> SeedRadiance {
-        let (width, height) = Self::buffer_size(self.made_for.0, lower.divisor);
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("ReducedLayers::seed_radiance"),
-            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: SEED_RADIANCE_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let view = texture.create_view(&Default::default());
+        let view = self.texture(device, "ReducedLayers::seed_radiance", lower.divisor, SEED_RADIANCE_FORMAT);
         let bind_group = self.bind_group(device, "ReducedLayers::seed_radiance", &lower.view, Some(&view));
         SeedRadiance { view, bind_group, divisor: lower.divisor }
     }
@@ -393,19 +387,8 @@ impl ReducedLayersPass {
     /// instead of taking each of its finer pixels back itself. Returns the draws.
     pub fn convert_seed(&self, encoder: &mut wgpu::CommandEncoder, globals: &wgpu::BindGroup) -> u32 {
         let (Some(radiance), Some(lower)) = (&self.seed_radiance, self.buffers.first()) else { return 0 };
-        let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("ReducedLayers::seed_radiance"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &radiance.view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        // Every texel is written: the clear colour does not matter.
+        let mut rpass = self.begin_into(encoder, (&radiance.view, lower.divisor), "ReducedLayers::seed_radiance", None);
         rpass.set_pipeline(self.seed_radiance_pipeline.get());
         rpass.set_bind_group(0, globals, &[]);
         rpass.set_bind_group(1, &lower.bind_group, &[]);
@@ -441,7 +424,7 @@ impl ReducedLayersPass {
         for (j, out) in self.combined.iter().enumerate().rev() {
             let (Some(lower), Some(upper)) = (self.buffers.get(j), self.upper_bind_group(j + 1)) else { return draws };
             // Every pixel is written: the clear colour does not matter.
-            let mut rpass = self.begin_into(encoder, out, "ReducedLayers::combine", if j == 0 { timestamp_writes.take() } else { None });
+            let mut rpass = self.begin_into(encoder, (&out.view, out.divisor), "ReducedLayers::combine", if j == 0 { timestamp_writes.take() } else { None });
             rpass.set_pipeline(if j == 0 { background } else { above });
             rpass.set_bind_group(0, globals, &[]);
             rpass.set_bind_group(1, &lower.bind_group, &[]);
@@ -470,7 +453,7 @@ impl ReducedLayersPass {
     /// Begins the render pass that draws a layer into own buffer `p` (cleared to nothing in
     /// front), before the pass of the run it belongs to.
     pub fn begin_own<'e>(&self, encoder: &'e mut wgpu::CommandEncoder, p: usize, timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>) -> Option<wgpu::RenderPass<'e>> {
-        Some(self.begin_into(encoder, self.own.get(p)?, "ReducedLayers::own", timestamp_writes))
+        Some(self.begin_into(encoder, self.own.get(p).map(|b| (&b.view, b.divisor))?, "ReducedLayers::own", timestamp_writes))
     }
 
     /// Composites own buffer `p` into the run's buffer whose pass `rpass` is, in the place of the
@@ -510,21 +493,22 @@ impl ReducedLayersPass {
     /// Begins the render pass that draws run `run` into its buffer (cleared to nothing in front:
     /// colour 0, transmittance 1), its viewport the whole buffer.
     pub fn begin<'e>(&self, encoder: &'e mut wgpu::CommandEncoder, run: usize, timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>) -> Option<wgpu::RenderPass<'e>> {
-        Some(self.begin_into(encoder, self.buffers.get(run)?, "ReducedLayers::run", timestamp_writes))
+        Some(self.begin_into(encoder, self.buffers.get(run).map(|b| (&b.view, b.divisor))?, "ReducedLayers::run", timestamp_writes))
     }
 
-    /// A render pass into `buffer`, cleared to nothing in front, its viewport the whole buffer.
+    /// A render pass into the buffer `view` made at `divisor`, cleared to nothing in front, its
+    /// viewport the whole buffer.
     fn begin_into<'e>(
         &self,
         encoder: &'e mut wgpu::CommandEncoder,
-        buffer: &RunBuffer,
+        (view, divisor): (&wgpu::TextureView, Divisor),
         label: &str,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> wgpu::RenderPass<'e> {
         let mut rpass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &buffer.view,
+                view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: 1.0 }), store: wgpu::StoreOp::Store },
@@ -534,7 +518,7 @@ impl ReducedLayersPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        let (w, h) = Self::buffer_size(self.made_for.0, buffer.divisor);
+        let (w, h) = Self::buffer_size(self.made_for.0, divisor);
         rpass.set_viewport(0.0, 0.0, w as f32, h as f32, 0.0, 1.0);
         rpass
     }
