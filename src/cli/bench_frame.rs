@@ -276,23 +276,25 @@ fn measure_cases(ctx: &GpuContext, floor: &Baseline, (skies, views): (&[(String,
         for (hour, weather) in TIMES {
             for (view, camera) in views {
                 let input = FrameInput::new(hour, weather);
+                // Each twin's still frame, the same for every measured frame.
+                let stills: Vec<_> = twins.iter().map(|sky| sky.evaluate(&input)).collect();
                 let mut samples: Vec<Vec<Samples>> = twins.iter().map(|_| measured[0].iter().map(|_| Samples::default()).collect()).collect();
                 for i in 0..frames + 2 {
                     let moved_input = FrameInput::new(hour + SUN_STEP_HOURS * (i + 1) as f32, weather);
-                    for ((sky, set), samples) in twins.iter().zip(measured.iter_mut()).zip(&mut samples) {
-                        let (frame, moved) = (sky.evaluate(&input), sky.evaluate(&moved_input));
+                    for (((sky, frame), set), samples) in twins.iter().zip(&stills).zip(measured.iter_mut()).zip(&mut samples) {
+                        let moved = sky.evaluate(&moved_input);
                         for (m, samples) in set.iter_mut().zip(samples) {
                             let target = m.moving.target.target();
                             let moving = timed(ctx, |e| m.moving.renderer.render(ctx, e, &target, &moved, camera, &m.options))?;
                             m.moving.renderer.after_submit();
                             let target = m.plain.target.target();
                             let f = timed(ctx, |e| floor.record(e, target.color))?;
-                            let with = timed(ctx, |e| m.plain.renderer.render(ctx, e, &target, &frame, camera, &m.with_scene))?;
+                            let with = timed(ctx, |e| m.plain.renderer.render(ctx, e, &target, frame, camera, &m.with_scene))?;
                             m.plain.renderer.after_submit();
-                            let s = timed(ctx, |e| m.plain.renderer.render(ctx, e, &target, &frame, camera, &m.options))?;
+                            let s = timed(ctx, |e| m.plain.renderer.render(ctx, e, &target, frame, camera, &m.options))?;
                             m.plain.renderer.after_submit();
                             let target = m.timing.target.target();
-                            timed(ctx, |e| m.timing.renderer.render(ctx, e, &target, &frame, camera, &m.options))?;
+                            timed(ctx, |e| m.timing.renderer.render(ctx, e, &target, frame, camera, &m.options))?;
                             settle(ctx, &mut m.timing)?;
                             if i >= 2 {
                                 samples.floor_ms.push(f);

@@ -171,9 +171,9 @@ pub fn map_texels_per_deg((lowest, highest): (f32, f32)) -> f32 {
 }
 
 /// Texels per degree a physical model's sky-view map holds near the horizon, for the buffer its
-/// layer goes to: its rows 2 degrees above the horizon (square-root spaced, 108 over the sphere) are half a
-/// degree apart, its columns 1.9 degrees (96 over half the circle, the other half its mirror). Nearer the horizon the rows
-/// crowd further; there the sky's colour changes over a degree or two, which a buffer pixel of
+/// layer goes to: its rows 2 degrees above the horizon (square-root spaced, 108 over the sphere)
+/// are half a degree apart, its columns 1.9 degrees (96 over half the circle, the other half its
+/// mirror). Nearer the horizon the rows crowd further; there the sky's colour changes over a degree or two, which a buffer pixel of
 /// half a degree still follows (docs/performance-notes.md measures the difference).
 pub const SKY_VIEW_TEXELS_PER_DEG: f32 = 2.0;
 
