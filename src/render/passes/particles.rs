@@ -341,7 +341,7 @@ impl Pass for ParticlesPass {
             // One constant colour: it needs no resolution, so it joins the run of dome layers
             // before it, if there is one, at whatever resolution that run has.
             let (finest, coarsest) = cx.options.strategy.dome_resolution.divisors();
-            let reduced = cx.options.strategy.flash_in_run() && finest > Divisor::FULL;
+            let reduced = cx.options.strategy.flash_in_run() && finest.reduces();
             out.push(DrawItem { additive: true, reduced, joins_only: true, divisor: if reduced { coarsest } else { Divisor::FULL }, ..DrawItem::new(63, FLASH_KEY) });
         }
     }

@@ -227,8 +227,8 @@ impl ReducedLayersPass {
     }
 
     /// Size of the reduced buffers for a frame size and divisor, pixels.
-    pub fn buffer_size((width, height): (u32, u32), divisor: Divisor) -> (u32, u32) {
-        (divisor.buffer_len(width), divisor.buffer_len(height))
+    pub fn buffer_size(size: (u32, u32), divisor: Divisor) -> (u32, u32) {
+        divisor.buffer_size(size)
     }
 
     /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, how the joined runs
@@ -655,8 +655,8 @@ mod tests {
     fn divisors_step_by_quarters_within_their_bounds() {
         let (half, quarter) = (Divisor::HALF, Divisor::QUARTER);
         // The built-in clouds: 10.3 frame pixels per degree, 4.04 texels per degree.
-        assert_eq!(Divisor::at_most(10.29 / 4.04, half, quarter).get(), 2.5);
-        assert_eq!(Divisor::at_most(3.99, half, quarter).get(), 3.75);
+        assert_eq!(Divisor::at_most(10.29 / 4.04, half, quarter).x(), 2.5);
+        assert_eq!(Divisor::at_most(3.99, half, quarter).y(), 3.75);
         assert_eq!(Divisor::at_most(1.2, half, quarter), half);
         assert_eq!(Divisor::at_most(f32::INFINITY, half, quarter), quarter);
         assert_eq!(Divisor::at_most(f32::NAN, half, quarter), half);
@@ -666,5 +666,9 @@ mod tests {
         assert_eq!(ReducedLayersPass::buffer_size((1280, 720), Divisor::at_most(2.5, half, quarter)), (512, 288));
         assert_eq!(ReducedLayersPass::buffer_size((322, 181), Divisor::whole(4)), (81, 46));
         assert_eq!(ReducedLayersPass::buffer_size((1, 1), quarter), (1, 1));
+        // Coarser across than down (a physical map's buffer): each side by its own.
+        let map = Divisor::at_most_each((9.0, 5.1), half, Divisor::EIGHTH);
+        assert_eq!((map.x(), map.y(), map.to_string()), (8.0, 5.0, "8x5".to_string()));
+        assert_eq!(ReducedLayersPass::buffer_size((1280, 720), map), (160, 144));
     }
 }

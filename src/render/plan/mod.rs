@@ -206,14 +206,14 @@ impl SkyPlan {
 pub fn plan(mut items: Vec<(usize, DrawItem)>, strategy: &FillStrategy, facts: FrameFacts) -> SkyPlan {
     // Sky objects and stars interleave by priority; list order among equals.
     items.sort_by_key(|(_, it)| it.priority);
-    let reduce = strategy.dome_resolution.divisors().0 > Divisor::FULL;
+    let reduce = strategy.dome_resolution.divisors().0.reduces();
     if reduce {
         join_additive_runs(&mut items);
         leave_lone_joiners(&mut items);
     }
     let runs = if reduce && facts.reduced_layers { reduced_runs(&items, strategy.seeds_joined()) } else { Vec::new() };
     // A run's buffer is as fine as its finest layer needs.
-    let divisors: Vec<Divisor> = runs.iter().map(|&(start, end)| items[start..end].iter().map(|(_, it)| it.divisor).min().unwrap_or(Divisor::FULL)).collect();
+    let divisors: Vec<Divisor> = runs.iter().map(|&(start, end)| items[start..end].iter().map(|(_, it)| it.divisor).reduce(Divisor::finer).unwrap_or(Divisor::FULL)).collect();
     // The first run, when the sky phase draws nothing before it, is the frame's background:
     // drawn first in the scene's pass, over the clear colour.
     let background = runs.first().is_some_and(|&(start, _)| start == 0);
@@ -226,7 +226,7 @@ pub fn plan(mut items: Vec<(usize, DrawItem)>, strategy: &FillStrategy, facts: F
     let joined = chain >= 2;
     // Two joined runs, the second at least as fine: the second's buffer is seeded with the
     // first and ends as their combination. Otherwise joined runs are combined from the top down.
-    let seeded = strategy.seeds_joined() && chain == 2 && divisors[1] <= divisors[0];
+    let seeded = strategy.seeds_joined() && chain == 2 && divisors[1].resolves(divisors[0]);
     let combined = if seeded { Vec::new() } else { combined_divisors(&divisors[..chain]) };
     let first = under_background(&items, &runs, background && strategy.additive_first() && !facts.scene_in_view);
     // One of them that covers the frame can be the background itself; the others then go under
@@ -314,8 +314,8 @@ fn under_background(items: &[(usize, DrawItem)], runs: &[(usize, usize)], allowe
 }
 
 /// A run's buffer is at least this many times finer along each side than a costly layer needs
-/// before the layer goes to a buffer of its own ([`RunInput::Own`]): its fragments then cost a
-/// quarter as many or fewer, and the composite into the run's buffer costs about what a plain
+/// (by area: [`Divisor::mean`]) before the layer goes to a buffer of its own ([`RunInput::Own`]):
+/// its fragments then cost a quarter as many or fewer, and the composite into the run's buffer costs about what a plain
 /// layer's fragment does.
 const OWN_BUFFER_RATIO: f32 = 2.0;
 
@@ -362,7 +362,7 @@ fn run_draws(
                 k += 2;
             }
             None => {
-                let apart = items[k].1.caps.own_buffer.filter(|o| strategy.own_buffers() && o.divisor.get() >= OWN_BUFFER_RATIO * divisor.get());
+                let apart = items[k].1.caps.own_buffer.filter(|o| strategy.own_buffers() && o.divisor.mean() >= OWN_BUFFER_RATIO * divisor.mean());
                 let input = match apart {
                     Some(o) => {
                         own.push(o);
@@ -455,7 +455,7 @@ fn leave_lone_joiners(list: &mut [(usize, DrawItem)]) {
 /// needs none (its own buffer); fewer than two runs, none at all.
 fn combined_divisors(divisors: &[Divisor]) -> Vec<Divisor> {
     let n = divisors.len();
-    (0..n.saturating_sub(1)).map(|j| divisors[j..].iter().copied().min().unwrap_or(Divisor::FULL)).collect()
+    (0..n.saturating_sub(1)).map(|j| divisors[j..].iter().copied().reduce(Divisor::finer).unwrap_or(Divisor::FULL)).collect()
 }
 
 /// The runs of consecutive items marked `reduced` in a sorted phase list: (start, end) indices.
@@ -480,7 +480,7 @@ fn reduced_runs(list: &[(usize, DrawItem)], split_first: bool) -> Vec<(usize, us
     }
     if let (true, [(0, end)]) = (split_first, runs.as_slice()) {
         let divisor = |k: usize| list[k].1.divisor;
-        if let Some(k) = (1..*end).find(|&k| (0..k).all(|j| divisor(k) < divisor(j))) {
+        if let Some(k) = (1..*end).find(|&k| (0..k).all(|j| divisor(k).finer_than(divisor(j)))) {
             return vec![(0, k), (k, *end)];
         }
     }

@@ -62,6 +62,13 @@ fn a_lone_first_run_that_gets_finer_is_split_where_it_does() {
     assert_eq!(reduced_runs(&after, true), [(1, 3)]);
     let two = [at(0, 4), at(1, 2), item(2, false, false), at(3, 2)];
     assert_eq!(reduced_runs(&two, true), [(0, 2), (3, 4)]);
+    // A physical skydome coarser across than down (8 x 5) under clouds at 2: the clouds are
+    // finer along both sides, so they split off. Finer across only (5 x 8 under 8 x 5): not.
+    let each = |key: usize, across: f32, down: f32| {
+        (0, DrawItem { reduced: true, divisor: Divisor::at_most_each((across, down), Divisor::HALF, Divisor::EIGHTH), ..DrawItem::new(0, key) })
+    };
+    assert_eq!(reduced_runs(&[each(0, 8.0, 5.0), at(1, 2)], true), [(0, 1), (1, 2)]);
+    assert_eq!(reduced_runs(&[each(0, 8.0, 5.0), each(1, 5.0, 8.0)], true), [(0, 2)]);
 }
 
 #[test]
@@ -73,6 +80,9 @@ fn each_combination_is_as_fine_as_its_finest_run() {
     assert_eq!(combined_divisors(&[quarter, quarter, half]), [half, half]);
     assert_eq!(combined_divisors(&[half, quarter]), [half]);
     assert_eq!(combined_divisors(&[Divisor::whole(3), Divisor::whole(3), Divisor::at_most(2.6, half, quarter)]), [Divisor::at_most(2.5, half, quarter); 2]);
+    // Along each side on its own: the finer of both.
+    let [wide, tall] = [(8.0, 5.0), (5.0, 8.0)].map(|f| Divisor::at_most_each(f, half, Divisor::EIGHTH));
+    assert_eq!(combined_divisors(&[wide, tall]), [Divisor::whole(5)]);
     assert_eq!(combined_divisors(&[quarter]), Vec::<Divisor>::new());
     assert_eq!(combined_divisors(&[]), Vec::<Divisor>::new());
 }
@@ -98,6 +108,20 @@ fn night(bolt_under_run: bool) -> Vec<(usize, DrawItem)> {
 
 fn keys(plan: &SkyPlan, steps: &[Step]) -> Vec<usize> {
     steps.iter().map(|s| plan.items[s.item].1.key).collect()
+}
+
+#[test]
+fn a_second_run_seeds_only_when_finer_along_both_sides() {
+    let with_dome = |across: f32, down: f32| {
+        let mut items = night(true);
+        items[0].1.divisor = Divisor::at_most_each((across, down), Divisor::FULL, Divisor::EIGHTH);
+        plan(items, &FillStrategy::software(), FACTS)
+    };
+    // A physical skydome's buffer, coarser across than down, under clouds at half: seeded.
+    assert!(with_dome(8.0, 3.0).seeded);
+    // Finer than the clouds down the frame: the clouds' buffer cannot hold it; combined instead.
+    let p = with_dome(8.0, 1.5);
+    assert!(!p.seeded && p.combined == [Divisor::at_most_each((2.0, 1.5), Divisor::FULL, Divisor::EIGHTH)], "{p:?}");
 }
 
 #[test]

@@ -285,7 +285,7 @@ impl SkyObjectsPass {
             _ => None,
         };
         let covers = top_deg.filter(|&t| t < self.frame_elevations_deg.1).and_then(|t| self.frame_camera.pixels_below_elevation(self.frame_size, t));
-        Some(OwnBuffer { divisor: e.divisor.min(self.map_divisor), covers })
+        Some(OwnBuffer { divisor: e.divisor.finer(self.map_divisor), covers })
     }
 
     /// Pixels item `key` leaves uncovered as the background or over a seed: below the dome's
@@ -505,8 +505,9 @@ impl Pass for SkyObjectsPass {
             for e in &mut self.visible {
                 let d = &draws.objects[e.index][e.version];
                 // Frame pixels per degree at the frame's centre (the fewest: a perspective frame
-                // has more per degree towards its edges), in this draw's buffer.
-                let px_per_deg = view.centre_px_per_deg(cx.size.1) / e.divisor.get();
+                // has more per degree towards its edges), in this draw's buffer along its coarser
+                // side (where its textures minify first).
+                let px_per_deg = view.centre_px_per_deg(cx.size.1) / e.divisor.coarser();
                 let level0 = |ring: Option<usize>| {
                     (0..MAX_STAGES)
                         .filter(|&k| d.maps[k].as_ref().is_some_and(|m| m.peak(&d.shape, ring, &view) * LOD_MARGIN <= px_per_deg * std::f32::consts::SQRT_2))
