@@ -427,7 +427,7 @@ impl SkyRenderer {
         stats.own_buffers = plan.own_buffers.len() as u32;
         stats.clears_skipped = u32::from(!plan.clear_color) + u32::from(!plan.clear_depth);
         if let (false, Some(layers)) = (plan.runs.is_empty(), self.pass_mut::<ReducedLayersPass>()) {
-            let joining = if plan.seeded { Joining::Seeded } else { Joining::Combined(&plan.combined) };
+            let joining = if plan.seeded { Joining::Seeded(&plan.combined) } else { Joining::Combined(&plan.combined) };
             // Layers over the seed blend in radiance on a matched frame (`OVER_MODEL_SKY`).
             let seed_radiance = plan.seed_folded && matched;
             layers.ensure(&ctx.device, &ctx.queue, ((w, h), kind), &plan.divisors(), (joining, seed_radiance), &plan.own_buffers.iter().map(|o| o.divisor).collect::<Vec<_>>());
@@ -638,7 +638,7 @@ impl SkyRenderer {
                 let (i, it) = &plan.items[step.item];
                 calls += self.passes[*i].draw(&mut rpass, it.key, kind, Placement::Reduced, None);
             }
-            let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(first_pass, r + 1 == n && (!plan.joined() || plan.seeded)));
+            let run_writes = self.timer.as_mut().and_then(|t| t.reduced_writes(first_pass, r + 1 == n && plan.combined.is_empty()));
             let Some(layers) = reduced_layers(&self.passes) else { return calls };
             if run.draws.iter().any(|s| s.input == RunInput::Seed) {
                 calls += layers.convert_seed(encoder, &self.globals.bind_group);
@@ -657,7 +657,7 @@ impl SkyRenderer {
                 };
             }
         }
-        if let (true, false) = (plan.joined(), plan.seeded) {
+        if !plan.combined.is_empty() {
             let writes = self.timer.as_mut().and_then(|t| t.reduced_writes(false, true));
             if let Some(layers) = reduced_layers(&self.passes) {
                 calls += layers.record_combined(encoder, &self.globals.bind_group, kind, writes);

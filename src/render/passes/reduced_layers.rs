@@ -79,8 +79,10 @@ pub enum Joining<'a> {
     /// Combination j of the joined runs at divisor `[j]`, each in a pass of its own (none: the
     /// runs are not joined).
     Combined(&'a [Divisor]),
-    /// The first two runs, the second's buffer seeded with the first ([`ReducedLayersPass::seed`]).
-    Seeded,
+    /// The first two runs, the second's buffer seeded with the first ([`ReducedLayersPass::seed`]);
+    /// the runs above them, if any, combined over the seeded buffer: combination j at divisor
+    /// `[j]` holds runs j + 1 and above (the first of them over the seeded buffer).
+    Seeded(&'a [Divisor]),
 }
 
 /// One run's buffer, its divisor and the bind group that reads it.
@@ -130,10 +132,11 @@ pub struct ReducedLayersPass {
     /// Per run of a frame; reused while the size, target and run's divisor stay.
     buffers: Vec<RunBuffer>,
     /// When the frame joins its first runs: combination j holds runs j and above (up to the
-    /// last joined, which needs none), at the finest divisor among them.
+    /// last joined, which needs none), at the finest divisor among them; when seeded, runs
+    /// j + 1 and above, run 1's buffer holding run 0 too.
     combined: Vec<RunBuffer>,
-    /// This frame joins two runs by seeding the upper's buffer with the lower: the upper's
-    /// buffer ends as their combination, and `combined` is empty.
+    /// This frame joins its first two runs by seeding the upper's buffer with the lower: the
+    /// upper's buffer ends as their combination (the background's, with no runs above them).
     seeded: bool,
     /// The buffers of layers drawn apart from their runs (`RunInput::Own` in the frame plan).
     own: Vec<RunBuffer>,
@@ -246,7 +249,7 @@ impl ReducedLayersPass {
     ) {
         let (combined, seeded) = match joining {
             Joining::Combined(divisors) => (divisors, false),
-            Joining::Seeded => (&[][..], true),
+            Joining::Seeded(divisors) => (divisors, true),
         };
         if self.made_for != (size, target) {
             self.buffers.clear();
@@ -410,8 +413,9 @@ impl ReducedLayersPass {
 
     /// Records the combinations of the joined runs into their buffers ([`Self::ensure`]), from
     /// the top down: combination j is run j under combination j + 1 (or under the last joined
-    /// run). One full-screen pass at reduced resolution each, where the background would sample
-    /// every buffer at every frame pixel; the last one recorded gets `timestamp_writes`.
+    /// run); seeded, run j + 1 (the first: the seeded buffer, run 0 in it). One full-screen pass
+    /// at reduced resolution each, where the background would sample every buffer at every frame
+    /// pixel; the last one recorded gets `timestamp_writes`.
     pub fn record_combined(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -420,12 +424,16 @@ impl ReducedLayersPass {
         mut timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> u32 {
         let [background, above, _, _] = self.combine.for_target(target);
+        let below = usize::from(self.seeded);
         let mut draws = 0;
         for (j, out) in self.combined.iter().enumerate().rev() {
-            let (Some(lower), Some(upper)) = (self.buffers.get(j), self.upper_bind_group(j + 1)) else { return draws };
+            let (Some(lower), Some(upper)) = (self.buffers.get(j + below), self.upper_bind_group(j + below + 1)) else { return draws };
             // Every pixel is written: the clear colour does not matter.
             let mut rpass = self.begin_into(encoder, (&out.view, out.divisor), "ReducedLayers::combine", if j == 0 { timestamp_writes.take() } else { None });
-            rpass.set_pipeline(if j == 0 { background } else { above });
+            // The background's combination keeps the transmittance of the runs above the first
+            // (what the draws under the background go under): the upper's alone, or seeded, the
+            // seeded buffer's (run 1's) times the upper's.
+            rpass.set_pipeline(if j == 0 && !self.seeded { background } else { above });
             rpass.set_bind_group(0, globals, &[]);
             rpass.set_bind_group(1, &lower.bind_group, &[]);
             rpass.set_bind_group(2, upper, &[]);
@@ -440,12 +448,21 @@ impl ReducedLayersPass {
     pub fn upper_bind_group(&self, j: usize) -> Option<&wgpu::BindGroup> {
         // Seeded, run 1's buffer holds the combination (for the background) and reads run 0 to
         // take it off (for the draws between them).
-        if self.seeded {
+        if self.seeded && self.combined.is_empty() {
             return self.buffers.get(1).filter(|_| j <= 1).map(|b| &b.bind_group);
         }
+        // Seeded under combinations: the background reads combination 0; nothing lies between
+        // runs 0 and 1 (the plan seeds such a chain only where they touch); above, combination
+        // j - 1 holds runs j and above.
+        let j = match (self.seeded, j) {
+            (false, j) | (true, j @ 0) => j,
+            (true, 1) => return None,
+            (true, j) => j - 1,
+        };
+        let top = self.combined.len() + usize::from(self.seeded);
         match self.combined.get(j) {
             Some(c) => Some(&c.bind_group),
-            None if j == self.combined.len() => self.buffers.get(j).map(|b| &b.bind_group),
+            None if j == self.combined.len() => self.buffers.get(top).map(|b| &b.bind_group),
             None => None,
         }
     }
@@ -626,7 +643,7 @@ impl ReducedLayersPass {
     /// ([`Self::upper_bind_group`]). `over`: added to additive draws already on the frame, which
     /// lie on top of the first run or, joined, under the runs above the first.
     pub fn draw_background(&self, rpass: &mut wgpu::RenderPass<'_>, target: Target, joined: bool, over: bool) -> u32 {
-        let combination = if self.seeded { self.buffers.get(1) } else { self.combined.first() };
+        let combination = if self.seeded && self.combined.is_empty() { self.buffers.get(1) } else { self.combined.first() };
         let (buffer, pipeline) = match (joined, over) {
             (true, true) => (combination, JOINED_BACKGROUND_OVER),
             (true, false) => (combination, BACKGROUND),

@@ -9,7 +9,8 @@
 //! 2. Runs of consecutive reduced layers, each into a buffer as fine as its finest layer.
 //! 3. The background: the first run, when nothing precedes it, drawn first in the scene's pass;
 //!    the runs after it joined to it while every draw between two can go under a run
-//!    ([`RunJoining`](crate::render::plan::strategy::RunJoining)); two joined runs seeded rather than combined.
+//!    ([`RunJoining`](crate::render::plan::strategy::RunJoining)); the first two joined runs seeded
+//!    rather than combined, any above them combined over the seeded buffer.
 //! 4. What goes under the background ([`UnderBackground`](crate::render::plan::strategy::UnderBackground)):
 //!    the additive draws after it, and one of them as the background itself.
 //! 5. Inside each run: the seeding of a seeded buffer, its first layer over the seed, pairs, and
@@ -152,7 +153,8 @@ pub struct SkyPlan {
     pub chain: usize,
     /// The first two runs joined by seeding the second's buffer with the first.
     pub seeded: bool,
-    /// The joined runs' combinations' divisors, when joined and not seeded.
+    /// The joined runs' combinations' divisors: combination j holds runs j and above, or seeded,
+    /// runs j + 1 and above (none for a chain of two).
     pub combined: Vec<Divisor>,
     /// The background, if the first run is one.
     pub background: Option<Background>,
@@ -211,23 +213,28 @@ pub fn plan(mut items: Vec<(usize, DrawItem)>, strategy: &FillStrategy, facts: F
         join_additive_runs(&mut items);
         leave_lone_joiners(&mut items);
     }
-    let runs = if reduce && facts.reduced_layers { reduced_runs(&items, strategy.seeds_joined()) } else { Vec::new() };
-    // A run's buffer is as fine as its finest layer needs.
-    let divisors: Vec<Divisor> = runs.iter().map(|&(start, end)| items[start..end].iter().map(|(_, it)| it.divisor).reduce(Divisor::finer).unwrap_or(Divisor::FULL)).collect();
+    // The first run split where it gets finer, unless its two first runs as they are seed
+    // already: the split would then add a combination pass for the runs above them.
+    let split_first = reduce && facts.reduced_layers && strategy.seeds_joined() && {
+        let runs = reduced_runs(&items, false);
+        let divisors = run_divisors(&items, &runs);
+        joined_chain(&items, &runs, strategy) != 2 || !divisors[1].resolves(divisors[0])
+    };
+    let runs = if reduce && facts.reduced_layers { reduced_runs(&items, split_first) } else { Vec::new() };
+    let divisors = run_divisors(&items, &runs);
     // The first run, when the sky phase draws nothing before it, is the frame's background:
     // drawn first in the scene's pass, over the clear colour.
     let background = runs.first().is_some_and(|&(start, _)| start == 0);
-    // The runs after it join it for as long as every draw between two can be drawn after it,
-    // corrected by the runs above it (a lightning bolt between the clouds and the fog).
-    let mut chain = usize::from(background);
-    while background && strategy.joins_runs() && chain < runs.len() && items[runs[chain - 1].1..runs[chain].0].iter().all(|(_, it)| it.caps.under_run) {
-        chain += 1;
-    }
+    let chain = joined_chain(&items, &runs, strategy);
     let joined = chain >= 2;
-    // Two joined runs, the second at least as fine: the second's buffer is seeded with the
-    // first and ends as their combination. Otherwise joined runs are combined from the top down.
-    let seeded = strategy.seeds_joined() && chain == 2 && divisors[1].resolves(divisors[0]);
-    let combined = if seeded { Vec::new() } else { combined_divisors(&divisors[..chain]) };
+    // The first two joined runs, the second at least as fine: the second's buffer is seeded with
+    // the first and ends as their combination. Joined runs above them (or all, not seeded) are
+    // combined from the top down. Under a combination, only runs that touch (nothing drawn
+    // between them) are seeded: a draw between would need the runs above it without the first,
+    // which a combination over the seeded buffer no longer tells apart.
+    let touching = chain == 2 || runs.get(1).is_some_and(|r| r.0 == runs[0].1);
+    let seeded = strategy.seeds_joined() && chain >= 2 && touching && divisors[1].resolves(divisors[0]);
+    let combined = combined_divisors(&divisors[usize::from(seeded)..chain]);
     let first = under_background(&items, &runs, background && strategy.additive_first() && !facts.scene_in_view);
     // One of them that covers the frame can be the background itself; the others then go under
     // the runs above the first (joined) or onto it.
@@ -450,6 +457,25 @@ fn leave_lone_joiners(list: &mut [(usize, DrawItem)]) {
     }
 }
 
+/// Each run's divisor: its buffer is as fine as its finest layer needs.
+fn run_divisors(items: &[(usize, DrawItem)], runs: &[(usize, usize)]) -> Vec<Divisor> {
+    runs.iter().map(|&(start, end)| items[start..end].iter().map(|(_, it)| it.divisor).reduce(Divisor::finer).unwrap_or(Divisor::FULL)).collect()
+}
+
+/// How many runs form the background's chain: the first run, when the sky phase draws nothing
+/// before it, is the frame's background (drawn first in the scene's pass, over the clear
+/// colour; none otherwise), and the runs after it join it for as long as every draw between two
+/// can be drawn after it, corrected by the runs above it (a lightning bolt between the clouds and
+/// the fog).
+fn joined_chain(items: &[(usize, DrawItem)], runs: &[(usize, usize)], strategy: &FillStrategy) -> usize {
+    let background = runs.first().is_some_and(|&(start, _)| start == 0);
+    let mut chain = usize::from(background);
+    while background && strategy.joins_runs() && chain < runs.len() && items[runs[chain - 1].1..runs[chain].0].iter().all(|(_, it)| it.caps.under_run) {
+        chain += 1;
+    }
+    chain
+}
+
 /// Divisors of the combinations of a chain of joined runs (their buffers' `divisors`, lowest
 /// first): combination j holds runs j.. and is as fine as the finest of them. The last run
 /// needs none (its own buffer); fewer than two runs, none at all.
@@ -459,11 +485,12 @@ fn combined_divisors(divisors: &[Divisor]) -> Vec<Divisor> {
 }
 
 /// The runs of consecutive items marked `reduced` in a sorted phase list: (start, end) indices.
-/// `split_first`: a lone run at the start of the list whose layers get finer part-way (the
-/// skydome's at a quarter of the resolution, the clouds' at half, when the billboards between
-/// them lie out of the frame) is two runs, the coarse layers in their own buffer seeding the
-/// finer one ([`Seeded`](crate::render::plan::strategy::RunJoining::Seeded)), rather than every layer at the
-/// finer resolution.
+/// `split_first`: a run at the start of the list whose layers get finer part-way (the skydome's
+/// at a quarter of the resolution, the clouds' at half, when the billboards between them lie out
+/// of the frame) is two runs, the coarse layers in their own buffer seeding the finer one
+/// ([`Seeded`](crate::render::plan::strategy::RunJoining::Seeded)), rather than every layer at the
+/// finer resolution; runs after it (past rain drawn between the clouds and the fog) are then
+/// combined over the seeded buffer.
 fn reduced_runs(list: &[(usize, DrawItem)], split_first: bool) -> Vec<(usize, usize)> {
     let mut runs = Vec::new();
     let mut k = 0;
@@ -478,10 +505,10 @@ fn reduced_runs(list: &[(usize, DrawItem)], split_first: bool) -> Vec<(usize, us
             k += 1;
         }
     }
-    if let (true, [(0, end)]) = (split_first, runs.as_slice()) {
+    if let (true, Some(&(0, end))) = (split_first, runs.first()) {
         let divisor = |k: usize| list[k].1.divisor;
-        if let Some(k) = (1..*end).find(|&k| (0..k).all(|j| divisor(k).finer_than(divisor(j)))) {
-            return vec![(0, k), (k, *end)];
+        if let Some(k) = (1..end).find(|&k| (0..k).all(|j| divisor(k).finer_than(divisor(j)))) {
+            runs.splice(0..1, [(0, k), (k, end)]);
         }
     }
     runs

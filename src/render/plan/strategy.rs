@@ -22,8 +22,10 @@ pub enum RunJoining {
     Combined,
     /// As `Combined`, and with two runs joined the second run's buffer starts as the first run's
     /// colour instead of nothing, so that its layers leave the two runs' combination there (one
-    /// pass at reduced resolution less). Where the first run is the finer one, or with more runs
-    /// joined: combined as with `Combined`.
+    /// pass at reduced resolution less). Where the first run is the finer one: combined as with
+    /// `Combined`. With more runs joined, the first two are seeded where nothing lies between
+    /// them, and the runs above combined over the seeded buffer. A first run whose layers get
+    /// finer part-way (the skydome under the clouds) is split there into two such runs.
     Seeded,
     /// As `Seeded`, and the seeded buffer's first layer, when a dome that can, is drawn over the
     /// lower run's colour itself, replacing the clear colour, and the seeding pass only fills the

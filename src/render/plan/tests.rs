@@ -47,7 +47,7 @@ fn items_that_only_join_runs_stay_at_full_resolution_alone() {
 }
 
 #[test]
-fn a_lone_first_run_that_gets_finer_is_split_where_it_does() {
+fn a_first_run_that_gets_finer_is_split_where_it_does() {
     let at = |key: usize, divisor: u8| (0, DrawItem { reduced: true, divisor: Divisor::whole(divisor), ..DrawItem::new(0, key) });
     // Skydome and galaxy at a quarter, clouds at half, fog at a quarter: the billboards
     // between the skydome and the clouds out of the frame.
@@ -57,11 +57,13 @@ fn a_lone_first_run_that_gets_finer_is_split_where_it_does() {
     // Finer first, or all alike: one run.
     assert_eq!(reduced_runs(&[at(0, 2), at(1, 4)], true), [(0, 2)]);
     assert_eq!(reduced_runs(&[at(0, 4), at(1, 4)], true), [(0, 2)]);
-    // Not at the start of the list, or not alone: as they are.
+    // Not at the start of the list: as they are.
     let after = [item(0, false, false), at(1, 4), at(2, 2)];
     assert_eq!(reduced_runs(&after, true), [(1, 3)]);
+    // Followed by other runs (rain between the clouds and the fog): split all the same.
     let two = [at(0, 4), at(1, 2), item(2, false, false), at(3, 2)];
-    assert_eq!(reduced_runs(&two, true), [(0, 2), (3, 4)]);
+    assert_eq!(reduced_runs(&two, true), [(0, 1), (1, 2), (3, 4)]);
+    assert_eq!(reduced_runs(&two, false), [(0, 2), (3, 4)]);
     // A physical skydome coarser across than down (8 x 5) under clouds at 2: the clouds are
     // finer along both sides, so they split off. Finer across only (5 x 8 under 8 x 5): not.
     let each = |key: usize, across: f32, down: f32| {
@@ -122,6 +124,51 @@ fn a_second_run_seeds_only_when_finer_along_both_sides() {
     // Finer than the clouds down the frame: the clouds' buffer cannot hold it; combined instead.
     let p = with_dome(8.0, 1.5);
     assert!(!p.seeded && p.combined == [Divisor::at_most_each((2.0, 1.5), Divisor::FULL, Divisor::EIGHTH)], "{p:?}");
+}
+
+/// A stormy sky: the skydome (a quarter), the clouds (half, over a seed), rain between the
+/// clouds and the fog (additive, able to go under a run when `rain_under_run`), the fog (a
+/// quarter).
+fn storm(rain_under_run: bool) -> Vec<(usize, DrawItem)> {
+    let dome = Caps { over_seed: true, background: [true, true], ..Caps::default() };
+    let clouds = Caps { over_seed: true, background_gap: Some([0, 100, 320, 80]), ..Caps::default() };
+    vec![
+        (0, DrawItem { priority: 0, reduced: true, divisor: Divisor::QUARTER, caps: dome, ..DrawItem::new(0, 0) }),
+        (0, DrawItem { priority: 3, reduced: true, divisor: Divisor::HALF, caps: clouds, ..DrawItem::new(3, 1) }),
+        (1, DrawItem { priority: 4, additive: true, caps: Caps { under_run: rain_under_run, ..Caps::default() }, ..DrawItem::new(4, 0) }),
+        (0, DrawItem { priority: 5, reduced: true, divisor: Divisor::QUARTER, ..DrawItem::new(5, 2) }),
+    ]
+}
+
+#[test]
+fn the_first_two_runs_seed_under_a_combination_of_those_above() {
+    let p = plan(storm(true), &FillStrategy::software(), FACTS);
+    // The skydome splits off the clouds' run and seeds it; the fog's run, past the rain, is
+    // combined over the seeded buffer (one combination, at the clouds' half), and the rain goes
+    // under the fog's run.
+    assert_eq!(p.runs.iter().map(|r| r.range.clone()).collect::<Vec<_>>(), [0..1, 1..2, 3..4]);
+    assert_eq!((p.chain, p.seeded, p.composites, p.combined.as_slice()), (3, true, 1, &[Divisor::HALF][..]));
+    assert!(p.seed_folded && p.runs[1].draws[0].placement == Placement::OverSeed, "{:?}", p.runs[1]);
+    assert_eq!(p.steps, [SkyStep::Draw(Step { item: 2, placement: Placement::UnderRun, input: RunInput::Upper(2) })]);
+    // Rain that cannot go under a run: the seeded pair is the background, the fog composited.
+    let apart = plan(storm(false), &FillStrategy::software(), FACTS);
+    assert_eq!((apart.chain, apart.seeded, apart.composites), (2, true, 2));
+    assert!(apart.combined.is_empty());
+    assert!(matches!(apart.steps.as_slice(), [SkyStep::Draw(Step { placement: Placement::Plain, .. }), SkyStep::Composite(2)]), "{:?}", apart.steps);
+    // A fog as fine as the clouds: the two runs as they are seed already, and splitting the
+    // skydome off would add a combination; not split.
+    let mut fine_fog = storm(true);
+    fine_fog[3].1.divisor = Divisor::HALF;
+    let p = plan(fine_fog, &FillStrategy::software(), FACTS);
+    assert_eq!(p.runs.iter().map(|r| r.range.clone()).collect::<Vec<_>>(), [0..2, 3..4]);
+    assert!(p.seeded && p.combined.is_empty(), "{p:?}");
+    // The first run alone, something drawn between it and the clouds: not split, and runs that
+    // do not touch are combined, not seeded (the draw between would need the runs above it
+    // without the skydome).
+    let mut between = storm(true);
+    between.insert(1, (1, DrawItem { priority: 1, additive: true, caps: Caps { under_run: true, ..Caps::default() }, ..DrawItem::new(1, 1) }));
+    let p = plan(between, &FillStrategy::software(), FACTS);
+    assert_eq!((p.chain, p.seeded, p.combined.as_slice()), (3, false, &[Divisor::HALF, Divisor::HALF][..]));
 }
 
 #[test]
