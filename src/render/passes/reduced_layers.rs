@@ -229,11 +229,6 @@ impl ReducedLayersPass {
         ])
     }
 
-    /// Size of the reduced buffers for a frame size and divisor, pixels.
-    pub fn buffer_size(size: (u32, u32), divisor: Divisor) -> (u32, u32) {
-        divisor.buffer_size(size)
-    }
-
     /// Makes sure the frame's runs have buffers: run `r` at `divisors[r]`, how the joined runs
     /// are combined (`joining`), the buffers of layers drawn apart from their runs (`own`), and
     /// whether a seeded frame's lower run is taken back to radiance (`seed_radiance`), for the
@@ -260,7 +255,7 @@ impl ReducedLayersPass {
         }
         // Each buffer holds the whole frame (its viewport is the whole buffer, even where the
         // frame's size is not a multiple of the divisor): texture coordinates are the frame's.
-        let seeded_size = divisors.get(1).filter(|_| seeded).map_or((1, 1), |&d| Self::buffer_size(size, d));
+        let seeded_size = divisors.get(1).filter(|_| seeded).map_or((1, 1), |&d| d.buffer_size(size));
         let u = CompositeUniform { uv_from_pixel: [1.0 / size.0.max(1) as f32, 1.0 / size.1.max(1) as f32, 1.0 / seeded_size.0 as f32, 1.0 / seeded_size.1 as f32] };
         if u.uv_from_pixel != self.uniform_written.uv_from_pixel {
             queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&u));
@@ -323,7 +318,7 @@ impl ReducedLayersPass {
 
     /// A texture of the whole frame at `divisor` in `format`, drawn into and sampled.
     fn texture(&self, device: &wgpu::Device, label: &str, divisor: Divisor, format: wgpu::TextureFormat) -> wgpu::TextureView {
-        let (width, height) = Self::buffer_size(self.made_for.0, divisor);
+        let (width, height) = divisor.buffer_size(self.made_for.0);
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
             size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
@@ -403,7 +398,7 @@ impl ReducedLayersPass {
     /// (rounded outwards): where the first layer drawn over the seed does not reach.
     pub fn seed_within(&self, rpass: &mut wgpu::RenderPass<'_>, globals: &wgpu::BindGroup, target: Target, gap: [u32; 4]) -> u32 {
         let Some(upper) = self.buffers.get(1) else { return 0 };
-        let (bw, bh) = Self::buffer_size(self.made_for.0, upper.divisor);
+        let (bw, bh) = upper.divisor.buffer_size(self.made_for.0);
         let Some([x0, y0, w, h]) = self.buffer_rect(upper.divisor, gap) else { return 0 };
         rpass.set_scissor_rect(x0, y0, w, h);
         let n = self.seed(rpass, globals, target);
@@ -480,7 +475,7 @@ impl ReducedLayersPass {
     /// the run's next draw again.
     pub fn composite_own(&self, rpass: &mut wgpu::RenderPass<'_>, globals: &wgpu::BindGroup, target: Target, (p, covers): (usize, Option<[u32; 4]>), run: Divisor) -> u32 {
         let Some(own) = self.own.get(p) else { return 0 };
-        let (bw, bh) = Self::buffer_size(self.made_for.0, run);
+        let (bw, bh) = run.buffer_size(self.made_for.0);
         let Some([x, y, w, h]) = covers.map_or(Some([0, 0, bw, bh]), |c| self.buffer_rect(run, c)) else { return 0 };
         let [_, _, _, into_run] = self.combine.for_target(target);
         rpass.set_pipeline(into_run);
@@ -497,7 +492,7 @@ impl ReducedLayersPass {
     /// The pixels of a buffer at `divisor` under frame pixels `[x, y, width, height]` (rounded
     /// outwards), as a scissor rectangle; None when empty.
     fn buffer_rect(&self, divisor: Divisor, [x, y, w, h]: [u32; 4]) -> Option<[u32; 4]> {
-        let (bw, bh) = Self::buffer_size(self.made_for.0, divisor);
+        let (bw, bh) = divisor.buffer_size(self.made_for.0);
         let (fw, fh) = self.made_for.0;
         // Buffer pixel b covers frame pixels [b fw / bw, (b + 1) fw / bw).
         let lo = |p: u32, frame: u32, buffer: u32| (u64::from(p) * u64::from(buffer) / u64::from(frame.max(1))) as u32;
@@ -535,7 +530,7 @@ impl ReducedLayersPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        let (w, h) = Self::buffer_size(self.made_for.0, divisor);
+        let (w, h) = divisor.buffer_size(self.made_for.0);
         rpass.set_viewport(0.0, 0.0, w as f32, h as f32, 0.0, 1.0);
         rpass
     }
@@ -680,12 +675,12 @@ mod tests {
         assert_eq!(Divisor::whole(3).to_string(), "3");
         assert_eq!(Divisor::at_most(2.5, half, quarter).to_string(), "2.5");
         // Buffers cover the whole frame, rounding up.
-        assert_eq!(ReducedLayersPass::buffer_size((1280, 720), Divisor::at_most(2.5, half, quarter)), (512, 288));
-        assert_eq!(ReducedLayersPass::buffer_size((322, 181), Divisor::whole(4)), (81, 46));
-        assert_eq!(ReducedLayersPass::buffer_size((1, 1), quarter), (1, 1));
+        assert_eq!(Divisor::at_most(2.5, half, quarter).buffer_size((1280, 720)), (512, 288));
+        assert_eq!(Divisor::whole(4).buffer_size((322, 181)), (81, 46));
+        assert_eq!(quarter.buffer_size((1, 1)), (1, 1));
         // Coarser across than down (a physical map's buffer): each side by its own.
         let map = Divisor::at_most_each((9.0, 5.1), half, Divisor::EIGHTH);
         assert_eq!((map.x(), map.y(), map.to_string()), (8.0, 5.0, "8x5".to_string()));
-        assert_eq!(ReducedLayersPass::buffer_size((1280, 720), map), (160, 144));
+        assert_eq!(map.buffer_size((1280, 720)), (160, 144));
     }
 }

@@ -213,19 +213,19 @@ pub fn plan(mut items: Vec<(usize, DrawItem)>, strategy: &FillStrategy, facts: F
         join_additive_runs(&mut items);
         leave_lone_joiners(&mut items);
     }
+    let mut runs = if reduce && facts.reduced_layers { reduced_runs(&items, false) } else { Vec::new() };
+    let mut divisors = run_divisors(&items, &runs);
+    let mut chain = joined_chain(&items, &runs, strategy);
     // The first run split where it gets finer, unless its two first runs as they are seed
     // already: the split would then add a combination pass for the runs above them.
-    let split_first = reduce && facts.reduced_layers && strategy.seeds_joined() && {
-        let runs = reduced_runs(&items, false);
-        let divisors = run_divisors(&items, &runs);
-        joined_chain(&items, &runs, strategy) != 2 || !divisors[1].resolves(divisors[0])
-    };
-    let runs = if reduce && facts.reduced_layers { reduced_runs(&items, split_first) } else { Vec::new() };
-    let divisors = run_divisors(&items, &runs);
+    let seeds_already = chain == 2 && divisors[1].resolves(divisors[0]);
+    if strategy.seeds_joined() && !seeds_already && split_first_run(&items, &mut runs) {
+        divisors = run_divisors(&items, &runs);
+        chain = joined_chain(&items, &runs, strategy);
+    }
     // The first run, when the sky phase draws nothing before it, is the frame's background:
     // drawn first in the scene's pass, over the clear colour.
     let background = runs.first().is_some_and(|&(start, _)| start == 0);
-    let chain = joined_chain(&items, &runs, strategy);
     let joined = chain >= 2;
     // The first two joined runs, the second at least as fine: the second's buffer is seeded with
     // the first and ends as their combination. Joined runs above them (or all, not seeded) are
@@ -505,13 +505,20 @@ fn reduced_runs(list: &[(usize, DrawItem)], split_first: bool) -> Vec<(usize, us
             k += 1;
         }
     }
-    if let (true, Some(&(0, end))) = (split_first, runs.first()) {
-        let divisor = |k: usize| list[k].1.divisor;
-        if let Some(k) = (1..end).find(|&k| (0..k).all(|j| divisor(k).finer_than(divisor(j)))) {
-            runs.splice(0..1, [(0, k), (k, end)]);
-        }
+    if split_first {
+        split_first_run(list, &mut runs);
     }
     runs
+}
+
+/// Splits the first of `runs`, when it starts the list, where its layers get finer
+/// ([`reduced_runs`]'s `split_first`); whether it did.
+fn split_first_run(list: &[(usize, DrawItem)], runs: &mut Vec<(usize, usize)>) -> bool {
+    let Some(&(0, end)) = runs.first() else { return false };
+    let divisor = |k: usize| list[k].1.divisor;
+    let Some(k) = (1..end).find(|&k| (0..k).all(|j| divisor(k).finer_than(divisor(j)))) else { return false };
+    runs.splice(0..1, [(0, k), (k, end)]);
+    true
 }
 
 #[cfg(test)]
