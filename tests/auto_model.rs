@@ -48,8 +48,8 @@ fn auto_pick_meets_its_budget_against_the_reference_on_every_committed_sky() {
     // Skies that share a sun path and an atmosphere share the reference's answers.
     let mut truths: std::collections::HashMap<String, Vec<[f64; 3]>> = std::collections::HashMap::new();
     for sky in committed_skies() {
-        let scored = auto_model::score(&sky, &ev, &skytune::support::progress::Job::new()).expect("scored");
-        let pick = auto_model::choose(&scored, budget, auto_model::sky_suns(&sky));
+        // As the sky loads: only the candidates that decide the pick are measured.
+        let (pick, scored) = auto_model::pick(&sky, budget, &ev, &skytune::support::progress::Job::new()).expect("picked");
         assert!(pick.within_budget, "{}: no model within {budget:?}: {scored:?}", sky.name);
         let model = pick.model(&sky.model);
         // Mid-morning, noon, and the sunset's hardest moment: the sun just above the horizon.
@@ -98,11 +98,49 @@ fn tighter_budgets_never_pick_cheaper_models_and_picks_are_reproducible() {
             if let Some(r) = &pick.runner_up {
                 assert!(r.cost_ms >= pick.chosen.cost_ms && r.de2000 <= de2000);
             }
+            // The fast rule stops before the candidates past the runner-up and picks the same.
+            let empty = auto_model::Scores::empty(scored.iter().map(|s| s.quick).collect());
+            let fast = auto_model::measure_in_order(empty, Some(Budget { de2000 }), |n| Ok::<_, ()>(scored[n].clone())).expect("in order");
+            assert_eq!(fast.pick(Budget { de2000 }, auto_model::sky_suns(&sky)), Some(pick.clone()), "budget {de2000}");
         } else {
             let best = scored.iter().map(|s| s.de2000).fold(f64::MAX, f64::min);
             assert!(best > de2000 && pick.chosen.de2000 == best, "over budget: the most accurate model");
         }
     }
+}
+
+/// The fast pick (candidates measured only until they decide it) is the full measurement's pick:
+/// on the committed skies' atmosphere, a hazy one (the benchmark's, four times the aerosols) and
+/// a stormy one (twelve times, outside the benchmark: its reference is computed), at the default
+/// budget and at a tight and a loose one.
+#[test]
+fn the_fast_pick_is_the_full_measurements_pick() {
+    let ev = evaluator();
+    let job = skytune::support::progress::Job::new();
+    let aerosols = |k: f64| {
+        let a = skytune::atmosphere::Atmosphere::default();
+        skytune::atmosphere::Atmosphere { mie_scattering_per_km: a.mie_scattering_per_km.map(|b| b * k), mie_extinction_per_km: a.mie_extinction_per_km.map(|b| b * k), ..a }
+    };
+    let mut skipped_any = false;
+    for (name, atm) in [("default", aerosols(1.0)), ("hazy", dome::Haze::Hazy.atmosphere()), ("stormy", aerosols(12.0))] {
+        let mut sky = skytune::sky::builtin::default_sky();
+        sky.atmosphere = atm;
+        sky.atmosphere_by_weather.clear();
+        let full = auto_model::score(&sky, &ev, &job).expect("full measurement");
+        for de2000 in [skytune::sky::load::DEFAULT_DE2000_BUDGET, 1.0, 4.0] {
+            let budget = Budget { de2000 };
+            let (fast, scores) = auto_model::pick(&sky, budget, &ev, &job).expect("fast pick");
+            let expected = auto_model::choose(&full, budget, auto_model::sky_suns(&sky));
+            let measured = scores.measured().len();
+            eprintln!("{name}, budget {de2000}: {measured} of {} candidates measured; {}", full.len(), fast.describe());
+            assert_eq!(fast, expected, "{name}, budget {de2000}: the fast pick differs from the full measurement's");
+            for (slot, whole) in scores.slots.iter().zip(&full) {
+                assert!(slot.as_ref().is_none_or(|s| s == whole), "{name}: {slot:?} is not the full measurement's {whole:?}");
+            }
+            skipped_any |= measured < full.len();
+        }
+    }
+    assert!(skipped_any, "the fast pick measured every candidate every time");
 }
 
 fn load(text: &str) -> Result<Sky, String> {

@@ -1,5 +1,6 @@
-//! `kind = "auto"` in the window: the pick for a new atmosphere measures every candidate against
-//! a reference computed for it (a minute or more on two cores), so it runs on a worker thread.
+//! `kind = "auto"` in the window: the pick for a new atmosphere measures the candidates that decide
+//! it against a reference computed for it (up to a minute on two cores), so it runs on a worker
+//! thread.
 //! The window keeps rendering with the last good model meanwhile, shows the worker's progress,
 //! and swaps the pick in when it arrives. A reload that changes what is measured (an atmosphere,
 //! the sun's range) cancels a running pick and drops whatever it would have returned; one that
@@ -10,16 +11,16 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::measure::auto_model::{self, Pick, Scored};
+use crate::measure::auto_model::{self, Pick, Scores};
 use crate::render::GpuContext;
-use crate::sky::resolved::SkyModel;
+use crate::sky::resolved::{Budget, SkyModel};
 use crate::sky::Sky;
 use crate::support::progress::Job;
 
 /// A pick being measured on the worker.
 struct Pending {
     job: Arc<Job>,
-    result: Receiver<Result<Vec<Scored>, String>>,
+    result: Receiver<Result<Scores, String>>,
     /// What it measures ([`auto_model::scores_key`]).
     key: u64,
     /// The latest version of the sky it measures for, and its generation.
@@ -29,6 +30,8 @@ struct Pending {
     /// Longest frame of the window while it ran.
     longest_frame: Duration,
     frames: u64,
+    /// The adapter it measures on, kept to measure on when a reload's budget needs more.
+    ctx: GpuContext,
 }
 
 /// Frames left out of the longest frame time a pick reports: a window's first frames build
@@ -70,13 +73,19 @@ impl AutoPicker {
             self.result = Some(Ok(pick));
             return;
         }
+        self.spawn(sky, generation, key, budget, ctx);
+    }
+
+    /// Starts a worker measuring the candidates of `sky` until they decide its pick for `budget`
+    /// (resuming from what the caches hold).
+    fn spawn(&mut self, sky: &Arc<Sky>, generation: u64, key: u64, budget: Budget, ctx: &GpuContext) {
         let job = Arc::new(Job::new());
         let (send, result) = mpsc::channel();
-        let (worker_sky, ctx, worker_job) = (sky.clone(), ctx.clone(), job.clone());
+        let (worker_sky, worker_ctx, worker_job) = (sky.clone(), ctx.clone(), job.clone());
         let spawned = std::thread::Builder::new().name("auto-pick".into()).spawn(move || {
             lower_priority();
             let started = Instant::now();
-            let out = auto_model::score_cached(&worker_sky, &ctx, &worker_job);
+            let out = auto_model::score_cached(&worker_sky, Some(budget), &worker_ctx, &worker_job);
             if worker_job.is_cancelled() {
                 // Nobody waits for a cancelled pick: its receiver is gone.
                 log::info!("auto model: stopped measuring for a superseded version of the sky after {:.1} s", started.elapsed().as_secs_f64());
@@ -87,7 +96,8 @@ impl AutoPicker {
         match spawned {
             Ok(_) => {
                 log::info!("auto model: measuring the candidates for this sky's atmosphere on a worker (once; cached)");
-                self.pending = Some(Pending { job, result, key, sky: sky.clone(), generation, started: Instant::now(), longest_frame: Duration::ZERO, frames: 0 });
+                self.pending =
+                    Some(Pending { job, result, key, sky: sky.clone(), generation, started: Instant::now(), longest_frame: Duration::ZERO, frames: 0, ctx: ctx.clone() });
             }
             Err(e) => self.result = Some(Err(format!("auto model: cannot start its worker: {e}"))),
         }
@@ -114,7 +124,15 @@ impl AutoPicker {
             return false;
         }
         let result = match (result, p.sky.auto_model) {
-            (Ok(scores), Some(budget)) => Ok(auto_model::choose(&scores, budget, auto_model::sky_suns(&p.sky))),
+            (Ok(scores), Some(budget)) => match scores.pick(budget, auto_model::sky_suns(&p.sky)) {
+                Some(pick) => Ok(pick),
+                None => {
+                    // A reload changed the budget meanwhile, to one these candidates do not
+                    // decide: measure on from where this worker stopped.
+                    self.spawn(&p.sky, p.generation, p.key, budget, &p.ctx);
+                    return false;
+                }
+            },
             (Ok(_), None) => Err("auto model: the sky no longer asks for one".to_string()),
             (Err(e), _) => Err(e),
         };

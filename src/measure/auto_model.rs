@@ -3,7 +3,10 @@
 //!
 //! - Candidates: the benchmark's points a sky file can select ([`model_points::Point::auto`]),
 //!   ranked by the frame cost of the committed benchmark (docs/models.csv, embedded), ties by id:
-//!   the same inputs give the same pick on any machine.
+//!   the same inputs give the same pick on any machine. They are measured in that order up to
+//!   the first within the budget (the pick), then only those quick to measure up to the next one
+//!   within it (the runner-up) ([`Scores`]): the pick is the full measurement's, and the default
+//!   `precomputed` tables (minutes on a software adapter) are not built for a runner-up.
 //! - Error: for each weather step's atmosphere and each sun elevation of the benchmark that the
 //!   sky's sun reaches (plus the one on either side of its range), the mean CIE dE2000 over the
 //!   benchmark's dome at its fixed exposure, seen from the sky's camera altitude and ground
@@ -40,6 +43,9 @@ pub struct Scored {
     pub de2000: f64,
     /// Frame cost in the committed benchmark, ms.
     pub cost_ms: f64,
+    /// Whether it is quick to measure (tables built within [`RUNNER_UP_MAX_BUILD_MS`]): only
+    /// such candidates are runners-up.
+    pub quick: bool,
 }
 
 /// What `auto` picked.
@@ -47,7 +53,8 @@ pub struct Scored {
 pub struct Pick {
     /// The cheapest candidate within the budget (or the most accurate when none is).
     pub chosen: Scored,
-    /// The next cheapest candidate within the budget.
+    /// The next cheapest candidate within the budget among those quick to measure
+    /// ([`Scored::quick`]).
     pub runner_up: Option<Scored>,
     /// Whether the chosen one meets the budget.
     pub within_budget: bool,
@@ -87,14 +94,42 @@ impl Pick {
     }
 }
 
+/// A candidate of `auto`: a point of the chart with its committed costs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    /// The point.
+    pub point: model_points::Point,
+    /// Frame cost in the committed benchmark, ms.
+    pub cost_ms: f64,
+    /// One-off cost (building its tables) in the committed benchmark, ms.
+    pub build_ms: f64,
+}
+
+/// Longest table build, in the committed benchmark, of a candidate measured only to name a
+/// runner-up: the default `precomputed` tables (139 s on lavapipe) would more than double the
+/// time of a first pick for a line of information, while every other candidate builds in under
+/// 6 s.
+pub const RUNNER_UP_MAX_BUILD_MS: f64 = 10_000.0;
+
+impl Candidate {
+    /// Whether it may be measured to name a runner-up ([`RUNNER_UP_MAX_BUILD_MS`]).
+    pub fn quick(&self) -> bool {
+        self.build_ms <= RUNNER_UP_MAX_BUILD_MS
+    }
+}
+
 /// The candidates with their committed costs, cheapest first: by frame cost, then by one-off cost
 /// (building tables: `precomputed` points cost the same per frame whatever their size), then by id.
-pub fn candidates() -> Vec<(model_points::Point, f64)> {
+pub fn candidates() -> Vec<Candidate> {
     let costs: HashMap<String, (f64, f64)> =
         model_points::rows_from_csv(model_points::COMMITTED_CSV).unwrap_or_default().into_iter().map(|r| (r.id.clone(), (r.frame_ms(), r.build_ms))).collect();
-    let mut out: Vec<(model_points::Point, (f64, f64))> = model_points::points().into_iter().filter(|p| p.auto).filter_map(|p| costs.get(&p.id).copied().map(|c| (p, c))).collect();
-    out.sort_by(|a, b| a.1 .0.total_cmp(&b.1 .0).then_with(|| a.1 .1.total_cmp(&b.1 .1)).then_with(|| a.0.id.cmp(&b.0.id)));
-    out.into_iter().map(|(p, (frame_ms, _))| (p, frame_ms)).collect()
+    let mut out: Vec<Candidate> = model_points::points()
+        .into_iter()
+        .filter(|p| p.auto)
+        .filter_map(|p| costs.get(&p.id).copied().map(|(cost_ms, build_ms)| Candidate { point: p, cost_ms, build_ms }))
+        .collect();
+    out.sort_by(|a, b| a.cost_ms.total_cmp(&b.cost_ms).then_with(|| a.build_ms.total_cmp(&b.build_ms)).then_with(|| a.point.id.cmp(&b.point.id)));
+    out
 }
 
 /// The benchmark's sun elevations the sky needs: those within the range its sun reaches over a
@@ -205,21 +240,107 @@ fn parse_rgb(s: &str) -> Option<Rgb> {
 /// against it is the rest): about what the two cost on a software adapter.
 const REFERENCE_SHARE: f64 = 0.85;
 
-/// Every candidate's worst error over the sky's conditions, measured on `ev`, cheapest first;
-/// progress and cancellation through `job`.
+/// What is known of a sky's candidates: each one's score where it is measured, in the order of
+/// [`candidates`] (cheapest first).
+///
+/// A pick needs only some of them: the cheapest candidate within the budget is the pick, whatever
+/// comes after it, and the runner-up is the next one within it that is quick to measure. So the
+/// candidates are measured in order up to the pick, then only the quick ones up to a runner-up;
+/// the rest (the default `precomputed` tables, minutes on a software adapter) are not built for
+/// nothing. Only a budget that nothing meets needs every candidate (the most accurate).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scores {
+    /// Per candidate, in order: its score, if measured.
+    pub slots: Vec<Option<Scored>>,
+    /// Per candidate, in order: whether it is quick to measure ([`Candidate::quick`]).
+    pub quick: Vec<bool>,
+}
+
+impl Scores {
+    /// Nothing measured of candidates whose quickness is `quick`.
+    pub fn empty(quick: Vec<bool>) -> Self {
+        Self { slots: vec![None; quick.len()], quick }
+    }
+
+    /// The candidates measured, cheapest first.
+    pub fn measured(&self) -> Vec<Scored> {
+        self.slots.iter().flatten().cloned().collect()
+    }
+
+    /// Whether every candidate is measured.
+    pub fn complete(&self) -> bool {
+        self.slots.iter().all(Option::is_some)
+    }
+
+    /// The next candidate to measure before the pick for `budget` is decided (every candidate
+    /// for `None`), or `None` when it is.
+    pub fn next_needed(&self, budget: Option<Budget>) -> Option<usize> {
+        let Some(budget) = budget else { return self.slots.iter().position(Option::is_none) };
+        let mut chosen = false;
+        for (n, slot) in self.slots.iter().enumerate() {
+            if chosen && !self.quick[n] {
+                continue;
+            }
+            let Some(score) = slot else { return Some(n) };
+            let within = score.de2000 <= budget.de2000;
+            if within && chosen {
+                return None;
+            }
+            chosen |= within;
+        }
+        // Nothing within (every candidate is measured) or no runner-up after the pick.
+        None
+    }
+
+    /// Whether what is measured decides the pick for `budget`.
+    pub fn decides(&self, budget: Budget) -> bool {
+        self.next_needed(Some(budget)).is_none()
+    }
+
+    /// The pick for `budget`, if what is measured decides it ([`Scores::decides`]).
+    pub fn pick(&self, budget: Budget, suns_deg: Vec<f64>) -> Option<Pick> {
+        self.decides(budget).then(|| choose(&self.measured(), budget, suns_deg))
+    }
+}
+
+/// Measures candidates in the order of `scores` with `measure` until what is measured decides the
+/// pick for `until` ([`Scores::next_needed`]), or all of them when `until` is `None` (the full
+/// measurement). Kept apart from the GPU so that tests can check the rule on any scores.
+pub fn measure_in_order<E>(mut scores: Scores, until: Option<Budget>, mut measure: impl FnMut(usize) -> Result<Scored, E>) -> Result<Scores, E> {
+    while let Some(n) = scores.next_needed(until) {
+        scores.slots[n] = Some(measure(n)?);
+    }
+    Ok(scores)
+}
+
+/// Every candidate's worst error over the sky's conditions, measured on `ev`, cheapest first
+/// (the full measurement); progress and cancellation through `job`.
 pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Scored>> {
+    Ok(score_from(sky, ev, job, None, None)?.measured())
+}
+
+/// The candidates measured on `ev` besides those `known`, until they decide the pick for `until`
+/// (all of them for `None`). References are read or computed only when a candidate is left to
+/// measure.
+fn score_from(sky: &Sky, ev: &Evaluator<'_>, job: &Job, known: Option<Scores>, until: Option<Budget>) -> anyhow::Result<Scores> {
+    let candidates = candidates();
+    anyhow::ensure!(!candidates.is_empty(), "no candidate model has a cost in the committed benchmark (docs/models.csv)");
+    let done = known.unwrap_or_else(|| Scores::empty(candidates.iter().map(Candidate::quick).collect()));
+    if done.next_needed(until).is_none() {
+        return Ok(done);
+    }
     let suns = sky_suns(sky);
     let atmospheres = sky_atmospheres(sky);
     let dirs: Vec<DomeDir> = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
     // Read once: the committed dataset is parsed, a cached one read from disk.
     let ground = sky.model.ground();
-    let known: Vec<_> = atmospheres.iter().map(|a| known_reference(a, &suns, ground)).collect();
-    let to_compute = known.iter().filter(|k| k.is_none()).count();
+    let known_refs: Vec<_> = atmospheres.iter().map(|a| known_reference(a, &suns, ground)).collect();
+    let to_compute = known_refs.iter().filter(|k| k.is_none()).count();
     let reference_share = if to_compute == 0 { 0.0 } else { REFERENCE_SHARE };
     let share_each = reference_share / to_compute.max(1) as f64;
     let mut computed = 0;
     let mut references: Vec<Vec<Vec<Rgb>>> = Vec::new();
-    for (w, (a, k)) in atmospheres.iter().zip(known).enumerate() {
+    for (w, (a, k)) in atmospheres.iter().zip(known_refs).enumerate() {
         let reference = match k {
             Some(r) => r?,
             None => {
@@ -230,10 +351,9 @@ pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Sco
         };
         references.push(reference);
     }
-    let candidates = candidates();
     let measuring = job.phase(reference_share, 1.0 - reference_share);
-    let mut scored = Vec::new();
-    for (n, (point, cost_ms)) in candidates.iter().enumerate() {
+    let scores = measure_in_order(done, until, |n| -> anyhow::Result<Scored> {
+        let Candidate { point, cost_ms, .. } = &candidates[n];
         job.check()?;
         job.set_stage(format!("measuring {}", point.id));
         measuring.report(n, candidates.len());
@@ -258,19 +378,19 @@ pub fn score(sky: &Sky, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<Vec<Sco
                 worst = worst.max(dome::dome_error(&dirs, r, &model).de_mean);
             }
         }
-        scored.push(Scored { id: point.id.clone(), method: point.method, turbidity, de2000: worst, cost_ms: *cost_ms });
-    }
+        log::debug!("auto model: {} reads dE2000 {worst:.3} (worst over {} sun(s) and {} weather step(s))", point.id, suns.len(), atmospheres.len());
+        Ok(Scored { id: point.id.clone(), method: point.method, turbidity, de2000: worst, cost_ms: *cost_ms, quick: candidates[n].quick() })
+    })?;
     measuring.report(1, 1);
-    anyhow::ensure!(!scored.is_empty(), "no candidate model has a cost in the committed benchmark (docs/models.csv)");
-    Ok(scored)
+    Ok(scores)
 }
 
-/// The cheapest of `scored` (cheapest first) within `budget`, and the next one; the most accurate
-/// when none is within.
+/// The cheapest of `scored` (cheapest first) within `budget`, and the next one quick to measure;
+/// the most accurate when none is within.
 pub fn choose(scored: &[Scored], budget: Budget, suns_deg: Vec<f64>) -> Pick {
     let mut within = scored.iter().filter(|s| s.de2000 <= budget.de2000);
     let (chosen, runner_up, within_budget) = match within.next() {
-        Some(first) => (first.clone(), within.next().cloned(), true),
+        Some(first) => (first.clone(), within.find(|s| s.quick).cloned(), true),
         None => {
             let best = scored.iter().min_by(|a, b| a.de2000.total_cmp(&b.de2000).then(a.cost_ms.total_cmp(&b.cost_ms)));
             (best.cloned().unwrap_or_else(|| scored[0].clone()), None, false)
@@ -280,7 +400,7 @@ pub fn choose(scored: &[Scored], budget: Budget, suns_deg: Vec<f64>) -> Pick {
 }
 
 /// Scores already measured in this process, by everything they depend on.
-static SCORES: Mutex<Vec<(u64, Vec<Scored>)>> = Mutex::new(Vec::new());
+static SCORES: Mutex<Vec<(u64, Scores)>> = Mutex::new(Vec::new());
 
 /// The key of `sky`'s scores: everything they depend on (its atmospheres, sun range, camera,
 /// ground and analytic units, the committed benchmark), not its budget or anything else in the
@@ -301,40 +421,52 @@ fn scores_file(key: u64) -> Option<PathBuf> {
     cache_dir().map(|d| d.join(format!("auto-{key:016x}.csv")))
 }
 
-/// `sky`'s scores if this process or the disk cache already holds them (no measuring).
-fn known_scores(sky: &Sky) -> Option<Vec<Scored>> {
+/// What this process or the disk cache holds of `sky`'s scores (no measuring); nothing measured
+/// when neither holds any.
+fn known_scores(sky: &Sky) -> Scores {
     let key = scores_key(sky);
     if let Some((_, s)) = SCORES.lock().unwrap_or_else(|p| p.into_inner()).iter().find(|(k, _)| *k == key) {
-        return Some(s.clone());
+        return s.clone();
     }
-    let file = scores_file(key)?;
-    let points = model_points::points();
-    let from_disk: Option<Vec<Scored>> = std::fs::read_to_string(&file).ok().and_then(|text| {
-        text.lines()
-            .map(|line| {
-                let f: Vec<&str> = line.split(',').collect();
-                let id = *f.first()?;
-                let point = points.iter().find(|p| p.id == id)?;
-                Some(Scored { id: point.id.clone(), method: point.method, turbidity: f.get(1)?.parse().ok()?, de2000: f.get(2)?.parse().ok()?, cost_ms: f.get(3)?.parse().ok()? })
-            })
-            .collect()
-    });
-    let scored = from_disk.filter(|s| !s.is_empty())?;
-    SCORES.lock().unwrap_or_else(|p| p.into_inner()).push((key, scored.clone()));
-    Some(scored)
+    let candidates = candidates();
+    let mut scores = Scores::empty(candidates.iter().map(Candidate::quick).collect());
+    let text = scores_file(key).and_then(|f| std::fs::read_to_string(f).ok()).unwrap_or_default();
+    for line in text.lines() {
+        // id, turbidity, dE2000, cost; a line of another form or candidate is left out.
+        let f: Vec<&str> = line.split(',').collect();
+        let Some(n) = candidates.iter().position(|c| Some(&c.point.id.as_str()) == f.first()) else { continue };
+        let c = &candidates[n];
+        let number = |k: usize| f.get(k).and_then(|v| v.parse::<f64>().ok());
+        if let (4, Some(turbidity), Some(de2000), Some(cost_ms)) = (f.len(), number(1), number(2), number(3)) {
+            scores.slots[n] = Some(Scored { id: c.point.id.clone(), method: c.point.method, turbidity, de2000, cost_ms, quick: c.quick() });
+        }
+    }
+    if scores.slots.iter().any(Option::is_some) {
+        remember(key, &scores);
+    }
+    scores
 }
 
-/// Every candidate's score for `sky`: from this process's cache, the disk cache, or measured on
-/// `ctx` (seconds to minutes for a new atmosphere; progress and cancellation through `job`).
-pub fn score_cached(sky: &Sky, ctx: &crate::render::GpuContext, job: &Job) -> anyhow::Result<Vec<Scored>> {
-    if let Some(s) = known_scores(sky) {
+/// Keeps `scores` for `key` in this process, replacing what was kept.
+fn remember(key: u64, scores: &Scores) {
+    let mut kept = SCORES.lock().unwrap_or_else(|p| p.into_inner());
+    kept.retain(|(k, _)| *k != key);
+    kept.push((key, scores.clone()));
+}
+
+/// `sky`'s scores, enough to decide its pick for `budget` (every candidate for `None`): from this
+/// process's cache or the disk cache, the rest measured on `ctx` and cached (seconds to minutes
+/// for a new atmosphere; progress and cancellation through `job`).
+pub fn score_cached(sky: &Sky, budget: Option<Budget>, ctx: &crate::render::GpuContext, job: &Job) -> anyhow::Result<Scores> {
+    let known = known_scores(sky);
+    if known.next_needed(budget).is_none() {
         job.set_fraction(1.0);
-        return Ok(s);
+        return Ok(known);
     }
     let key = scores_key(sky);
-    let s = score(sky, &Evaluator::new(ctx)?, job)?;
+    let s = score_from(sky, &Evaluator::new(ctx)?, job, Some(known), budget)?;
     if let Some(f) = scores_file(key) {
-        let text: String = s.iter().map(|x| format!("{},{},{},{}\n", x.id, x.turbidity, x.de2000, x.cost_ms)).collect();
+        let text: String = s.measured().iter().map(|x| format!("{},{},{},{}\n", x.id, x.turbidity, x.de2000, x.cost_ms)).collect();
         if let Some(dir) = f.parent() {
             let _ = std::fs::create_dir_all(dir);
         }
@@ -342,18 +474,27 @@ pub fn score_cached(sky: &Sky, ctx: &crate::render::GpuContext, job: &Job) -> an
             log::warn!("auto model: cannot cache the scores: {e}");
         }
     }
-    SCORES.lock().unwrap_or_else(|p| p.into_inner()).push((key, s.clone()));
+    remember(key, &s);
     Ok(s)
 }
 
 /// The pick for `sky` if it is known without measuring (cached in this process or on disk).
 pub fn known_pick(sky: &Sky, budget: Budget) -> Option<Pick> {
-    known_scores(sky).map(|s| choose(&s, budget, sky_suns(sky)))
+    known_scores(sky).pick(budget, sky_suns(sky))
 }
 
-/// The pick for `sky` within `budget` (scores cached per atmospheres and sun range).
+/// The pick for `sky` within `budget` (scores cached per atmospheres and sun range; only as many
+/// candidates measured as decide it).
 pub fn pick_cached(sky: &Sky, budget: Budget, ctx: &crate::render::GpuContext, job: &Job) -> anyhow::Result<Pick> {
-    Ok(choose(&score_cached(sky, ctx, job)?, budget, sky_suns(sky)))
+    let scores = score_cached(sky, Some(budget), ctx, job)?;
+    Ok(choose(&scores.measured(), budget, sky_suns(sky)))
+}
+
+/// The pick for `sky` within `budget` measured on `ev`, as [`pick_cached`] measures it but with
+/// no cache: only the candidates that decide it.
+pub fn pick(sky: &Sky, budget: Budget, ev: &Evaluator<'_>, job: &Job) -> anyhow::Result<(Pick, Scores)> {
+    let scores = score_from(sky, ev, job, None, Some(budget))?;
+    Ok((choose(&scores.measured(), budget, sky_suns(sky)), scores))
 }
 
 /// Resolves `kind = "auto"`: replaces the sky's model with the pick. Returns the pick, or `None`
@@ -363,4 +504,80 @@ pub fn resolve(sky: &mut Sky, ctx: &crate::render::GpuContext, job: &Job) -> any
     let p = pick_cached(sky, budget, ctx, job)?;
     sky.model = p.model(&sky.model);
     Ok(Some(p))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scored(n: usize, de2000: f64, quick: bool) -> Scored {
+        Scored { id: format!("c{n}"), method: Method::Cells(n), turbidity: 0.0, de2000, cost_ms: n as f64, quick }
+    }
+
+    fn measure_from(all: &[Scored], known: Scores, budget: Budget) -> (Scores, Vec<usize>) {
+        let mut asked = Vec::new();
+        let scores = measure_in_order(known, Some(budget), |n| {
+            asked.push(n);
+            Ok::<_, ()>(all[n].clone())
+        })
+        .expect("measured");
+        (scores, asked)
+    }
+
+    /// On every list of errors (random, with ties at the budget and candidates slow to measure),
+    /// what the rule measures picks what every candidate picks, and it measures nothing past the
+    /// pick but the quick candidates up to the runner-up.
+    #[test]
+    fn what_the_rule_measures_picks_what_every_candidate_picks() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut stopped_early = 0;
+        for _ in 0..2000 {
+            let len = 1 + (next() % 12) as usize;
+            let all: Vec<Scored> = (0..len).map(|n| scored(n, [0.5, 1.0, 2.0, 3.0, 8.0][(next() % 5) as usize], next() % 4 != 0)).collect();
+            let empty = Scores::empty(all.iter().map(|s| s.quick).collect());
+            for de2000 in [0.4, 1.0, 2.0, 5.0] {
+                let budget = Budget { de2000 };
+                let (scores, asked) = measure_from(&all, empty.clone(), budget);
+                let full = choose(&all, budget, Vec::new());
+                assert_eq!(scores.pick(budget, Vec::new()), Some(full.clone()), "{all:?} at {de2000}");
+                let chosen = all.iter().position(|s| s.de2000 <= de2000);
+                let expected: Vec<usize> = match chosen {
+                    None => (0..len).collect(),
+                    Some(c) => {
+                        let runner = (c + 1..len).find(|&n| all[n].quick && all[n].de2000 <= de2000).unwrap_or(len);
+                        (0..=c).chain((c + 1..runner.min(len - 1) + 1).filter(|&n| all[n].quick)).collect()
+                    }
+                };
+                assert_eq!(asked, expected, "{all:?} at {de2000}");
+                stopped_early += usize::from(asked.len() < len);
+                // Resumed from part of what it measured, it measures the rest and ends the same.
+                let mut part = empty.clone();
+                for &n in &asked[..asked.len() / 2] {
+                    part.slots[n] = Some(all[n].clone());
+                }
+                assert_eq!(measure_from(&all, part, budget).0, scores);
+            }
+        }
+        assert!(stopped_early > 1000, "the rule stopped early {stopped_early} times");
+    }
+
+    /// What decides a loose budget may not decide a tighter one: it says so rather than pick, and
+    /// measuring on from it gives the tighter budget's pick.
+    #[test]
+    fn an_undecided_measurement_gives_no_pick() {
+        let all = vec![scored(0, 3.0, true), scored(1, 1.5, true), scored(2, 1.8, false), scored(3, 1.9, true), scored(4, 0.5, true)];
+        let (loose, asked) = measure_from(&all, Scores::empty(all.iter().map(|s| s.quick).collect()), Budget { de2000: 2.0 });
+        assert_eq!(asked, [0, 1, 3], "c2 is slow to measure and past the pick");
+        assert_eq!(loose.pick(Budget { de2000: 2.0 }, Vec::new()).and_then(|p| p.runner_up).map(|r| r.id), Some("c3".to_string()));
+        assert!(loose.pick(Budget { de2000: 1.0 }, Vec::new()).is_none(), "only c4 meets 1.0, and it is not measured");
+        let (tight, asked) = measure_from(&all, loose, Budget { de2000: 1.0 });
+        assert_eq!(asked, [2, 4]);
+        assert_eq!(tight.pick(Budget { de2000: 1.0 }, Vec::new()).map(|p| p.chosen.id), Some("c4".to_string()));
+    }
 }

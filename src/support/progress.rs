@@ -240,6 +240,14 @@ where
 {
     let job = Job::new();
     let finished = AtomicBool::new(false);
+    /// Sets `finished` however the work ends: a work that panics must not leave the reporter
+    /// polling for ever (the scope waits for it before the panic goes on).
+    struct Finish<'a>(&'a AtomicBool);
+    impl Drop for Finish<'_> {
+        fn drop(&mut self) {
+            self.0.store(true, Ordering::Release);
+        }
+    }
     std::thread::scope(|scope| {
         let shown = scope.spawn(|| {
             let started = Instant::now();
@@ -260,8 +268,10 @@ where
             }
             reporter
         });
-        let out = work(&job);
-        finished.store(true, Ordering::Release);
+        let out = {
+            let _finish = Finish(&finished);
+            work(&job)
+        };
         if let Ok(Some(r)) = shown.join() {
             r.set_position(1000);
             r.finish();
@@ -284,5 +294,17 @@ mod tests {
         assert_eq!(job.check(), Ok(()));
         job.cancel();
         assert_eq!(job.check(), Err(Cancelled));
+    }
+
+    /// A work that panics ends the reported run with its panic (it hung, the reporter polling
+    /// for a finish that never came, when `skytune check` panicked in an auto pick).
+    #[test]
+    fn a_panicking_work_ends_the_run() {
+        let (send, done) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let out = std::panic::catch_unwind(|| run_reported("test", |_| -> u32 { panic!("on purpose") }));
+            let _ = send.send(out.is_err());
+        });
+        assert_eq!(done.recv_timeout(Duration::from_secs(30)), Ok(true), "the run ended with the work's panic");
     }
 }
