@@ -267,11 +267,6 @@ impl Scores {
         self.slots.iter().flatten().cloned().collect()
     }
 
-    /// Whether every candidate is measured.
-    pub fn complete(&self) -> bool {
-        self.slots.iter().all(Option::is_some)
-    }
-
     /// The next candidate to measure before the pick for `budget` is decided (every candidate
     /// for `None`), or `None` when it is.
     pub fn next_needed(&self, budget: Option<Budget>) -> Option<usize> {
