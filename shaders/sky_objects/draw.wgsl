@@ -59,13 +59,17 @@ const UV_CELESTIAL_LEVEL0: u32 = 5u;
 // A cloud layer's point seen along the view direction (`layer_uv`). Keep in sync with `UV_LAYER`
 // in src/render/sky_objects/material.rs.
 const UV_LAYER: u32 = 6u;
+// The cloud-layer mapping computed per vertex of the dome's grid, the grid moved onto the layer
+// (a variant only, `LayerCoordinates::PerVertex`). Keep in sync with `UV_LAYER_VERTEX` in
+// src/render/sky_objects/material.rs.
+const UV_LAYER_VERTEX: u32 = 7u;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) uv: vec2<f32>,
     @location(1) world_dir: vec3<f32>,
     // Each stage's texture coordinates under the mesh mapping (stages 0 and 1, then 2 and 3):
-    // affine in the mesh's, so exact per vertex. Interpolated inputs sampled as they are cost
+    // affine in the mesh's, so exact per vertex; or a cloud layer's per vertex (`sky_vertex`). Interpolated inputs sampled as they are cost
     // lavapipe much less than coordinates computed per pixel (it takes their derivatives from
     // the triangle's setup instead of differencing across pixels): about 2 ms per full-screen
     // layer of two stages at 1280x720.
@@ -79,19 +83,48 @@ fn scaled(d: Draw, i: u32, uv: vec2<f32>) -> vec2<f32> {
     return uv * so.xy + so.zw;
 }
 
-// A vertex of the draw's shape, for `vs_main` and `vs_pair`.
-fn sky_vertex(position: vec3<f32>, uv: vec2<f32>) -> VertexOut {
-    let dir = (draw.object_from_local * vec4<f32>(position, 0.0)).xyz;
+// Where sky direction `dir` (any length) lands on the frame.
+fn sky_clip(dir: vec3<f32>) -> vec4<f32> {
     var clip = globals.clip_from_sky * vec4<f32>(dir, 1.0);
     // Any depth inside the sky's viewport range works: the sky neither writes nor sorts by depth,
     // it only has to lose against the main scene drawn in [0, 0.95].
     clip.z = clip.w * 0.5;
-    var out: VertexOut;
-    out.clip = clip;
-    out.uv = uv;
-    out.world_dir = dir;
-    out.mesh_uv01 = vec4<f32>(scaled(draw, 0u, uv), scaled(draw, 1u, uv));
-    out.mesh_uv23 = vec4<f32>(scaled(draw, 2u, uv), scaled(draw, 3u, uv));
-    return out;
+    return clip;
 }
 
+// The first stage whose cloud-layer coordinates are computed per vertex (4: none). Every such
+// stage maps the same layer (src/render/sky_objects/upload.rs, `vertex_layer_modes`).
+fn vertex_layer_stage(l: u32, d: Draw) -> u32 {
+    for (var i = 0u; i < 4u; i++) {
+        if uv_mode(l, d, i) == UV_LAYER_VERTEX { return i; }
+    }
+    return 4u;
+}
+
+// Stage `i`'s coordinates at a vertex: the mesh's, or the layer's at `on_layer` (the vertex moved
+// onto the layer) under `UV_LAYER_VERTEX`.
+fn vertex_uv(l: u32, d: Draw, i: u32, uv: vec2<f32>, on_layer: vec3<f32>) -> vec2<f32> {
+    if uv_mode(l, d, i) == UV_LAYER_VERTEX { return scaled(d, i, on_layer.xz); }
+    return scaled(d, i, uv);
+}
+
+// A vertex of the draw's shape, for `vs_main` and `vs_pair`. With cloud-layer coordinates per
+// vertex, the vertex moves along its ray onto the layer: the same ray, so the same pixels, but the
+// rasteriser's perspective-correct interpolation then runs over chords of the layer, on which its
+// coordinates are the points' own horizontal ones (exact for a flat layer, off by the chords' sag
+// for a curved one). The interpolated direction stays on the view ray.
+fn sky_vertex(position: vec3<f32>, uv: vec2<f32>) -> VertexOut {
+    var dir = (draw.object_from_local * vec4<f32>(position, 0.0)).xyz;
+    let k = vertex_layer_stage(LAYER_OWN, draw);
+    if k < 4u {
+        let unit = normalize(dir);
+        dir = unit * layer_distance(draw.stages[k].params, unit);
+    }
+    var out: VertexOut;
+    out.clip = sky_clip(dir);
+    out.uv = uv;
+    out.world_dir = dir;
+    out.mesh_uv01 = vec4<f32>(vertex_uv(LAYER_OWN, draw, 0u, uv, dir), vertex_uv(LAYER_OWN, draw, 1u, uv, dir));
+    out.mesh_uv23 = vec4<f32>(vertex_uv(LAYER_OWN, draw, 2u, uv, dir), vertex_uv(LAYER_OWN, draw, 3u, uv, dir));
+    return out;
+}

@@ -13,11 +13,16 @@ fn celestial_uv(dir: vec3<f32>) -> vec2<f32> {
 // displacement. The root of t^2 + 2 R y t - h (2 R + h) = 0 is taken in the form that does not
 // cancel on either side of the horizon. CPU twin: src/render/sky_objects/layer_map.rs.
 fn layer_uv(p: vec4<f32>, dir: vec3<f32>) -> vec2<f32> {
+    return dir.xz * layer_distance(p, dir);
+}
+
+// The distance along unit direction `dir` to the layer, in repeats (`layer_uv`).
+fn layer_distance(p: vec4<f32>, dir: vec3<f32>) -> f32 {
     let c = p.x * (2.0 * p.y + p.x);
     let s = sqrt(max(p.y * p.y * dir.y * dir.y + c, 0.0));
     var t = s - p.y * dir.y;
     if dir.y >= 0.0 { t = c / (p.y * dir.y + s); }
-    return dir.xz * t;
+    return t;
 }
 
 // The factor a cloud layer's sample is multiplied by: smooth from 0 at the horizon to 1 at the
@@ -27,18 +32,19 @@ fn layer_fade(p: vec4<f32>, dir: vec3<f32>) -> f32 {
     return smoothstep(0.0, p.z, dir.y);
 }
 
-// Where a layer's fragment lies: the view direction and each stage's texture coordinates under
-// the mesh mapping (stages 0 and 1, then 2 and 3), as the vertex shader interpolated them.
+// Where a layer's fragment lies: the view direction (any length) and each stage's texture
+// coordinates under the mesh mapping or a cloud layer's per vertex (stages 0 and 1, then 2 and
+// 3), as the vertex shader interpolated them.
 struct Place {
     world_dir: vec3<f32>,
     mesh_uv01: vec4<f32>,
     mesh_uv23: vec4<f32>,
 };
 
-// Stage `i`'s texture coordinates under its mapping `mode`: the mesh's come from the vertex
-// shader, the others from the view direction.
+// Stage `i`'s texture coordinates under its mapping `mode`: the mesh's and a layer's per vertex
+// come from the vertex shader, the others from the view direction.
 fn stage_uv(d: Draw, i: u32, mode: u32, at: Place) -> vec2<f32> {
-    if mode == UV_MESH {
+    if mode == UV_MESH || mode == UV_LAYER_VERTEX {
         switch i {
             case 0u: { return at.mesh_uv01.xy; }
             case 1u: { return at.mesh_uv01.zw; }
@@ -201,7 +207,7 @@ fn stage_sample(l: u32, d: Draw, i: u32, t: texture_2d<f32>, smp: sampler, at: P
         return textureSampleGrad(t, smp, uv, dx, dy);
     }
     let c = textureSample(t, smp, stage_uv(d, i, mode, at));
-    if mode == UV_LAYER { return c * layer_fade(d.stages[i].params, normalize(at.world_dir)); }
+    if mode == UV_LAYER || mode == UV_LAYER_VERTEX { return c * layer_fade(d.stages[i].params, normalize(at.world_dir)); }
     return c;
 }
 
@@ -212,10 +218,11 @@ fn stage_sample(l: u32, d: Draw, i: u32, t: texture_2d<f32>, smp: sampler, at: P
 // edges face outwards). The light is the sky model's (globals.cloud_sun = E T / pi as a display
 // value, so E T / (4 pi) is a quarter of it), in the target's space.
 fn lit_cloud(world_dir: vec3<f32>, depth: f32) -> vec4<f32> {
+    // The interpolated direction is a point on the grid's chords, or the layer's (any length).
     let dir = normalize(world_dir);
     let d_depth = vec2<f32>(dpdx(depth), dpdy(depth));
-    let d_dir_x = dpdx(world_dir);
-    let d_dir_y = dpdy(world_dir);
+    let d_dir_x = dpdx(dir);
+    let d_dir_y = dpdy(dir);
     let gx = d_dir_x / max(dot(d_dir_x, d_dir_x), 1e-12);
     let gy = d_dir_y / max(dot(d_dir_y, d_dir_y), 1e-12);
     // Depth slope per radian of view direction, scaled to a bump of a few degrees.

@@ -14,9 +14,10 @@ struct TexelOut {
 
 @vertex
 fn vs_texels(@location(0) position: vec3<f32>, @location(1) offset: vec2<f32>, @location(2) texel: vec4<f32>) -> TexelOut {
-    let own = sky_vertex(position, vec2<f32>(0.0));
+    // Placed as it is: under a layer's coordinates per vertex the polygons were built on the
+    // grid already moved onto the layer (src/render/sky_objects/upload.rs, `grid_on_layer`).
     var out: TexelOut;
-    out.clip = own.clip;
+    out.clip = sky_clip((draw.object_from_local * vec4<f32>(position, 0.0)).xyz);
     out.offset = offset;
     out.texel = texel;
     return out;

@@ -80,7 +80,7 @@ fn skipped(ui: &mut egui::Ui, info: &UiInfo<'_>) {
 /// now against the median when they were last all on.
 fn switches(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
     let s = info.stats;
-    use crate::render::plan::strategy::{CostlyLayers, FlashPlacement, LayerPairs, PhysicalTarget, RunJoining, SparseStages, UnderBackground, PRESETS};
+    use crate::render::plan::strategy::{CostlyLayers, FlashPlacement, LayerCoordinates, LayerPairs, PhysicalTarget, RunJoining, SparseStages, UnderBackground, PRESETS};
     let st = &mut c.options.strategy;
     ui.horizontal_wrapped(|ui| {
         ui.label(format!("fill strategy: {} (preset", st.name()));
@@ -114,6 +114,12 @@ fn switches(ui: &mut egui::Ui, c: &mut Controls, info: &UiInfo<'_>) {
         &format!("sparse stars ({} triangles, {} rectangles)", s.texel_triangles, s.background_rects),
         &mut st.sparse_stages,
         &[(SparseStages::Sampled, "sampled"), (SparseStages::TexelPolygons, "texel by texel"), (SparseStages::TexelPolygonsOnBands, "texel by texel, the rest on bands")],
+    );
+    choice(
+        ui,
+        "cloud-layer coordinates on a grid",
+        &mut st.layer_coordinates,
+        &[(LayerCoordinates::PerPixel, "per pixel"), (LayerCoordinates::PerVertex, "per vertex, on the layer's chords")],
     );
     choice(
         ui,

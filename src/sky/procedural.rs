@@ -360,6 +360,25 @@ fn image_from_fn(w: u32, h: u32, f: impl Fn(f32, f32) -> Rgba) -> ColorBitmap {
     ColorBitmap::from_fn(w, h, |x, y| f((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32))
 }
 
+/// `img` rolled (it repeats) so that its brightest neighbourhood, the mean of red over a square of
+/// `radius` texels either side, lies at texel (0, 0): under the cloud-layer mapping the origin of
+/// the texture is the zenith, and a star mask should not leave the zenith starless.
+fn brightest_at_origin(img: &ColorBitmap, radius: i64) -> ColorBitmap {
+    let (w, h) = (i64::from(img.width), i64::from(img.height));
+    let at = |x: i64, y: i64| img.texels[(y.rem_euclid(h) * w + x.rem_euclid(w)) as usize];
+    let mut best = (f32::NEG_INFINITY, 0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            let sum: f32 = (-radius..=radius).flat_map(|dy| (-radius..=radius).map(move |dx| (dx, dy))).map(|(dx, dy)| at(x + dx, y + dy)[0]).sum();
+            if sum > best.0 {
+                best = (sum, x, y);
+            }
+        }
+    }
+    let (_, bx, by) = best;
+    ColorBitmap::from_fn(img.width, img.height, |x, y| at(i64::from(x) + bx, i64::from(y) + by))
+}
+
 fn radial(u: f32, v: f32) -> f32 {
     ((u - 0.5).powi(2) + (v - 0.5).powi(2)).sqrt() * 2.0
 }
@@ -380,10 +399,13 @@ pub fn textures(seed: u64) -> Vec<(&'static str, ColorBitmap)> {
         }),
         (
             "star_mask.png",
-            image_from_fn(64, 64, |u, v| {
-                let n = smoothstep(0.35, 0.75, fbm(u, v, 4, 4, seed + 2));
-                [n, n, n, 1.0]
-            }),
+            brightest_at_origin(
+                &image_from_fn(64, 64, |u, v| {
+                    let n = smoothstep(0.35, 0.75, fbm(u, v, 4, 4, seed + 2));
+                    [n, n, n, 1.0]
+                }),
+                6,
+            ),
         ),
         (
             "halo.png",

@@ -70,6 +70,22 @@ pub enum SparseStages {
     TexelPolygonsOnBands,
 }
 
+/// Where a cloud-layer mapping's texture coordinates (`uv = { kind = "layer" }`) are computed for
+/// a layer drawn on its dome's grid (one with a stage of the mesh's own; layers mapped only by
+/// the view direction go on the dome's outline, per pixel either way).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LayerCoordinates {
+    /// Per pixel from the view direction: exact.
+    PerPixel,
+    /// Per vertex of the grid, the grid's vertices moved along their rays onto the layer so that
+    /// the rasteriser's perspective-correct interpolation runs over chords of the layer itself
+    /// (the view direction stays exact; the coordinates are off by the chords' sag, a fraction of
+    /// a texel for the stars' layer). Lavapipe takes interpolated coordinates' derivatives from
+    /// the triangle's setup instead of differencing across pixels, and a sparse stage under the
+    /// layer can then be drawn texel by texel on the same chords ([`SparseStages`]).
+    PerVertex,
+}
+
 /// Where the lightning flash (one additive colour over the sky, above every layer) is added.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FlashPlacement {
@@ -162,6 +178,9 @@ pub struct FillStrategy {
     pub under_background: UnderBackground,
     /// How a sparse stage of the fused background is drawn.
     pub sparse_stages: SparseStages,
+    /// Where cloud-layer coordinates of a layer on its dome's grid are computed (a sparse stage
+    /// under the layer mapping is drawn texel by texel only per vertex).
+    pub layer_coordinates: LayerCoordinates,
     /// Where the lightning flash is added.
     pub flash: FlashPlacement,
     /// How two neighbouring alpha-blended layers of a run are drawn.
@@ -179,13 +198,14 @@ pub struct FillStrategy {
 }
 
 /// The named presets, for the command line and reports.
-pub const PRESETS: [(&str, FillStrategy); 6] = [
+pub const PRESETS: [(&str, FillStrategy); 7] = [
     ("software", FillStrategy::software()),
     ("plain", FillStrategy::plain()),
     ("software-hdr", FillStrategy::software().with_hdr()),
     ("software-as-painted", FillStrategy { physical_target: PhysicalTarget::DisplayAsPainted, ..FillStrategy::software() }),
     ("software-exact-curves", FillStrategy { display_curves: DisplayCurves::Exact, ..FillStrategy::software() }),
     ("software-costly-in-run", FillStrategy { costly_layers: CostlyLayers::InRun, ..FillStrategy::software() }),
+    ("software-layer-per-pixel", FillStrategy { layer_coordinates: LayerCoordinates::PerPixel, ..FillStrategy::software() }),
 ];
 
 impl FillStrategy {
@@ -197,6 +217,7 @@ impl FillStrategy {
             runs: RunJoining::SeededFolded,
             under_background: UnderBackground::AdditiveFused,
             sparse_stages: SparseStages::TexelPolygonsOnBands,
+            layer_coordinates: LayerCoordinates::PerVertex,
             flash: FlashPlacement::InRun,
             pairs: LayerPairs::AtOnce,
             costly_layers: CostlyLayers::OwnBuffer,
@@ -221,6 +242,7 @@ impl FillStrategy {
             runs: RunJoining::Separate,
             under_background: UnderBackground::Nothing,
             sparse_stages: SparseStages::Sampled,
+            layer_coordinates: LayerCoordinates::PerPixel,
             flash: FlashPlacement::OverFrame,
             pairs: LayerPairs::OneByOne,
             costly_layers: CostlyLayers::InRun,
@@ -291,6 +313,11 @@ impl FillStrategy {
     /// Whether sparse stages are drawn texel by texel.
     pub fn texel_polygons(&self) -> bool {
         self.sparse_stages != SparseStages::Sampled
+    }
+
+    /// Whether cloud-layer coordinates on a dome's grid are interpolated from its vertices.
+    pub fn layer_per_vertex(&self) -> bool {
+        self.layer_coordinates == LayerCoordinates::PerVertex
     }
 
     /// Whether the background without its sparse stage goes on one triangle and bands.

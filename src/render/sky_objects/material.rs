@@ -61,6 +61,11 @@ pub(super) const UV_CELESTIAL_LEVEL0: u32 = 5;
 /// shaders/sky_objects/draw.wgsl.
 pub(super) const UV_LAYER: u32 = 6;
 
+/// UV mode of the cloud-layer mapping computed per vertex of the dome's grid, the grid moved onto
+/// the layer (`LayerCoordinates::PerVertex`; a variant of the mapping, never in a uniform). Keep
+/// in sync with `UV_LAYER_VERTEX` in shaders/sky_objects/draw.wgsl.
+pub(super) const UV_LAYER_VERTEX: u32 = 7;
+
 /// UV mode numbers shared with the shader.
 pub(super) fn uv_mode(uv: &UvSource) -> (u32, [f32; 4]) {
     match *uv {

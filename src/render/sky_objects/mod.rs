@@ -40,7 +40,7 @@ use crate::render::frame::camera::Camera;
 use crate::render::frame::pass::{Caps, DrawItem, FrameContext, OwnBuffer, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
 use crate::render::frame::renderer::FrameStats;
 use crate::render::gpu::error::RenderResult;
-use crate::render::gpu::mesh::{outline_mesh, shape_key, shape_mesh, GpuMesh, SkyVertex};
+use crate::render::gpu::mesh::{outline_mesh, shape_key, shape_mesh, GpuMesh, MeshData, SkyVertex};
 use crate::render::gpu::shaders;
 use crate::render::gpu::textures::{self, TextureCache};
 use crate::render::plan::mip_bounds::{self, DomeGrid, DrawMesh};
@@ -85,6 +85,9 @@ pub struct SkyObjectsPass {
     map_divisor: Divisor,
     /// Sparse stages are drawn texel by texel this frame ([`crate::render::plan::strategy::SparseStages::TexelPolygons`]).
     texels_on: bool,
+    /// Cloud-layer stages of draws on their grid computed per vertex this frame
+    /// ([`crate::render::plan::strategy::LayerCoordinates::PerVertex`]).
+    layer_per_vertex: bool,
     /// The rest of such a draw goes as bands where the polygons stand for the stage
     /// ([`crate::render::plan::strategy::SparseStages::TexelPolygonsOnBands`]).
     bands_on: bool,
@@ -203,6 +206,7 @@ impl SkyObjectsPass {
             reduces: false,
             map_divisor: Divisor::FULL,
             texels_on: false,
+            layer_per_vertex: false,
             bands_on: false,
             missing_pipelines: std::cell::Cell::new(0),
             texel_triangles: std::cell::Cell::new(0),
@@ -441,6 +445,7 @@ impl Pass for SkyObjectsPass {
         self.hidden = 0;
         self.draws_dark = 0;
         self.texels_on = cx.options.strategy.texel_polygons() && cx.target == Target::Display;
+        self.layer_per_vertex = cx.options.strategy.layer_per_vertex();
         self.bands_on = cx.options.strategy.grid_bands();
         self.texel_triangles.set(0);
         self.missing_pipelines.set(0);

@@ -45,7 +45,10 @@ impl SkyObjectsPass {
         let Some(draws) = &self.draws.current else { return false };
         let (a, b) = (&draws.objects[lower.index][lower.version], &draws.objects[upper.index][upper.version]);
         let one_cover = Arc::ptr_eq(&a.mesh, &b.mesh) || (a.shape == b.shape && (a.outline || b.outline));
-        self.pair_candidate(lower) && self.pair_candidate(upper) && one_cover
+        // Coordinates per vertex move the grid onto one layer: the other draw's would be
+        // interpolated over the wrong chords.
+        let per_vertex = self.layer_per_vertex && (a.vertex_modes.is_some() || b.vertex_modes.is_some());
+        self.pair_candidate(lower) && self.pair_candidate(upper) && one_cover && !per_vertex
     }
 
     /// The mesh a pair is drawn on: the one draw's grid where the other draws an outline.

@@ -81,14 +81,17 @@ impl SkyObjectsPass {
 
     /// The background signature `key` with its sparse stage `stage` drawn texel by texel: the
     /// signature without the stage, if the stage makes a term of its own that the polygons can
-    /// stand for (mesh-mapped, not the sky model's, the term's other stages folded into it as
+    /// stand for (mesh-mapped or a cloud layer's per vertex, not the sky model's, the term's other stages folded into it as
     /// white, no lighting) on the display target, in a layer without the sky model's map (whose
     /// terms are summed in radiance and tone-mapped by the layer: the polygons' display values
     /// could not join that sum).
     pub(super) fn without_texel_stage(key: &VariantKey, stage: usize) -> Option<VariantKey> {
         let background = matches!(key.placement, Slot::Background | Slot::JoinedBackground);
         let own_term = (0..MAX_STAGES).filter(|&j| j != stage && key.live[j]).all(|j| j > stage && key.modes[j] == UV_WHITE && key.ops[j] == 1 && key.constants[j] == NO_STAGE);
-        let term = key.live[stage] && key.modes[stage] == UV_MESH && key.ops[stage] != 1 && key.view_stage as usize >= MAX_STAGES && key.lighting == 0;
+        // Per vertex, the polygons lie on the same chords of the layer as the grid the sample
+        // would be interpolated over.
+        let on_grid = key.modes[stage] == UV_MESH || key.modes[stage] == UV_LAYER_VERTEX;
+        let term = key.live[stage] && on_grid && key.ops[stage] != 1 && key.view_stage as usize >= MAX_STAGES && key.lighting == 0;
         (background && key.target == Target::Display && !key.reduced && own_term && term).then(|| {
             let mut live = key.live;
             live[stage] = false;
