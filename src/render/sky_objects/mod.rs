@@ -513,9 +513,13 @@ impl Pass for SkyObjectsPass {
                 // has more per degree towards its edges), in this draw's buffer along its coarser
                 // side (where its textures minify first).
                 let px_per_deg = view.centre_px_per_deg(cx.size.1) / e.divisor.coarser();
+                // Layer coordinates interpolated per vertex change faster than the layer's own in
+                // places (the chords' sag): their bound takes a margin more.
+                let per_vertex = d.vertex_modes.filter(|_| self.layer_per_vertex);
+                let margin = |k: usize| if per_vertex.is_some_and(|m| m[k] == UV_LAYER_VERTEX) { LOD_MARGIN * PER_VERTEX_LOD_MARGIN } else { LOD_MARGIN };
                 let level0 = |ring: Option<usize>| {
                     (0..MAX_STAGES)
-                        .filter(|&k| d.maps[k].as_ref().is_some_and(|m| m.peak(&d.shape, ring, &view) * LOD_MARGIN <= px_per_deg * std::f32::consts::SQRT_2))
+                        .filter(|&k| d.maps[k].as_ref().is_some_and(|m| m.peak(&d.shape, ring, &view) * margin(k) <= px_per_deg * std::f32::consts::SQRT_2))
                         .fold(0u8, |m, k| m | 1 << k)
                 };
                 let mesh = match crate::render::gpu::mesh::dome_grid(&d.shape) {
