@@ -69,10 +69,10 @@ struct VertexOut {
     @location(0) uv: vec2<f32>,
     @location(1) world_dir: vec3<f32>,
     // Each stage's texture coordinates under the mesh mapping (stages 0 and 1, then 2 and 3):
-    // affine in the mesh's, so exact per vertex; or a cloud layer's per vertex (`sky_vertex`). Interpolated inputs sampled as they are cost
-    // lavapipe much less than coordinates computed per pixel (it takes their derivatives from
-    // the triangle's setup instead of differencing across pixels): about 2 ms per full-screen
-    // layer of two stages at 1280x720.
+    // affine in the mesh's, so exact per vertex; or a cloud layer's per vertex (`sky_vertex`).
+    // Interpolated inputs sampled as they are cost lavapipe much less than coordinates computed
+    // per pixel (it takes their derivatives from the triangle's setup instead of differencing
+    // across pixels): about 2 ms per full-screen layer of two stages at 1280x720.
     @location(2) mesh_uv01: vec4<f32>,
     @location(3) mesh_uv23: vec4<f32>,
 };

@@ -79,8 +79,9 @@ pub enum LayerCoordinates {
     PerPixel,
     /// Per vertex of the grid, the grid's vertices moved along their rays onto the layer so that
     /// the rasteriser's perspective-correct interpolation runs over chords of the layer itself
-    /// (the view direction stays exact; the coordinates are off by the chords' sag, a fraction of
-    /// a texel for the stars' layer). Lavapipe takes interpolated coordinates' derivatives from
+    /// (the view direction stays exact; the coordinates are off by the chords' sag: for the
+    /// stars' layer 0.01 texels near the zenith to 3 in the bottom ring, src/render/sky_objects/upload.rs
+    /// tests). Lavapipe takes interpolated coordinates' derivatives from
     /// the triangle's setup instead of differencing across pixels, and a sparse stage under the
     /// layer can then be drawn texel by texel on the same chords ([`SparseStages`]).
     PerVertex,

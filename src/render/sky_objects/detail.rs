@@ -37,9 +37,9 @@ pub(super) fn stage_texels_per_deg(stage: &crate::sky::resolved::Stage, shape: &
 /// rasteriser derives (from differences across 2x2 pixels, along triangles' chords rather than
 /// arcs) before a level-0 sampler could differ from the mipmapped one.
 pub(super) const LOD_MARGIN: f32 = 1.25;
-/// The further margin of a cloud layer's coordinates interpolated per vertex: over the grid's
-/// chords of the layer they change up to this much faster than the layer's own in places (found
-/// on the stars' layer at dusk looking up, tests/skips.rs, where 1.0 moved 0.04% of the pixels).
+/// The further margin of a cloud layer's coordinates interpolated per vertex, whose rate over the
+/// grid's chords of the layer departs from the layer's own in places: found by tests/skips.rs (at
+/// 1.0 a level-0 sampler moved 0.04% of the pixels at dusk looking up), not derived.
 pub(super) const PER_VERTEX_LOD_MARGIN: f32 = 1.2;
 
 /// What the frame shows, for bounding how finely a texture lands on its pixels.

@@ -515,7 +515,7 @@ impl Pass for SkyObjectsPass {
                 let px_per_deg = view.centre_px_per_deg(cx.size.1) / e.divisor.coarser();
                 // Layer coordinates interpolated per vertex change faster than the layer's own in
                 // places (the chords' sag): their bound takes a margin more.
-                let per_vertex = d.vertex_modes.filter(|_| self.layer_per_vertex);
+                let per_vertex = d.vertex_modes_for(self.layer_per_vertex);
                 let margin = |k: usize| if per_vertex.is_some_and(|m| m[k] == UV_LAYER_VERTEX) { LOD_MARGIN * PER_VERTEX_LOD_MARGIN } else { LOD_MARGIN };
                 let level0 = |ring: Option<usize>| {
                     (0..MAX_STAGES)

@@ -47,7 +47,7 @@ impl SkyObjectsPass {
         let one_cover = Arc::ptr_eq(&a.mesh, &b.mesh) || (a.shape == b.shape && (a.outline || b.outline));
         // Coordinates per vertex move the grid onto one layer: the other draw's would be
         // interpolated over the wrong chords.
-        let per_vertex = self.layer_per_vertex && (a.vertex_modes.is_some() || b.vertex_modes.is_some());
+        let per_vertex = a.vertex_modes_for(self.layer_per_vertex).is_some() || b.vertex_modes_for(self.layer_per_vertex).is_some();
         self.pair_candidate(lower) && self.pair_candidate(upper) && one_cover && !per_vertex
     }
 

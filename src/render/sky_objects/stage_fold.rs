@@ -93,26 +93,25 @@ pub fn folds(v: &Version) -> Vec<Fold> {
     let mut k = 0;
     while k + 1 < v.stages.len() {
         if let (Some((a, ta)), Some((b, tb))) = (static_stage(v, k), static_stage(v, k + 1)) {
-            // Texels per unit of the mapping's coordinates, then how many units the texture spans:
-            // one repeat of the mesh's; the dome's square of the layer's, and a margin.
+            // Texels per unit of the mapping's coordinates.
             let density = |ta: u32, sa: f32, tb: u32, sb: f32| (ta as f32 * sa.abs()).max(tb as f32 * sb.abs());
             let (du, dv) = (density(ta.width, a.uv_scale[0], tb.width, b.uv_scale[0]), density(ta.height, a.uv_scale[1], tb.height, b.uv_scale[1]));
-            // Under a layer: the dome's reach and the margin, rounded up to whole texels.
+            // The texture's extent and size: one repeat of the mesh's coordinates; under a layer,
+            // the dome's reach and the margin, rounded up to whole texels of the finer stage.
             let whole = |reach: f32, d: f32| (2.0 * (reach + LAYER_MARGIN_TEXELS / d.max(1e-6)) * d).ceil() / (2.0 * d.max(1e-6));
-            let half_extent: Option<Option<[f32; 2]>> = match (a.uv, layer_params(a.uv)) {
-                (UvSource::Layer { .. }, Some(p)) if a.uv == b.uv && !(a.clamp || b.clamp) => {
-                    layer_reach(&p, &v.shape).map(|reach| Some([whole(reach as f32, du), whole(reach as f32, dv)]))
-                }
-                (UvSource::Mesh, _) if b.uv == UvSource::Mesh => Some(None),
+            let side = |texels: f32| texels.round().clamp(1.0, u32::MAX as f32) as u32;
+            let folded = match (a.uv, layer_params(a.uv)) {
+                (UvSource::Layer { .. }, Some(p)) if a.uv == b.uv && !(a.clamp || b.clamp) => layer_reach(&p, &v.shape).map(|reach| {
+                    let e = [whole(reach as f32, du), whole(reach as f32, dv)];
+                    (Some(e), (side(2.0 * e[0] * du), side(2.0 * e[1] * dv)))
+                }),
+                (UvSource::Mesh, _) if b.uv == UvSource::Mesh => Some((None, (side(du.ceil()), side(dv.ceil())))),
                 _ => None,
             };
-            let Some(half_extent) = half_extent else {
+            let Some((half_extent, size)) = folded else {
                 k += 1;
                 continue;
             };
-            let span = half_extent.map_or([1.0, 1.0], |e| [2.0 * e[0], 2.0 * e[1]]);
-            let side = |d: f32, span: f32| (d * span).round().clamp(1.0, u32::MAX as f32) as u32;
-            let size = if half_extent.is_some() { (side(du, span[0]), side(dv, span[1])) } else { (side(du.ceil(), 1.0), side(dv.ceil(), 1.0)) };
             let fits = size.0 <= MAX_SIDE && size.1 <= MAX_SIDE && size.0 * size.1 <= MAX_TEXELS;
             if b.op == StageOp::Modulate && (a.constant.is_none() || b.constant.is_none()) && fits {
                 out.push(Fold { stage: k, size, clamp: a.clamp || b.clamp, half_extent });
@@ -199,6 +198,10 @@ mod tests {
     use super::*;
     use crate::sky::builtin::default_sky;
 
+    /// The built-in skydome's folded stars and mask, texels: 2 x (3.17 + 2 / 128) repeats of the
+    /// stars' layer at 128 texels a repeat, the dome's reach at -20 degrees and the margin.
+    const SKYDOME_FOLD: (u32, u32) = (816, 816);
+
     fn version_of(name: &str) -> Version {
         default_sky().objects.iter().find(|o| o.name == name).map(|o| o.standard.clone()).expect("built-in object")
     }
@@ -210,9 +213,9 @@ mod tests {
             for v in std::iter::once(&o.standard).chain(&o.fallback) {
                 let f = folds(v);
                 if o.name == "skydome" && v.stages.len() > 2 {
-                    // Stars (128 x 128, ten by five times) times their mask.
-                    assert_eq!(f.len(), 1, "{}", o.name);
-                    assert_eq!((f[0].stage, f[0].clamp), (1, false), "{}", o.name);
+                    // Stars (128 x 128 a repeat of their layer) times their mask, over the dome's
+                    // reach and the margin in whole stars' texels.
+                    assert_eq!(f.iter().map(|f| (f.stage, f.size, f.clamp)).collect::<Vec<_>>(), vec![(1, SKYDOME_FOLD, false)], "{}", o.name);
                 } else if o.name == "skydome" {
                     assert!(f.len() <= 1, "{}", o.name);
                 } else {

@@ -34,6 +34,14 @@ pub(super) struct VersionDraw {
     pub(super) vertex_modes: Option<[u32; MAX_STAGES]>,
 }
 
+impl VersionDraw {
+    /// [`Self::vertex_modes`] where the frame's strategy computes layer coordinates per vertex
+    /// (`per_vertex`), else None.
+    pub(super) fn vertex_modes_for(&self, per_vertex: bool) -> Option<[u32; MAX_STAGES]> {
+        self.vertex_modes.filter(|_| per_vertex)
+    }
+}
+
 /// The UV modes of `sig` with the stages of `v` under the first cloud layer it maps (the same
 /// layer: one distance per vertex moves the grid onto it) computed per vertex: `UV_LAYER_VERTEX`.
 /// None on the dome's outline (its triangles span the whole dome: nothing to interpolate from) or

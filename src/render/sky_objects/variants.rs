@@ -322,7 +322,7 @@ impl SkyObjectsPass {
         let level0 = if e.parts.1 > 0 { self.parts.get(e.parts.0 as usize).map_or(0, |p| p.1) } else { 0 };
         // Cloud-layer stages of a draw on its grid per vertex where the strategy says so (one
         // pipeline for every part too: it does not depend on the rings).
-        let vertex_modes = self.draws.current.as_ref().and_then(|d| d.objects[e.index][e.version].vertex_modes).filter(|_| self.layer_per_vertex);
+        let vertex_modes = self.draws.current.as_ref().and_then(|d| d.objects[e.index][e.version].vertex_modes_for(self.layer_per_vertex));
         let modes = std::array::from_fn(|s| match (k.modes[s], vertex_modes) {
             (UV_CELESTIAL, _) if level0 & (1 << s) != 0 => UV_CELESTIAL_LEVEL0,
             (UV_LAYER, Some(m)) => m[s],
