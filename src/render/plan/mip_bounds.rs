@@ -36,6 +36,13 @@ impl DomeGrid {
         let (a, b) = (top + (bottom - top) * r as f32 / n, top + (bottom - top) * (r + 1) as f32 / n);
         (a.min(b), a.max(b))
     }
+
+    /// Whether a frame showing elevations `lowest_deg..highest_deg` may show ring `r`: with the
+    /// margin of the chords' sag (tests in gpu/mesh.rs).
+    pub fn ring_shown(&self, r: u32, lowest_deg: f32, highest_deg: f32) -> bool {
+        let (ring_lo, ring_hi) = self.ring_deg(r);
+        ring_lo - 0.5 <= highest_deg && ring_hi + 0.5 >= lowest_deg
+    }
 }
 
 /// The mesh of one draw, as the mip bounds see it.
@@ -71,10 +78,8 @@ pub fn parts(mesh: DrawMesh, shown_deg: (f32, f32), covered_below_deg: f32, leve
     let mut out: Vec<Part> = Vec::new();
     let mut used = 0u8;
     for r in 0..grid.rings {
-        let (ring_lo, ring_hi) = grid.ring_deg(r);
-        // With the margin of the chords' sag (tests in gpu/mesh.rs); rings the scene covers whole
-        // are left out too.
-        if ring_lo - 0.5 > highest_deg || ring_hi + 0.5 < lowest_deg.max(covered_below_deg) {
+        // Rings the scene covers whole are left out too.
+        if !grid.ring_shown(r, lowest_deg.max(covered_below_deg), highest_deg) {
             continue;
         }
         let mask = level0(Some(r as usize));

@@ -199,6 +199,8 @@ pub struct ResolutionFacts {
     /// Texels per degree the sky-view map holds where the frame shows it densest, across the
     /// frame and down it ([`map_texels_per_deg`]).
     pub map_texels_per_deg: (f32, f32),
+    /// The lowest and highest elevation the frame shows, degrees.
+    pub shown_deg: (f32, f32),
 }
 
 impl ResolutionFacts {
@@ -212,6 +214,7 @@ impl ResolutionFacts {
             coarsest,
             finest_whole: resolution.finest_whole(),
             map_texels_per_deg: map_texels_per_deg(elevations_deg),
+            shown_deg: elevations_deg,
         }
     }
 

@@ -42,6 +42,32 @@ pub(super) const LOD_MARGIN: f32 = 1.25;
 /// 1.0 a level-0 sampler moved 0.04% of the pixels at dusk looking up), not derived.
 pub(super) const PER_VERTEX_LOD_MARGIN: f32 = 1.2;
 
+/// Each stage's finest detail (texels per degree) where a frame showing elevations `shown_deg`
+/// (lowest, highest) draws a dome on `grid`: its peak density over the rings in view
+/// ([`StageMap::ring_peaks`]) over its oversampling, where that is less than `whole` (over the
+/// whole shape, as [`stage_texels_per_deg`] bounds it, over the same oversampling). A cloud
+/// layer's texels crowd towards the horizon, so a frame looking up can draw it in a coarser
+/// buffer. As dense as what the frame shows or denser: a ring's peak covers all of the ring, and
+/// a layer's horizon fade, which `whole` counts, only lowers the detail. Stage `keep` (the sparse
+/// one drawn texel by texel: its polygons go at full resolution, where a reduced buffer would
+/// blur its points) and stages without ring peaks keep `whole`.
+pub(super) fn texels_per_deg_shown(
+    maps: &[Option<StageMap>; MAX_STAGES],
+    (whole, oversampling): ([f32; MAX_STAGES], [f32; MAX_STAGES]),
+    keep: Option<usize>,
+    grid: DomeGrid,
+    (lowest_deg, highest_deg): (f32, f32),
+) -> [f32; MAX_STAGES] {
+    std::array::from_fn(|k| match &maps[k] {
+        Some(m) if m.ring_peaks.len() == grid.rings as usize && keep != Some(k) => {
+            let shown = (0..grid.rings).filter(|&r| grid.ring_shown(r, lowest_deg, highest_deg));
+            let peak = shown.map(|r| m.ring_peaks[r as usize]).fold(0.0, f32::max);
+            whole[k].min(peak / oversampling[k].max(1.0))
+        }
+        _ => whole[k],
+    })
+}
+
 /// What the frame shows, for bounding how finely a texture lands on its pixels.
 pub(super) struct FrameView {
     /// Lowest and highest elevation in the frame, degrees.
@@ -267,3 +293,41 @@ pub fn texture_oversampling(img: &TextureImage) -> f32 {
 /// Levels of 255 a texture may lose in 99% of its values and still count as carried by a
 /// coarser sampling ([`texture_oversampling`]).
 pub const DETAIL_TOLERANCE: u8 = 4;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::gpu::mesh::dome_grid;
+    use crate::sky::builtin::default_sky;
+
+    #[test]
+    fn a_layer_looking_up_is_coarser_than_across_the_horizon_and_never_coarser_than_shown() {
+        // The built-in clear-weather clouds: two stages on a layer 2 km up round a 4 km planet.
+        let sky = default_sky();
+        let v = &sky.objects.iter().find(|o| o.name == "clouds_clear").expect("the clouds").standard;
+        let maps: [Option<StageMap>; MAX_STAGES] = std::array::from_fn(|k| v.stages.get(k).and_then(|s| StageMap::of(s, &v.shape)));
+        let whole: [f32; MAX_STAGES] = std::array::from_fn(|k| v.stages.get(k).map_or(0.0, |s| stage_texels_per_deg(s, &v.shape)));
+        let detail = (whole, [1.0; MAX_STAGES]);
+        let grid = DomeGrid::from_tuple(dome_grid(&v.shape).expect("a dome"));
+        // Across the horizon (the bench's view, -30 to 38 degrees): the whole dome's.
+        assert_eq!(texels_per_deg_shown(&maps, detail, None, grid, (-30.0, 38.0)), whole);
+        // Looking up (the zenith preset shows 34.5 to 90 degrees): measured 0.662 of it for both.
+        let up = texels_per_deg_shown(&maps, detail, None, grid, (34.5, 90.0));
+        for k in 0..2 {
+            let ratio = up[k] / whole[k];
+            assert!((0.64..0.68).contains(&ratio), "stage {k}: {ratio}");
+        }
+        // The stage drawn texel by texel keeps the whole dome's.
+        assert_eq!(texels_per_deg_shown(&maps, detail, Some(1), grid, (34.5, 90.0))[1], whole[1]);
+        // Never less than the exact peak over what a frame shows, nor more than the whole dome's.
+        for lo in (-25..=85).step_by(5) {
+            let shown_deg = (lo as f32, (lo as f32 + 30.0).min(90.0));
+            let shown = texels_per_deg_shown(&maps, detail, None, grid, shown_deg);
+            let view = FrameView { elevation_deg: shown_deg, sun_max_deg: 180.0, half_fov_y: 0.0, celestial_pole_deg: 0.0 };
+            for k in 0..2 {
+                let exact = maps[k].as_ref().expect("a texture").peak_texels_per_deg(&v.shape, &view);
+                assert!(shown[k] >= exact * 0.999 && shown[k] <= whole[k], "{shown_deg:?}, stage {k}: {} against {exact}, whole {}", shown[k], whole[k]);
+            }
+        }
+    }
+}

@@ -614,7 +614,7 @@ fn push_version(visible: &mut Vec<Visible>, entry: Visible, (d, key): (&VersionD
         count: key.count as usize,
         terms: stage_terms(key.ops),
         live: key.live,
-        texels_per_deg: d.texels_per_deg,
+        texels_per_deg: d.texels_per_deg_shown(facts.shown_deg),
         physical: (key.view_stage as usize) < MAX_STAGES,
         blend: d.blend,
     };

@@ -26,6 +26,9 @@ pub(super) struct VersionDraw {
     pub(super) signature: MaterialSignature,
     /// Finest detail of each stage's texture on the sky, texels per degree (0: no stage).
     pub(super) texels_per_deg: [f32; 4],
+    /// How much finer each stage's texels are than the detail they carry
+    /// ([`texture_oversampling`]; 1 for a folded texture and without a texture).
+    pub(super) oversampling: [f32; 4],
     /// A sparse stage's texels as polygons on the grid ([`crate::render::sky_objects::texel_quads`]): the stage and
     /// its polygons.
     pub(super) texels: Option<(usize, Arc<GpuTexelMesh>)>,
@@ -35,6 +38,14 @@ pub(super) struct VersionDraw {
 }
 
 impl VersionDraw {
+    /// [`Self::texels_per_deg`] where a frame shows elevations `shown_deg` (lowest, highest):
+    /// [`texels_per_deg_shown`] over its dome's grid, the stage drawn texel by texel kept.
+    pub(super) fn texels_per_deg_shown(&self, shown_deg: (f32, f32)) -> [f32; MAX_STAGES] {
+        let Some(grid) = crate::render::gpu::mesh::dome_grid(&self.shape).map(DomeGrid::from_tuple) else { return self.texels_per_deg };
+        let keep = self.texels.as_ref().map(|(k, _)| *k);
+        texels_per_deg_shown(&self.maps, (self.texels_per_deg, self.oversampling), keep, grid, shown_deg)
+    }
+
     /// [`Self::vertex_modes`] where the frame's strategy computes layer coordinates per vertex
     /// (`per_vertex`), else None.
     pub(super) fn vertex_modes_for(&self, per_vertex: bool) -> Option<[u32; MAX_STAGES]> {
@@ -243,9 +254,10 @@ impl Uploader<'_> {
         let bind_groups = self.bind_groups(label, &uniform, (&views, &samplers, &level0_samplers), level0_able);
         let gradient_stage = v.gradients.as_ref().map(|g| g.stage);
         let mut texels_per_deg = [0.0; 4];
-        for (k, s) in v.stages.iter().enumerate() {
-            let oversampling = s.texture.as_ref().map_or(1.0, |t| *self.oversampling.entry(t.key.clone()).or_insert_with(|| texture_oversampling(t)));
-            texels_per_deg[k] = stage_texels_per_deg(s, &v.shape) / oversampling;
+        let mut oversampling = [1.0; 4];
+        for (k, s) in v.stages.iter().enumerate().take(MAX_STAGES) {
+            oversampling[k] = s.texture.as_ref().map_or(1.0, |t| *self.oversampling.entry(t.key.clone()).or_insert_with(|| texture_oversampling(t)));
+            texels_per_deg[k] = stage_texels_per_deg(s, &v.shape) / oversampling[k];
         }
         let signature = MaterialSignature::of(v, &folds.iter().map(|f| f.stage).collect::<Vec<_>>());
         let mut base = DrawUniform::from(v).with_signature(&signature);
@@ -254,6 +266,7 @@ impl Uploader<'_> {
             // A folded texture carries the finer detail of its two stages.
             texels_per_deg[first] = texels_per_deg[first].max(texels_per_deg[second]);
             texels_per_deg[second] = 0.0;
+            (oversampling[first], oversampling[second]) = (1.0, 1.0);
             let scale = f.uv_scale();
             base.stages[first].scale_offset = [scale[0], scale[1], 0.0, 0.0];
         }
@@ -273,6 +286,7 @@ impl Uploader<'_> {
             base,
             signature,
             texels_per_deg,
+            oversampling,
             texels,
             vertex_modes,
         }
