@@ -6,7 +6,8 @@ mod common;
 use std::collections::VecDeque;
 use std::process::Command;
 
-use skytune::app::ui::{self, Controls, UiAction, UiInfo};
+use skytune::app::controls::{CompareInfo, Controls, UiInfo};
+use skytune::app::ui::{self, UiAction};
 use skytune::render::FrameStats;
 use skytune::sky::builtin::default_sky;
 use skytune::sky::FrameInput;
@@ -40,7 +41,7 @@ fn run_panels_at(controls: &mut Controls, events: Vec<egui::Event>, size: (f32, 
         sheet_progress: Some((3, 32)),
         last_capture: "",
         model_progress: Some(0.4),
-        compare: controls.compare.open.then(|| ui::CompareInfo {
+        compare: controls.compare.open.then(|| CompareInfo {
             texture: None,
             summary: Some(("model lut".into(), "FLIP mean 0.1".into(), skytune::measure::image_diff::FlipSummary { mean: 0.1, p95: 0.2, max: 0.5 })),
             progress: Some(0.5),

@@ -122,7 +122,7 @@ fn the_window_opens_with_the_editor_and_keeps_half_for_the_sky() {
 fn reopening_a_bitmap_brings_its_history_back() {
     let (_dir, sky_path) = common::default_sky_folder();
     let sky = skytune::sky::load_sky_file(&sky_path).unwrap();
-    let mut c = skytune::app::ui::Controls::default();
+    let mut c = skytune::app::controls::Controls::default();
     skytune::app::ui::open_curves(&mut c, &sky, "fog.png", "fog_color".into(), false);
     c.curves.as_mut().unwrap().editor.apply(&Edit::SetColor { x: 3, y: 0, rgba: [1.0, 0.0, 0.0, 1.0] }, false);
     // Another bitmap, then back: the edit and its undo are still there.

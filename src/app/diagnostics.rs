@@ -4,7 +4,7 @@
 
 use std::collections::VecDeque;
 
-use super::ui::{section, Controls, UiInfo};
+use super::controls::{section, Controls, UiInfo};
 
 /// The frame's statistics: frame time and its graph, then collapsible sections for the time per
 /// phase and section, what was drawn and skipped, and the renderer's switches.

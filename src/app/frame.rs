@@ -11,7 +11,8 @@ use winit::event_loop::ActiveEventLoop;
 use winit::keyboard::{Key, NamedKey};
 
 use super::capture::{free_path, screenshot_name, ContactSheet};
-use super::ui::{self, UiAction, UiInfo};
+use super::controls::{CompareInfo, UiInfo};
+use super::ui::{self, UiAction};
 use super::window::UiPaint;
 use super::App;
 use crate::files::hot_reload::{ReloadEvent, SkySpec};
@@ -301,7 +302,7 @@ impl App {
         let compare = self.controls.compare.open.then(|| {
             let c = &self.controls.compare;
             let texture = self.compare.picture(gpu.egui_state.egui_ctx(), c.layout, c.split);
-            ui::CompareInfo {
+            CompareInfo {
                 texture,
                 summary: self.compare.result.as_ref().map(|r| (r.b_label.clone(), r.diff.summary(), r.diff.flip)),
                 progress: self.compare.pending.then_some(self.compare.progress.unwrap_or(0.0)),

@@ -8,15 +8,17 @@
 //! - [`compare`]: the compare view (two renders, their difference) and snapshots;
 //! - [`auto_pick`]: `kind = "auto"` measured on a worker, the window rendering meanwhile;
 //! - [`layout`]: panel widths and sections, the sky view's rectangle;
-//! - [`ui`]: the panels; [`diagnostics`]: their statistics section.
+//! - [`controls`]: what the panels read and write; [`ui`]: the panels; [`diagnostics`]: their
+//!   statistics section.
 
 pub mod auto_pick;
 pub mod capture;
 pub mod compare;
+pub mod controls;
 pub mod curve_bake;
 pub mod curve_editor;
 pub mod diagnostics;
-pub mod frame;
+mod frame;
 pub mod layout;
 pub mod settings;
 pub mod ui;
@@ -38,8 +40,8 @@ use crate::files::watch::FileWatcher;
 use crate::render::{AdapterChoice, FillStrategy, GpuContext, Headless, RenderOptions, ShaderLibrary};
 use crate::sky::{Clock, FrameInput, Stepping, Tier};
 use capture::{screenshot_name, ContactSheet};
+use controls::Controls;
 use settings::Settings;
-use ui::Controls;
 use window::WindowGpu;
 
 /// How the window was asked to start.

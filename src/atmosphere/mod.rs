@@ -10,8 +10,10 @@ pub mod analytic;
 pub mod cases;
 pub mod cells;
 pub mod dome;
+pub mod error;
 pub mod precomputed;
 pub mod reference;
+pub use error::AtmosphereError;
 pub use precomputed::{PrecomputedSettings, TablePrecision};
 pub mod represent;
 
@@ -71,16 +73,6 @@ impl Default for Atmosphere {
             sun_angular_radius_rad: 0.004675,
         }
     }
-}
-
-/// A parameter out of its domain.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{field}: {message}")]
-pub struct AtmosphereError {
-    /// The field, as named in the sky file.
-    pub field: &'static str,
-    /// What is wrong.
-    pub message: String,
 }
 
 /// Scattering and extinction at one point.

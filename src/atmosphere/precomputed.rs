@@ -4,7 +4,7 @@
 
 use serde::Deserialize;
 
-use super::AtmosphereError;
+use super::error::AtmosphereError;
 
 /// How the tables the lookup reads are stored (the build always works in single precision). The
 /// discriminant is the tables' header value (`PrecomputedHeader::steps[3]`).

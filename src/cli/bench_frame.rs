@@ -520,7 +520,8 @@ struct ParticleCost {
 
 /// The built-in rain emitter at each cap, simulated on the CPU (plus upload) and on the GPU.
 fn particle_costs(ctx: &GpuContext, runs: u32, caps: &[u32]) -> anyhow::Result<Vec<ParticleCost>> {
-    use skytune::sky::particles::{simulate, ParticleClock};
+    use skytune::sky::particle_sim::simulate;
+    use skytune::sky::particles::ParticleClock;
     let mut out = Vec::new();
     for &cap in caps {
         let mut sky = default_sky();

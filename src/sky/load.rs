@@ -4,51 +4,19 @@
 //! find in one go, so an artist fixes a broken file in one round trip.
 
 use std::collections::{HashMap, HashSet};
-use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use toml::Spanned;
 
 use super::bitmap::ColorBitmap;
+use super::error::{SkyError, SkyErrors};
 use super::model::{self, FileRef, ModelChoice, SkyFile};
 use super::resolved::*;
 
 /// The error budget of `kind = "auto"` without `budget`: mean CIE dE2000 over the dome (2.3 is
 /// about one just-noticeable difference).
 pub const DEFAULT_DE2000_BUDGET: f64 = 2.0;
-
-/// One problem in a sky file, located precisely.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{file}:{line}:{column}: {field}: {message}")]
-pub struct SkyError {
-    /// File the problem is in (the sky file, or the bitmap that failed).
-    pub file: String,
-    /// 1-based line in `file` (1 for whole-file problems).
-    pub line: usize,
-    /// 1-based column.
-    pub column: usize,
-    /// Dotted path of the field, e.g. `object[1].standard.stage[0].texture`.
-    pub field: String,
-    /// What was wrong and what was expected.
-    pub message: String,
-}
-
-/// All the problems found in one load.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub struct SkyErrors(pub Vec<SkyError>);
-
-impl fmt::Display for SkyErrors {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        for (i, e) in self.0.iter().enumerate() {
-            if i > 0 {
-                writeln!(f)?;
-            }
-            write!(f, "{e}")?;
-        }
-        Ok(())
-    }
-}
 
 /// Where a sky's text and images come from: files next to the sky file, or the built-in sky.
 pub trait AssetSource: Send + Sync {

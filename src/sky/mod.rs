@@ -3,15 +3,19 @@
 
 pub mod bitmap;
 pub mod builtin;
+pub mod error;
 pub mod eval;
+mod evaluate;
 pub mod load;
 pub mod model;
+pub mod particle_sim;
 pub mod particles;
 pub mod procedural;
 pub mod resolved;
 pub mod starfield;
 
 pub use bitmap::{ColorBitmap, Rgba};
+pub use error::{SkyError, SkyErrors};
 pub use eval::{Clock, FrameInput, FrameSky, Hidden, ObjectFrame, StarsFrame, Stepping, Tier, VersionFrame};
-pub use load::{load_sky, load_sky_file, AssetSource, FsSource, SkyError, SkyErrors};
+pub use load::{load_sky, load_sky_file, AssetSource, FsSource};
 pub use resolved::Sky;

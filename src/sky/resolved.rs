@@ -74,7 +74,7 @@ pub struct Sky {
     /// `kind = "auto"`: the error budget; `model` holds `lut` until `auto_model::resolve` picks.
     pub auto_model: Option<Budget>,
     /// What the loader found questionable without refusing the sky (file, line and field each).
-    pub warnings: Vec<super::load::SkyError>,
+    pub warnings: Vec<super::error::SkyError>,
 }
 
 /// A skydome colour source and its settings.
