@@ -3,8 +3,8 @@
 
 mod common;
 
+use skytune::render::frame::options::Occluder;
 use skytune::render::passes::glare::{GlareState, QueryPhase};
-use skytune::render::passes::scene::Occluder;
 use skytune::render::{Camera, Headless, RenderOptions, Skips};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::{FrameInput, Sky};

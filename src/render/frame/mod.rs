@@ -1,7 +1,10 @@
 //! The frame: the renderer that carries out the plan ([`renderer`]), the interface every pass
-//! implements ([`pass`]), the camera and bind group 0's globals.
+//! implements ([`pass`]), what a frame is drawn with ([`options`]) and what it reports
+//! ([`stats`]), the camera and bind group 0's globals.
 
 pub mod camera;
 pub mod globals;
+pub mod options;
 pub mod pass;
 pub mod renderer;
+pub mod stats;

@@ -5,69 +5,19 @@
 //! `shaders/NAME/`) that records its work into a phase. The sky file's NeL "fallback passes" are
 //! object versions (`crate::sky::VersionFrame`), not GPU passes.
 //!
-//! Adding a pass: write the module and its `.wgsl`, implement [`Pass`], add one line to [`PASSES`].
+//! Adding a pass: write the module and its `.wgsl`, implement [`Pass`], add one line to
+//! [`crate::render::passes::PASSES`].
 
 use std::any::Any;
 
 use crate::render::frame::camera::Camera;
-use crate::render::frame::renderer::{FrameStats, RenderOptions};
+use crate::render::frame::options::RenderOptions;
+use crate::render::frame::stats::FrameStats;
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders::ShaderLibrary;
 use crate::render::gpu::textures::TextureCache;
-use crate::render::plan::resolution::Divisor;
+pub use crate::render::plan::items::{Caps, DrawItem, OwnBuffer, Phase, Placement, Target};
 use crate::sky::{FrameSky, Sky};
-
-/// The slots of a frame, in the order they run. Each is one wgpu pass.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Phase {
-    /// Compute work before any drawing: look-up tables, particle simulation.
-    Compute,
-    /// The main scene, drawn first in depth range [`crate::render::SCENE_DEPTH`]; the phase clears the target.
-    Scene,
-    /// Sky objects and stars, merged by priority, in depth range [`crate::render::SKY_DEPTH`].
-    Sky,
-    /// Things drawn in the scene's depth range after the sky, so the scene occludes them (particles).
-    SceneAfterSky,
-    /// Overlays on top of everything (glare).
-    Overlay,
-    /// From the frame's HDR target to the display target: exposure was applied upstream, here the
-    /// tone mapper and display encoding (physical sky models only; the NeL bitmap path draws
-    /// display values straight into the display target and skips it).
-    Display,
-}
-
-impl Phase {
-    /// Every phase, in frame order.
-    pub const ALL: [Phase; 6] = [Phase::Compute, Phase::Scene, Phase::Sky, Phase::SceneAfterSky, Phase::Overlay, Phase::Display];
-
-    /// Name used in GPU labels and timings.
-    pub fn name(self) -> &'static str {
-        match self {
-            Phase::Compute => "compute",
-            Phase::Scene => "scene",
-            Phase::Sky => "sky",
-            Phase::SceneAfterSky => "scene_after_sky",
-            Phase::Overlay => "overlay",
-            Phase::Display => "display",
-        }
-    }
-
-    /// Position in [`Phase::ALL`].
-    pub fn index(self) -> usize {
-        self as usize
-    }
-}
-
-/// Which colour target a frame's drawing phases write.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum Target {
-    /// Display values straight into the display target (the NeL bitmap path, as in 2005).
-    #[default]
-    Display,
-    /// Exposed linear radiance into the frame's HDR target ([`crate::render::HDR_FORMAT`]); the display
-    /// phase tone-maps it (physical sky models).
-    Hdr,
-}
 
 /// What a pass builds its layouts and pipelines with.
 #[derive(Clone, Copy)]
@@ -81,7 +31,7 @@ pub struct PassBuild<'a> {
     /// Shader sources.
     pub library: &'a ShaderLibrary,
     /// Colour format of the display target (render pipelines are also built for
-    /// [`crate::render::HDR_FORMAT`]: see [`Pipelines::new_render`]).
+    /// [`crate::render::gpu::parts::HDR_FORMAT`]: see [`Pipelines::new_render`]).
     pub color_format: wgpu::TextureFormat,
     /// Textures one pass writes and others read.
     pub shared: &'a SharedResources,
@@ -103,9 +53,9 @@ pub struct SharedResources {
     /// The `lut` model's tables: `sky_luts` builds them, `sky_view` reads them.
     pub luts: crate::render::passes::sky_model::LutTables,
     /// The `precomputed` model's tables: `precomputed_tables` builds them, `sky_view` reads them.
-    pub precomputed: crate::render::passes::precomputed_tables::PrecomputedTables,
+    pub precomputed: crate::render::passes::sky_model::PrecomputedTables,
     /// Whether they are complete (a software rasteriser builds them over several frames).
-    pub precomputed_state: std::sync::Arc<crate::render::passes::precomputed_tables::PrecomputedState>,
+    pub precomputed_state: std::sync::Arc<crate::render::passes::sky_model::PrecomputedState>,
     /// The sky-view map: a physical model's exposed linear radiance by direction (`sky_view`
     /// writes it in the compute phase, `sky_objects` samples it in the gradient stage).
     pub sky_view: wgpu::Texture,
@@ -119,7 +69,7 @@ pub struct SharedResources {
 impl SharedResources {
     /// Size of the sky-view map, texels: Hillaire 2020's sky-view LUT's 192 x 108 over half the
     /// circle of azimuth (shaders/sky_model/sky_view_map.wgsl), 1.9 degrees a column.
-    pub const SKY_VIEW_SIZE: (u32, u32) = (96, 108);
+    pub const SKY_VIEW_SIZE: (u32, u32) = crate::render::plan::resolution::SKY_VIEW_SIZE;
     /// Format of the sky-view map: linear radiance above 1 near the sun must survive.
     pub const SKY_VIEW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
@@ -147,7 +97,7 @@ impl SharedResources {
         });
         Self {
             luts: crate::render::passes::sky_model::LutTables::new(device),
-            precomputed: crate::render::passes::precomputed_tables::PrecomputedTables::largest(device),
+            precomputed: crate::render::passes::sky_model::PrecomputedTables::largest(device),
             precomputed_state: Default::default(),
             sky_view,
             sky_view_view,
@@ -197,118 +147,6 @@ impl FrameContext<'_> {
     pub fn aspect(&self) -> f32 {
         self.size.0 as f32 / self.size.1.max(1) as f32
     }
-}
-
-/// One draw a pass wants in its phase. The sky phase orders the items of all its passes by
-/// `priority` (stable: list order among equals); other phases keep list order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct DrawItem {
-    /// Transparency priority (sky phase only).
-    pub priority: u8,
-    /// The pass's own index of what to draw.
-    pub key: usize,
-    /// A dome layer the sky phase may draw at reduced resolution ([`Placement::Reduced`](crate::render::frame::pass::Placement::Reduced)).
-    pub reduced: bool,
-    /// The draw only adds to what lies behind it (target + something, clamped): it commutes with
-    /// every other such draw, so the sky phase may reorder them (to join reduced runs).
-    pub additive: bool,
-    /// Frame pixels per buffer pixel along each side where `reduced` (the coarsest buffer that
-    /// still resolves the layer); [`Divisor::FULL`] otherwise.
-    pub divisor: Divisor,
-    /// A `reduced` item that goes to a reduced buffer only to join a run of other layers: alone,
-    /// its run's full-resolution composite would cost what drawing it at full resolution does
-    /// (the lightning flash: one constant colour over the sky).
-    pub joins_only: bool,
-    /// The placements other than plain and reduced that the pass can draw this item at, this
-    /// frame (the frame plan chooses among them: [`crate::render::plan`]).
-    pub caps: Caps,
-}
-
-impl DrawItem {
-    /// A plain full-resolution draw: not reduced, not known to commute, no other placement.
-    pub fn new(priority: u8, key: usize) -> Self {
-        Self { priority, key, reduced: false, additive: false, divisor: Divisor::FULL, joins_only: false, caps: Caps::default() }
-    }
-}
-
-/// What a pass can do with one of its items this frame, as data for the frame plan.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Caps {
-    /// [`Placement::UnderRun`]: drawn after the composite of the run of reduced layers that
-    /// follows it, as if drawn before that run. Two runs join into one composite only when every
-    /// item between them can.
-    pub under_run: bool,
-    /// [`Placement::First`] (additive items): onto the cleared frame, before the background.
-    pub first: bool,
-    /// It spans much of the frame (a dome layer): drawing it first pays for the blended
-    /// background; a few small billboards or sprites do not.
-    pub spans_frame: bool,
-    /// [`Placement::OverSeed`] (reduced items): it covers every pixel of its buffer outside
-    /// `background_gap`.
-    pub over_seed: bool,
-    /// [`Placement::Background`] over one run (index 0) and over joined runs (index 1): it covers
-    /// every pixel of the frame outside `background_gap`.
-    pub background: [bool; 2],
-    /// A rectangle of pixels (x, y, width, height) holding every pixel the item leaves uncovered
-    /// as the background or over a seed (below a dome's lowest row). None: it covers the frame.
-    pub background_gap: Option<[u32; 4]>,
-    /// The pass's next item (its key) in priority order, and whether the two can be drawn at once
-    /// as [`Placement::Pair`]: plain (index 0) and over a seed (index 1).
-    pub pair_next: Option<(usize, [bool; 2])>,
-    /// [`RunInput::Own`](crate::render::plan::RunInput::Own) (reduced items): its fragments cost
-    /// many reads of a buffer each (an alpha layer matched over the model's sky), so where its
-    /// run's buffer is much finer than it needs it may be drawn beforehand into a buffer of its
-    /// own, which is then composited into the run's buffer in its place.
-    pub own_buffer: Option<OwnBuffer>,
-}
-
-/// A buffer of its own for a costly layer drawn apart from its run ([`Caps::own_buffer`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct OwnBuffer {
-    /// Frame pixels per buffer pixel.
-    pub divisor: Divisor,
-    /// Frame pixels (x, y, width, height) that hold every pixel the layer covers (a band's rows),
-    /// where its composite into the run's buffer is confined; None: the whole frame.
-    pub covers: Option<[u32; 4]>,
-}
-
-/// How one draw reaches the frame: chosen by the frame plan, carried out by [`Pass::draw`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Placement {
-    /// In its place in its phase, at full resolution, depth-tested against the scene.
-    Plain,
-    /// Into a reduced-resolution buffer of a run of dome layers ([`crate::render::passes::reduced_layers`]:
-    /// premultiplied colour and transmittance, blended with
-    /// [`crate::render::passes::reduced_layers::REDUCED_BLENDS`]).
-    Reduced,
-    /// After the composite of the run of reduced layers that follows it in the sky phase, as if
-    /// drawn before that run: corrected by the run's colour and transmittance (the run's buffer
-    /// as group 2: [`crate::render::passes::reduced_layers::run_layout`]).
-    UnderRun,
-    /// Additive, onto the cleared frame before the background run is composited over it
-    /// ([`crate::render::plan::strategy::UnderBackground::Additive`]): without depth test, since the scene
-    /// drawn afterwards covers what it hides. Adding onto black is writing.
-    First,
-    /// Reduced, as the first layer of a seeded buffer
-    /// ([`crate::render::plan::strategy::RunJoining::SeededFolded`]): over the lower run's colour (group 2),
-    /// replacing the clear colour, unblended: what its blend would leave over the seed.
-    OverSeed,
-    /// Reduced, at once with the pass's item `upper` right after it in the run
-    /// ([`crate::render::plan::strategy::LayerPairs::AtOnce`]): one draw that leaves what the two would, one
-    /// after the other; over the seed (group 2) when `over_seed`.
-    Pair {
-        /// The upper item's key.
-        upper: usize,
-        /// The pair is a seeded buffer's first layers.
-        over_seed: bool,
-    },
-    /// Additive, as the frame's background in place of the background run's composite: the
-    /// run's colour (group 2) plus its own term, weighed by the transmittance of the runs above
-    /// it when `joined`. One full-screen pass, neither blended nor depth-tested.
-    Background {
-        /// The background is the combination of joined runs.
-        joined: bool,
-    },
 }
 
 /// A GPU pass: its pipelines (built once, rebuilt on shader reload), its per-sky resources and
@@ -405,26 +243,10 @@ pub trait Pass: Any {
 /// Creates a pass; its pipelines are built, its sky resources empty.
 pub type PassConstructor = fn(&PassBuild<'_>) -> RenderResult<Box<dyn Pass>>;
 
-/// Boxes a pass's constructor for [`PASSES`].
+/// Boxes a pass's constructor for [`crate::render::passes::PASSES`].
 pub fn boxed<P: Pass, F: Fn(&PassBuild<'_>) -> RenderResult<P>>(f: F, build: &PassBuild<'_>) -> RenderResult<Box<dyn Pass>> {
     Ok(Box::new(f(build)?))
 }
-
-/// Every pass of the renderer, in recording order within its phase. The one list: pipelines,
-/// shader reloads, sky uploads, per-frame steps and GPU timings all follow it.
-pub const PASSES: &[(&str, PassConstructor)] = &[
-    ("sky_luts", |b| boxed(crate::render::passes::sky_luts::SkyLutsPass::new, b)),
-    ("precomputed_tables", |b| boxed(crate::render::passes::precomputed_tables::PrecomputedTablesPass::new, b)),
-    ("sky_view", |b| boxed(crate::render::passes::sky_view::SkyViewPass::new, b)),
-    ("scene", |b| boxed(crate::render::passes::scene::ScenePass::new, b)),
-    ("sky_objects", |b| boxed(crate::render::sky_objects::SkyObjectsPass::new, b)),
-    ("stars", |b| boxed(crate::render::passes::stars::StarsPass::new, b)),
-    ("particles", |b| boxed(crate::render::passes::particles::ParticlesPass::new, b)),
-    ("precipitation", |b| boxed(crate::render::passes::precipitation::PrecipitationPass::new, b)),
-    ("glare", |b| boxed(crate::render::passes::glare::GlarePass::new, b)),
-    ("tone_map", |b| boxed(crate::render::passes::tone_map::ToneMapPass::new, b)),
-    ("reduced_layers", |b| boxed(crate::render::passes::reduced_layers::ReducedLayersPass::new, b)),
-];
 
 /// A value in use and a replacement waiting for every other pass to succeed too.
 #[derive(Debug)]
@@ -479,7 +301,7 @@ impl<T> Pipelines<T> {
         Self::with_targets(b, layout, build, false)
     }
 
-    /// Builds render pipelines with `layout` for the display format and for [`crate::render::HDR_FORMAT`].
+    /// Builds render pipelines with `layout` for the display format and for [`crate::render::gpu::parts::HDR_FORMAT`].
     pub fn new_render(b: &PassBuild<'_>, layout: wgpu::PipelineLayout, build: PipelineBuilder<T>) -> RenderResult<Self> {
         Self::with_targets(b, layout, build, true)
     }
@@ -491,7 +313,7 @@ impl<T> Pipelines<T> {
 
     fn build_all(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, build: PipelineBuilder<T>, per_target: bool) -> RenderResult<(T, Option<T>)> {
         let display = build(b, layout)?;
-        let hdr = if per_target { Some(build(&PassBuild { color_format: crate::render::HDR_FORMAT, target: Target::Hdr, ..*b }, layout)?) } else { None };
+        let hdr = if per_target { Some(build(&PassBuild { color_format: crate::render::gpu::parts::HDR_FORMAT, target: Target::Hdr, ..*b }, layout)?) } else { None };
         Ok((display, hdr))
     }
 

@@ -4,16 +4,17 @@
 
 use crate::render::frame::camera::Camera;
 use crate::render::frame::globals::{Globals, GlobalsBinding};
-use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Placement, SharedResources, SkyUpload, Target, PASSES};
+use crate::render::frame::options::RenderOptions;
+use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Placement, SharedResources, SkyUpload, Target};
+use crate::render::frame::stats::{FrameStats, UploadStats};
+use crate::render::gpu::context::GpuContext;
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders::{self, ShaderLibrary};
 use crate::render::gpu::textures::TextureCache;
 use crate::render::gpu::timing::GpuTimer;
 use crate::render::passes::reduced_layers::{Joining, ReducedLayersPass};
-use crate::render::plan::resolution::Divisor;
-use crate::render::plan::strategy::FillStrategy;
+use crate::render::passes::PASSES;
 use crate::render::plan::{self, FrameFacts, RunInput, Seeding, SkyPlan, SkyStep, Step};
-use crate::render::GpuContext;
 use crate::sky::{FrameSky, Sky};
 
 /// Depth range of the main scene: it always wins against the sky.
@@ -21,182 +22,17 @@ pub const SCENE_DEPTH: (f32, f32) = (0.0, 0.95);
 /// Depth range of the sky.
 pub const SKY_DEPTH: (f32, f32) = (0.99, 1.0);
 
-/// What to draw besides the sky.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RenderOptions {
-    /// Draw the main-scene stand-in (terrain, buildings).
-    pub scene: bool,
-    /// Draw the scene first in [0, 0.95] and the sky in [0.99, 1] (early depth rejection of hidden
-    /// sky). Off: the sky is painted first over the whole screen, then the scene, as without the split.
-    pub depth_split: bool,
-    /// Draw the sun glare (and run its occlusion queries).
-    pub glare: bool,
-    /// Draw a test occluder into the scene's depth.
-    pub occluder: Option<crate::render::passes::scene::Occluder>,
-    /// Work skipped because it would contribute nothing (all on by default; off to measure
-    /// what each saves).
-    pub skips: Skips,
-    /// How the sky's pixels are filled: reduced buffers and the tricks that go with them, a
-    /// preset per kind of adapter ([`FillStrategy::for_device`]).
-    pub strategy: FillStrategy,
-}
-
-impl Default for RenderOptions {
-    fn default() -> Self {
-        Self { scene: true, depth_split: true, glare: true, occluder: None, skips: Skips::default(), strategy: FillStrategy::default() }
-    }
-}
-
-impl RenderOptions {
-    /// These options filling the sky's pixels with `strategy`.
-    pub fn with_strategy(self, strategy: FillStrategy) -> Self {
-        Self { strategy, ..self }
-    }
-
-    /// These options for an environment map: light from the sky only. No glare (an effect of
-    /// the viewing camera, which the glare pass also leaves out of any frame marked `env_map`),
-    /// and the main scene's stand-in only `with_scene`.
-    pub fn for_environment_map(self, with_scene: bool) -> Self {
-        Self { glare: false, scene: with_scene, ..self }
-    }
-}
-
-/// The renderer's skips of work that contributes nothing to the frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Skips {
-    /// Texture stages whose term is black this frame are not sampled, and alpha-blended or
-    /// additive draws whose every term is (black and transparent) are not drawn.
-    pub dark_stages: bool,
-    /// The star field is not drawn while its colour is transparent (daylight), nor its stars
-    /// too faint this frame to add half a level of 255 (dusk).
-    pub invisible_stars: bool,
-    /// The `lut` tables and the sky-view map are not recomputed while nothing they depend on moved.
-    pub unchanged_tables: bool,
-    /// With the main scene drawn, billboards and quads entirely below the horizon (by more than
-    /// [`SCENE_COVERS_BELOW_DEG`]) are not drawn, nor the rows of dome triangles there (domes
-    /// are drawn by rows with `unneeded_mips`): the scene covers that part of the sky.
-    pub below_horizon: bool,
-    /// Dome layers whose band of elevations the frame does not show (a fog band under a view
-    /// of the zenith) are not drawn, nor composited; nor are billboards and quads wholly
-    /// outside the frame, nor the parts of the main-scene stand-in wholly outside the view, nor
-    /// the glare's occlusion queries while the sun's disc lies wholly outside the frame (both
-    /// would count no sample: that result stands for them).
-    pub off_screen: bool,
-    /// Texture stages that no pixel of a draw minifies are sampled from level 0 alone (the same
-    /// texels; lavapipe then skips computing the level of detail).
-    pub unneeded_mips: bool,
-    /// The frame's colour is not cleared when the background (the first run of reduced dome
-    /// layers, composited or fused with the skydome's stars) writes every pixel before anything
-    /// reads it, nor the depth while it still holds the clear value: no main scene drawn into
-    /// that depth view since the renderer last cleared it. Each clear is a pass over the frame.
-    pub covered_clears: bool,
-}
-
 /// Plans of one frame at most after the first, each after a pipeline the previous one chose
 /// failed to build (each failure is remembered, so the plans converge; a draw whose pipeline
 /// still fails after them is not drawn, and was logged).
 const MAX_REPLANS: usize = 4;
 
-/// The main-scene stand-in covers every direction more than this far below the horizon, degrees
-/// (its terrain reaches 2.5 km at a viewer height of 2 m; its lowest dip is 40 m down).
-pub const SCENE_COVERS_BELOW_DEG: f32 = 2.0;
-
-impl Default for Skips {
-    fn default() -> Self {
-        Self { dark_stages: true, invisible_stars: true, unchanged_tables: true, below_horizon: true, off_screen: true, unneeded_mips: true, covered_clears: true }
-    }
-}
-
-/// Counters of the last frame, for the stats panel and logs.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct FrameStats {
-    /// Draw calls recorded.
-    pub draw_calls: u32,
-    /// Sky objects drawn.
-    pub objects_drawn: u32,
-    /// Sky objects hidden (ref alpha, tier, toggle, view).
-    pub objects_hidden: u32,
-    /// Stars in the field after the magnitude cutoff.
-    pub stars: u32,
-    /// Of those, the stars drawn this frame: bright enough to add half a level of 255 somewhere
-    /// ([`Skips::invisible_stars`]).
-    pub stars_drawn: u32,
-    /// Texture stages of sky objects not sampled because their term is black this frame.
-    pub stages_skipped: u32,
-    /// Alpha-blended and additive draws of sky objects left out because every term of theirs is
-    /// black and transparent this frame (they would leave the frame as it is).
-    pub draws_dark: u32,
-    /// Sky objects not drawn because their ref colour's alpha is 0 this frame.
-    pub objects_ref_hidden: u32,
-    /// Sky objects not drawn because they are below the horizon, behind the main scene.
-    pub objects_below_horizon: u32,
-    /// Dome layers not drawn because the frame does not show their elevations, and billboards
-    /// and quads not drawn because they lie wholly outside the frame.
-    pub objects_off_screen: u32,
-    /// Texture stages sampled from level 0 alone (no pixel minifies them), over every draw.
-    pub stages_level0: u32,
-    /// Sky objects drawn into a reduced-resolution buffer ([`dome_resolution`](crate::render::plan::strategy::FillStrategy::dome_resolution)).
-    pub objects_reduced: u32,
-    /// Each run of reduced layers this frame, in draw order: its buffer's divisor (2: half the
-    /// frame's width and height, 2.5: two fifths, 4: a quarter). One composite each.
-    pub reduced_runs: Vec<Divisor>,
-    /// Full-screen composites of those runs (the background included): one for all the runs
-    /// joined ([`Combined`](crate::render::plan::strategy::RunJoining::Combined)).
-    pub composites: u32,
-    /// Additive draws put under the background ([`Additive`](crate::render::plan::strategy::UnderBackground::Additive)).
-    pub drawn_first: u32,
-    /// One of them (the skydome's fine stars) covered the frame and was drawn as the background
-    /// itself, its run's colour plus its term: no separate composite of the background.
-    pub background_fused: bool,
-    /// The first two runs were joined by seeding the second's buffer with the first
-    /// ([`Seeded`](crate::render::plan::strategy::RunJoining::Seeded)): no combining pass.
-    pub seeded: bool,
-    /// The seeded buffer's first layer was drawn over the lower run itself ([`SeededFolded`](crate::render::plan::strategy::RunJoining::SeededFolded)).
-    pub seed_folded: bool,
-    /// Pairs of reduced layers drawn at once ([`AtOnce`](crate::render::plan::strategy::LayerPairs::AtOnce)).
-    pub layers_paired: u32,
-    /// Costly layers drawn apart from their runs into buffers of their own
-    /// ([`OwnBuffer`](crate::render::plan::strategy::CostlyLayers::OwnBuffer)).
-    pub own_buffers: u32,
-    /// Triangles of texel polygons drawn in place of a sparse stage's sample
-    /// ([`TexelPolygons`](crate::render::plan::strategy::SparseStages::TexelPolygons)).
-    pub texel_triangles: u32,
-    /// Scissor rectangles in which the background without its sparse stage went as one triangle
-    /// over the frame ([`TexelPolygonsOnBands`](crate::render::plan::strategy::SparseStages::TexelPolygonsOnBands)).
-    pub background_rects: u32,
-    /// Draws added to a run of reduced layers only because the run was there
-    /// ([`DrawItem::joins_only`]: the lightning flash, [`InRun`](crate::render::plan::strategy::FlashPlacement::InRun)).
-    pub joined_runs_only: u32,
-    /// Clears of the frame left out ([`Skips::covered_clears`]): the colour's, the depth's.
-    pub clears_skipped: u32,
-    /// The star field was not drawn: transparent this frame.
-    pub stars_skipped: bool,
-    /// The `lut` or `precomputed` tables were not rebuilt: nothing they depend on moved.
-    pub tables_skipped: bool,
-    /// The sky-view map was not recomputed: nothing it depends on moved.
-    pub map_skipped: bool,
-    /// Texels of the sky-view map computed this frame (a slice of it while a moving sun's maps are
-    /// spread over frames: [`crate::render::plan::map_updates`]).
-    pub map_texels: u32,
-    /// Particles alive (every emitter).
-    pub particles: u32,
-}
-
-/// What the last sky upload did with the textures of the sky before it.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct UploadStats {
-    /// Textures uploaded (new files, or files whose content changed).
-    pub textures_uploaded: u32,
-    /// Textures taken over from the previous sky unchanged.
-    pub textures_reused: u32,
-}
-
 /// Where a frame is drawn.
 pub struct RenderTarget<'a> {
     /// Colour view, in the renderer's colour format.
     pub color: &'a wgpu::TextureView,
-    /// Depth view ([`crate::render::DEPTH_FORMAT`]), written by the renderer alone: it does not clear a
-    /// depth view again while it has drawn no main scene into it ([`Skips::covered_clears`]).
+    /// Depth view ([`crate::render::gpu::parts::DEPTH_FORMAT`]), written by the renderer alone: it does not clear a
+    /// depth view again while it has drawn no main scene into it ([`crate::render::frame::options::Skips::covered_clears`]).
     pub depth: &'a wgpu::TextureView,
     /// Size, pixels.
     pub size: (u32, u32),
@@ -226,7 +62,7 @@ pub struct SkyRenderer {
     hdr: Option<HdrTarget>,
     timer: Option<GpuTimer>,
     /// A depth view that still holds the clear value (1) everywhere: cleared by this renderer,
-    /// and no scene drawn into it since ([`Skips::covered_clears`]).
+    /// and no scene drawn into it since ([`crate::render::frame::options::Skips::covered_clears`]).
     depth_untouched: Option<wgpu::TextureView>,
     /// Counters of the last recorded frame.
     pub stats: FrameStats,
@@ -401,7 +237,7 @@ impl SkyRenderer {
         let mut items = self.collect_items(&cx);
         let (wf, hf) = (w as f32, h as f32);
         let facts = FrameFacts {
-            scene_in_view: options.scene && camera.elevation_range_deg(wf / hf.max(1.0)).0 < -SCENE_COVERS_BELOW_DEG,
+            scene_in_view: options.scene && camera.elevation_range_deg(wf / hf.max(1.0)).0 < -crate::render::plan::visibility::SCENE_COVERS_BELOW_DEG,
             reduced_layers: self.pass::<ReducedLayersPass>().is_some(),
             covered_clears: options.skips.covered_clears,
             depth_clean: self.depth_untouched.as_ref() == Some(target.depth),
@@ -719,7 +555,7 @@ impl SkyRenderer {
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: crate::render::HDR_FORMAT,
+            format: crate::render::gpu::parts::HDR_FORMAT,
             // COPY_SRC: linear exports (`render --format exr`) read it back.
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],

@@ -32,7 +32,7 @@ impl Baseline {
         });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("Baseline::layout"),
-            entries: &[crate::render::texture_entry(0), crate::render::sampler_entry(1)],
+            entries: &[crate::render::gpu::parts::texture_entry(0), crate::render::gpu::parts::sampler_entry(1)],
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("Baseline::bind_group"),

@@ -11,8 +11,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::render::frame::camera::Camera;
+use crate::render::frame::options::RenderOptions;
 use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
-use crate::render::frame::renderer::RenderOptions;
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders;
 use crate::render::gpu::textures::TextureCache;
@@ -205,7 +205,11 @@ impl GlarePass {
         let (device, globals) = (b.device, b.globals_layout);
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("Glare::layout"),
-            entries: &[crate::render::uniform_entry(0, wgpu::ShaderStages::VERTEX), crate::render::texture_entry(1), crate::render::sampler_entry(2)],
+            entries: &[
+                crate::render::gpu::parts::uniform_entry(0, wgpu::ShaderStages::VERTEX),
+                crate::render::gpu::parts::texture_entry(1),
+                crate::render::gpu::parts::sampler_entry(2),
+            ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Glare::pipeline_layout"),
@@ -237,7 +241,7 @@ impl GlarePass {
                         compilation_options: options.clone(),
                     },
                     primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                    depth_stencil: crate::render::depth_state(false, compare),
+                    depth_stencil: crate::render::gpu::parts::depth_state(false, compare),
                     multisample: Default::default(),
                     fragment: Some(wgpu::FragmentState {
                         module: &module,
@@ -267,7 +271,7 @@ impl GlarePass {
                     compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
-                depth_stencil: crate::render::depth_state(false, wgpu::CompareFunction::Always),
+                depth_stencil: crate::render::gpu::parts::depth_state(false, wgpu::CompareFunction::Always),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,

@@ -7,7 +7,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders;
-use crate::render::ShaderLibrary;
+use crate::render::gpu::shaders::ShaderLibrary;
 use crate::sky::particles::{GpuBirths, ParticleInstance, MAX_GPU_BUCKETS};
 use crate::sky::resolved::Emitter;
 
@@ -36,7 +36,7 @@ pub fn layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     };
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("ParticleSim::layout"),
-        entries: &[crate::render::uniform_entry(0, wgpu::ShaderStages::COMPUTE), storage(1, false), storage(2, true)],
+        entries: &[crate::render::gpu::parts::uniform_entry(0, wgpu::ShaderStages::COMPUTE), storage(1, false), storage(2, true)],
     })
 }
 
@@ -132,7 +132,7 @@ pub struct StandaloneSim {
 
 impl StandaloneSim {
     /// A pipeline and buffers for `cap` particles.
-    pub fn new(ctx: &crate::render::GpuContext, library: &ShaderLibrary, cap: u32) -> RenderResult<Self> {
+    pub fn new(ctx: &crate::render::gpu::context::GpuContext, library: &ShaderLibrary, cap: u32) -> RenderResult<Self> {
         let device = &ctx.device;
         let layout = layout(device);
         let empty_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("ParticleSim::empty_layout"), entries: &[] });
@@ -149,12 +149,12 @@ impl StandaloneSim {
     }
 
     /// The instances written (blocks), dead slots included.
-    pub fn read(&self, ctx: &crate::render::GpuContext) -> RenderResult<Vec<ParticleInstance>> {
+    pub fn read(&self, ctx: &crate::render::gpu::context::GpuContext) -> RenderResult<Vec<ParticleInstance>> {
         let size = self.sim.slots as u64 * std::mem::size_of::<ParticleInstance>() as u64;
         if size == 0 {
             return Ok(Vec::new());
         }
-        let bytes = crate::render::gpu::headless::read_buffer(ctx, &self.sim.particles, size)?;
+        let bytes = crate::render::gpu::readback::read_buffer(ctx, &self.sim.particles, size)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 }

@@ -5,7 +5,7 @@
 //! `precipitation.rs` draws the emitters attached to the camera with the same GPU resources.
 
 use crate::render::frame::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
-use crate::render::frame::renderer::FrameStats;
+use crate::render::frame::stats::FrameStats;
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders;
 use crate::render::gpu::textures::TextureCache;
@@ -102,7 +102,10 @@ pub fn write_instances(device: &wgpu::Device, queue: &wgpu::Queue, g: &mut Emitt
 
 /// The bind group layout of both particle passes: sprite texture and sampler.
 pub fn bind_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &[crate::render::texture_entry(0), crate::render::sampler_entry(1)] })
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &[crate::render::gpu::parts::texture_entry(0), crate::render::gpu::parts::sampler_entry(1)],
+    })
 }
 
 /// The sprites' sampler.
@@ -124,7 +127,7 @@ pub fn build_pipelines(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout, name: &
         layout,
         name,
         label,
-        [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", crate::render::ADDITIVE_ALPHA, "additive")],
+        [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", crate::render::gpu::parts::ADDITIVE_ALPHA, "additive")],
         Some(wgpu::CompareFunction::Less),
     )?;
     Ok([alpha, additive])
@@ -162,7 +165,7 @@ fn build_entries<const N: usize>(
                     compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
-                depth_stencil: compare.and_then(|c| crate::render::depth_state(false, c)),
+                depth_stencil: compare.and_then(|c| crate::render::gpu::parts::depth_state(false, c)),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
@@ -245,7 +248,7 @@ impl ParticlesPass {
                 l,
                 "particles",
                 "Particles::pipeline",
-                [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", crate::render::ADDITIVE_ALPHA, "additive"), ("fs_flash", FLASH_BLEND, "flash")],
+                [("fs_alpha", wgpu::BlendState::ALPHA_BLENDING, "alpha"), ("fs_main", crate::render::gpu::parts::ADDITIVE_ALPHA, "additive"), ("fs_flash", FLASH_BLEND, "flash")],
                 Some(wgpu::CompareFunction::Less),
             )
         })?;
@@ -254,7 +257,7 @@ impl ParticlesPass {
             build_entries(b, l, "particles", "Particles::reduced_pipeline", [("fs_flash", FLASH_RUN_BLEND, "flash")], None)
         })?;
         let first = Pipelines::new_render(b, pipeline_layout.clone(), |b, l| {
-            build_entries(b, l, "particles", "Particles::first_pipeline", [("fs_main", crate::render::ADDITIVE_ALPHA, "additive")], Some(wgpu::CompareFunction::Always))
+            build_entries(b, l, "particles", "Particles::first_pipeline", [("fs_main", crate::render::gpu::parts::ADDITIVE_ALPHA, "additive")], Some(wgpu::CompareFunction::Always))
         })?;
         let run_layout = crate::render::passes::reduced_layers::run_layout(b.device, "Particles::run_layout");
         let under_layout = b.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -265,7 +268,7 @@ impl ParticlesPass {
         let under_run = Pipelines::new_render(b, under_layout, |b, l| {
             // Premultiplied by the shader (fs_alpha_under_run).
             let over = wgpu::BlendState { color: wgpu::BlendComponent::OVER, alpha: wgpu::BlendComponent::OVER };
-            let entries = [("fs_alpha_under_run", over, "alpha"), ("fs_main_under_run", crate::render::ADDITIVE_ALPHA, "additive")];
+            let entries = [("fs_alpha_under_run", over, "alpha"), ("fs_main_under_run", crate::render::gpu::parts::ADDITIVE_ALPHA, "additive")];
             build_entries(b, l, "particles", "Particles::under_run_pipeline", entries, Some(wgpu::CompareFunction::Less))
         })?;
         let sampler = sampler(b.device, "Particles::sampler");

@@ -4,93 +4,12 @@
 //! atmosphere, the settings or the ground albedo change. Idle for every other model. The layout
 //! and the lookup are in shaders/sky_model/precomputed_sampling.wgsl.
 
-use bytemuck::{Pod, Zeroable};
-
 use crate::atmosphere::{PrecomputedSettings, TablePrecision};
 use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Staged};
 use crate::render::gpu::error::RenderResult;
-use crate::render::passes::sky_model::{storage_entry, AtmosphereUniform};
+use crate::render::passes::sky_model::{storage_entry, AtmosphereUniform, PrecomputedHeader, PrecomputedState, PrecomputedTables};
+use crate::render::plan::strategy::TableBuilds;
 use crate::sky::resolved::SkyModelKind;
-
-/// The tables' header, their first four texels. Keep in sync with `PrecomputedHeader` in
-/// shaders/sky_model/precomputed_sampling.wgsl.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
-pub struct PrecomputedHeader {
-    /// Transmittance width, height; irradiance width, height (texels).
-    pub sizes_2d: [u32; 4],
-    /// Scattering texels along nu, mu_s, mu (both halves), r.
-    pub sizes_4d: [u32; 4],
-    /// Transmittance samples, samples along rays, density directions per half turn; storage of
-    /// the looked-up tables (0 single, 1 half).
-    pub steps: [u32; 4],
-    /// Ground albedo, smallest sun cosine tabulated; unused.
-    pub ground: [f32; 4],
-}
-const _: () = assert!(std::mem::size_of::<PrecomputedHeader>() == 64);
-
-impl PrecomputedHeader {
-    /// The header of tables built with `settings` over a ground of `albedo`.
-    pub fn new(settings: &PrecomputedSettings, albedo: f32) -> Self {
-        let [tw, th] = settings.transmittance_size;
-        let [iw, ih] = settings.irradiance_size;
-        Self {
-            sizes_2d: [tw, th, iw, ih],
-            sizes_4d: settings.scattering_size,
-            steps: [settings.transmittance_steps, settings.ray_steps, settings.density_directions, settings.precision as u32],
-            ground: [albedo, PrecomputedSettings::MU_S_MIN, 0.0, 0.0],
-        }
-    }
-}
-
-/// Bytes the tables of `settings` take: the header, three 2D tables and five 4D tables of rgba32f.
-pub fn table_bytes(settings: &PrecomputedSettings) -> u64 {
-    let [tw, th] = settings.transmittance_size;
-    let [iw, ih] = settings.irradiance_size;
-    let texels = 4 + (tw * th) as u64 + 2 * (iw * ih) as u64 + 5 * settings.scattering_texels() as u64;
-    texels * 16
-}
-
-/// The `precomputed` model's tables: one storage buffer (the header, then every table).
-pub struct PrecomputedTables {
-    /// The buffer.
-    pub buffer: wgpu::Buffer,
-    /// Its size, bytes.
-    pub bytes: u64,
-}
-
-impl PrecomputedTables {
-    /// Allocates tables large enough for `settings`.
-    pub fn new(device: &wgpu::Device, settings: &PrecomputedSettings) -> Self {
-        Self::with_bytes(device, table_bytes(settings))
-    }
-
-    /// Allocates tables large enough for any valid settings (the renderer's shared tables).
-    pub fn largest(device: &wgpu::Device) -> Self {
-        let largest = PrecomputedSettings {
-            transmittance_size: PrecomputedSettings::MAX_TRANSMITTANCE,
-            irradiance_size: PrecomputedSettings::MAX_IRRADIANCE,
-            scattering_size: [PrecomputedSettings::MAX_SCATTERING_TEXELS, 1, 1, 1],
-            ..Default::default()
-        };
-        Self::with_bytes(device, table_bytes(&largest))
-    }
-
-    fn with_bytes(device: &wgpu::Device, bytes: u64) -> Self {
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("PrecomputedTables::buffer"),
-            size: bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        Self { buffer, bytes }
-    }
-
-    /// Whether tables of `settings` fit.
-    pub fn holds(&self, settings: &PrecomputedSettings) -> bool {
-        table_bytes(settings) <= self.bytes
-    }
-}
 
 /// A stage of the build: one entry point of shaders/precomputed_tables.wgsl.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -202,20 +121,6 @@ pub fn build_steps(settings: &PrecomputedSettings, slices: u32) -> Vec<BuildStep
     steps
 }
 
-/// How a frame builds the tables: all at once (a GPU: milliseconds), or spread over frames so
-/// that a software rasteriser keeps drawing while it builds (seconds to a minute at the default
-/// settings on lavapipe).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TableBuilds {
-    /// Every step in one frame.
-    AtOnce,
-    /// Each 4D stage in this many slices, one step per frame.
-    Spread {
-        /// Slices per 4D stage.
-        slices: u32,
-    },
-}
-
 /// Most steps a build may have (cursor entries).
 const MAX_STEPS: usize = 4096;
 /// Stride of the cursor entries (the minimum uniform offset alignment wgpu allows everywhere).
@@ -231,11 +136,11 @@ pub struct PrecomputedBuilder {
 
 impl PrecomputedBuilder {
     /// Builds the pipelines with `group0` as bind group 0 (the frame's globals, or an empty layout).
-    pub fn new(device: &wgpu::Device, library: &crate::render::ShaderLibrary, group0: &wgpu::BindGroupLayout) -> RenderResult<Self> {
+    pub fn new(device: &wgpu::Device, library: &crate::render::gpu::shaders::ShaderLibrary, group0: &wgpu::BindGroupLayout) -> RenderResult<Self> {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("PrecomputedTables::layout"),
             entries: &[
-                crate::render::uniform_entry(0, wgpu::ShaderStages::COMPUTE),
+                crate::render::gpu::parts::uniform_entry(0, wgpu::ShaderStages::COMPUTE),
                 storage_entry(1, false),
                 wgpu::BindGroupLayoutEntry {
                     binding: 2,
@@ -329,15 +234,6 @@ pub struct PrecomputedTablesPass {
     state: std::sync::Arc<PrecomputedState>,
     /// Table builds started so far (stats and tests).
     pub builds: u64,
-}
-
-/// Whether the shared tables are complete, for the passes that read them.
-#[derive(Debug, Default)]
-pub struct PrecomputedState {
-    /// The tables hold a finished build (none is under way).
-    pub complete: std::sync::atomic::AtomicBool,
-    /// Finished builds so far: a reader's results depend on it.
-    pub generation: std::sync::atomic::AtomicU64,
 }
 
 impl PrecomputedTablesPass {
@@ -454,7 +350,7 @@ impl Pass for PrecomputedTablesPass {
         }
     }
 
-    fn stats(&self, stats: &mut crate::render::FrameStats) {
+    fn stats(&self, stats: &mut crate::render::frame::stats::FrameStats) {
         stats.tables_skipped |= self.skipped;
     }
 
@@ -473,6 +369,7 @@ impl Pass for PrecomputedTablesPass {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::passes::sky_model::table_bytes;
 
     #[test]
     fn a_build_covers_every_texel_of_every_stage_in_order() {

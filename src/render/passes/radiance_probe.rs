@@ -7,11 +7,13 @@ use wgpu::util::DeviceExt;
 use crate::atmosphere::analytic::{self, AnalyticModel};
 use crate::atmosphere::reference::Case;
 use crate::atmosphere::{Atmosphere, LutSettings, PrecomputedSettings, SingleSettings};
+use crate::render::gpu::context::GpuContext;
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders;
-use crate::render::passes::precomputed_tables::{table_bytes, PrecomputedBuilder, PrecomputedHeader, PrecomputedTables};
+use crate::render::gpu::shaders::ShaderLibrary;
+use crate::render::passes::precomputed_tables::PrecomputedBuilder;
 use crate::render::passes::sky_model::{storage_entry, AtmosphereUniform, LutBuilder, LutTables, LutUniform, SingleUniform};
-use crate::render::{GpuContext, ShaderLibrary};
+use crate::render::passes::sky_model::{table_bytes, PrecomputedHeader, PrecomputedTables};
 
 /// The probe's pipelines, and the `lut` and `precomputed` models' table builders.
 pub struct RadianceProbe {

@@ -599,7 +599,7 @@ fn full_screen_pipeline(
             layout: Some(layout),
             vertex: wgpu::VertexState { module, entry_point: Some("vs_main"), buffers: &[], compilation_options: Default::default() },
             primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: crate::render::depth_state(false, compare),
+            depth_stencil: crate::render::gpu::parts::depth_state(false, compare),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module,
@@ -620,10 +620,10 @@ pub fn run_layout(device: &wgpu::Device, label: &str) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some(label),
         entries: &[
-            crate::render::uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
-            crate::render::texture_entry(1),
-            crate::render::sampler_entry(2),
-            crate::render::texture_entry(3),
+            crate::render::gpu::parts::uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
+            crate::render::gpu::parts::texture_entry(1),
+            crate::render::gpu::parts::sampler_entry(2),
+            crate::render::gpu::parts::texture_entry(3),
         ],
     })
 }

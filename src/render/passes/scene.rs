@@ -118,15 +118,6 @@ fn outside_frustum(clip_from_world: &glam::Mat4, (lo, hi): (glam::Vec3, glam::Ve
     planes.iter().any(|outside| corners.iter().all(outside))
 }
 
-/// A rectangle in clip space (NDC x, y) drawn into the scene's depth: a known occluder.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Occluder {
-    /// Left, bottom corner (NDC).
-    pub min: [f32; 2],
-    /// Right, top corner (NDC).
-    pub max: [f32; 2],
-}
-
 /// The scene's pipelines: terrain and buildings, and the test occluder.
 struct ScenePipelines {
     scene: wgpu::RenderPipeline,
@@ -177,7 +168,7 @@ impl ScenePass {
         let module = shaders::module(device, b.library, "scene")?;
         let constants = b.target_constants();
         let options = wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: true };
-        let depth = crate::render::depth_state(true, wgpu::CompareFunction::Less);
+        let depth = crate::render::gpu::parts::depth_state(true, wgpu::CompareFunction::Less);
         let make = |label: &'static str, vs: &'static str, fs: &'static str, buffer: wgpu::VertexBufferLayout<'_>| {
             shaders::validated(device, label, || {
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -301,7 +292,7 @@ mod tests {
         assert_eq!(next as usize, idx.len(), "every triangle is in a chunk");
         // At the horizon, the terrain behind the viewer is left out; the buildings (all round the
         // viewer, some in view) are kept.
-        let (clip_from_world, _) = crate::render::Camera::default().matrices(16.0 / 9.0);
+        let (clip_from_world, _) = crate::render::frame::camera::Camera::default().matrices(16.0 / 9.0);
         let culled = chunks.iter().filter(|c| outside_frustum(&clip_from_world, c.bounds)).count();
         assert!(culled > chunks.len() / 3, "{culled} of {} chunks left out", chunks.len());
         assert!(!outside_frustum(&clip_from_world, chunks[chunks.len() - 1].bounds));

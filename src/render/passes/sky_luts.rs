@@ -89,7 +89,7 @@ impl Pass for SkyLutsPass {
         }
     }
 
-    fn stats(&self, stats: &mut crate::render::FrameStats) {
+    fn stats(&self, stats: &mut crate::render::frame::stats::FrameStats) {
         stats.tables_skipped = self.skipped;
     }
 

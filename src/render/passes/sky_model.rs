@@ -1,9 +1,10 @@
-//! GPU forms of the physical sky models' parameters, shared by every pass that evaluates a model
-//! (`shaders/sky_model/`). The atmosphere types themselves know nothing of wgpu.
+//! GPU forms of the physical sky models' parameters and the storage of their tables (the `lut`
+//! and `precomputed` ones, which the renderer shares between passes), for every pass that
+//! evaluates a model (`shaders/sky_model/`). The atmosphere types themselves know nothing of wgpu.
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, SingleSettings};
+use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, PrecomputedSettings, SingleSettings};
 
 /// Keep in sync with `Atmosphere` in shaders/sky_model/atmosphere.wgsl.
 #[repr(C)]
@@ -150,10 +151,10 @@ pub struct LutBuilder {
 
 impl LutBuilder {
     /// Builds the pipelines with `group0` as bind group 0 (the frame's globals, or an empty layout).
-    pub fn new(device: &wgpu::Device, library: &crate::render::ShaderLibrary, group0: &wgpu::BindGroupLayout) -> crate::render::RenderResult<Self> {
+    pub fn new(device: &wgpu::Device, library: &crate::render::gpu::shaders::ShaderLibrary, group0: &wgpu::BindGroupLayout) -> crate::render::gpu::error::RenderResult<Self> {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("SkyLuts::layout"),
-            entries: &[crate::render::uniform_entry(0, wgpu::ShaderStages::COMPUTE), storage_entry(1, true), storage_entry(2, false), storage_entry(3, false)],
+            entries: &[crate::render::gpu::parts::uniform_entry(0, wgpu::ShaderStages::COMPUTE), storage_entry(1, true), storage_entry(2, false), storage_entry(3, false)],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("SkyLuts::pipeline_layout"),
@@ -193,4 +194,93 @@ impl LutBuilder {
         cpass.set_pipeline(&self.later_orders);
         cpass.dispatch_workgroups((m * m).div_ceil(64), 1, 1);
     }
+}
+
+/// The tables' header, their first four texels. Keep in sync with `PrecomputedHeader` in
+/// shaders/sky_model/precomputed_sampling.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct PrecomputedHeader {
+    /// Transmittance width, height; irradiance width, height (texels).
+    pub sizes_2d: [u32; 4],
+    /// Scattering texels along nu, mu_s, mu (both halves), r.
+    pub sizes_4d: [u32; 4],
+    /// Transmittance samples, samples along rays, density directions per half turn; storage of
+    /// the looked-up tables (0 single, 1 half).
+    pub steps: [u32; 4],
+    /// Ground albedo, smallest sun cosine tabulated; unused.
+    pub ground: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<PrecomputedHeader>() == 64);
+
+impl PrecomputedHeader {
+    /// The header of tables built with `settings` over a ground of `albedo`.
+    pub fn new(settings: &PrecomputedSettings, albedo: f32) -> Self {
+        let [tw, th] = settings.transmittance_size;
+        let [iw, ih] = settings.irradiance_size;
+        Self {
+            sizes_2d: [tw, th, iw, ih],
+            sizes_4d: settings.scattering_size,
+            steps: [settings.transmittance_steps, settings.ray_steps, settings.density_directions, settings.precision as u32],
+            ground: [albedo, PrecomputedSettings::MU_S_MIN, 0.0, 0.0],
+        }
+    }
+}
+
+/// Bytes the tables of `settings` take: the header, three 2D tables and five 4D tables of rgba32f.
+pub fn table_bytes(settings: &PrecomputedSettings) -> u64 {
+    let [tw, th] = settings.transmittance_size;
+    let [iw, ih] = settings.irradiance_size;
+    let texels = 4 + (tw * th) as u64 + 2 * (iw * ih) as u64 + 5 * settings.scattering_texels() as u64;
+    texels * 16
+}
+
+/// The `precomputed` model's tables: one storage buffer (the header, then every table).
+pub struct PrecomputedTables {
+    /// The buffer.
+    pub buffer: wgpu::Buffer,
+    /// Its size, bytes.
+    pub bytes: u64,
+}
+
+impl PrecomputedTables {
+    /// Allocates tables large enough for `settings`.
+    pub fn new(device: &wgpu::Device, settings: &PrecomputedSettings) -> Self {
+        Self::with_bytes(device, table_bytes(settings))
+    }
+
+    /// Allocates tables large enough for any valid settings (the renderer's shared tables).
+    pub fn largest(device: &wgpu::Device) -> Self {
+        let largest = PrecomputedSettings {
+            transmittance_size: PrecomputedSettings::MAX_TRANSMITTANCE,
+            irradiance_size: PrecomputedSettings::MAX_IRRADIANCE,
+            scattering_size: [PrecomputedSettings::MAX_SCATTERING_TEXELS, 1, 1, 1],
+            ..Default::default()
+        };
+        Self::with_bytes(device, table_bytes(&largest))
+    }
+
+    fn with_bytes(device: &wgpu::Device, bytes: u64) -> Self {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("PrecomputedTables::buffer"),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self { buffer, bytes }
+    }
+
+    /// Whether tables of `settings` fit.
+    pub fn holds(&self, settings: &PrecomputedSettings) -> bool {
+        table_bytes(settings) <= self.bytes
+    }
+}
+
+/// Whether the shared tables are complete, for the passes that read them.
+#[derive(Debug, Default)]
+pub struct PrecomputedState {
+    /// The tables hold a finished build (none is under way).
+    pub complete: std::sync::atomic::AtomicBool,
+    /// Finished builds so far: a reader's results depend on it.
+    pub generation: std::sync::atomic::AtomicU64,
 }

@@ -83,7 +83,7 @@ struct Key {
     atmosphere: AtmosphereUniform,
     single: SingleUniform,
     lut: crate::render::passes::sky_model::LutUniform,
-    precomputed: crate::render::passes::precomputed_tables::PrecomputedHeader,
+    precomputed: crate::render::passes::sky_model::PrecomputedHeader,
     /// Finished builds of the `precomputed` tables (a new build changes the map).
     precomputed_generation: u64,
     params: SkyViewParams,
@@ -279,7 +279,7 @@ pub struct SkyViewPass {
     sky_light: wgpu::Buffer,
     globals: wgpu::Buffer,
     /// Whether the `precomputed` tables are complete.
-    precomputed_state: std::sync::Arc<crate::render::passes::precomputed_tables::PrecomputedState>,
+    precomputed_state: std::sync::Arc<crate::render::passes::sky_model::PrecomputedState>,
     /// Whether this frame's model lights the main scene (copied into the globals every frame).
     drive_scene: bool,
     /// Whether this frame's model has a map, and so the light of lit clouds.
@@ -299,7 +299,7 @@ impl SkyViewPass {
     /// Builds the pipeline and binds the shared sky-view map.
     pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
         let device = b.device;
-        let mut entries: Vec<wgpu::BindGroupLayoutEntry> = (0..2).map(|i| crate::render::uniform_entry(i, wgpu::ShaderStages::COMPUTE)).collect();
+        let mut entries: Vec<wgpu::BindGroupLayoutEntry> = (0..2).map(|i| crate::render::gpu::parts::uniform_entry(i, wgpu::ShaderStages::COMPUTE)).collect();
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: 2,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -314,14 +314,14 @@ impl SkyViewPass {
         });
         entries.extend([
             // The slice: a uniform, as the stage's storage buffers are all taken.
-            crate::render::uniform_entry(11, wgpu::ShaderStages::COMPUTE),
+            crate::render::gpu::parts::uniform_entry(11, wgpu::ShaderStages::COMPUTE),
             crate::render::passes::sky_model::storage_entry(4, true),
             crate::render::passes::sky_model::storage_entry(5, true),
             crate::render::passes::sky_model::storage_entry(6, true),
             crate::render::passes::sky_model::storage_entry(7, true),
             crate::render::passes::sky_model::storage_entry(8, false),
             // A uniform: the stage's eight storage buffers are taken.
-            crate::render::uniform_entry(9, wgpu::ShaderStages::COMPUTE),
+            crate::render::gpu::parts::uniform_entry(9, wgpu::ShaderStages::COMPUTE),
             crate::render::passes::sky_model::storage_entry(10, true),
         ]);
         let analytic = device.create_buffer(&wgpu::BufferDescriptor {
@@ -366,7 +366,7 @@ impl SkyViewPass {
                 crate::render::passes::sky_model::storage_entry(0, true),
                 crate::render::passes::sky_model::storage_entry(1, true),
                 crate::render::passes::sky_model::storage_entry(2, false),
-                crate::render::uniform_entry(3, wgpu::ShaderStages::COMPUTE),
+                crate::render::gpu::parts::uniform_entry(3, wgpu::ShaderStages::COMPUTE),
             ],
         });
         let blend_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -566,7 +566,7 @@ impl Pass for SkyViewPass {
         }
     }
 
-    fn stats(&self, stats: &mut crate::render::FrameStats) {
+    fn stats(&self, stats: &mut crate::render::frame::stats::FrameStats) {
         stats.map_skipped = self.skipped;
         stats.map_texels = self.step.texels.as_ref().map_or(0, |t| t.len() as u32);
     }
@@ -615,7 +615,7 @@ impl SkyViewPass {
             atmosphere: (&cx.frame.atmosphere).into(),
             single: (&model.single).into(),
             lut: crate::render::passes::sky_model::LutUniform::new(&model.lut, model.ground_albedo, cx.frame.atmosphere.mie_g),
-            precomputed: crate::render::passes::precomputed_tables::PrecomputedHeader::new(&model.precomputed, model.ground_albedo),
+            precomputed: crate::render::passes::sky_model::PrecomputedHeader::new(&model.precomputed, model.ground_albedo),
             precomputed_generation: self.precomputed_state.generation.load(Ordering::Relaxed),
             params: (model, cx.frame.towards_sun).into(),
             cpu: match model.kind {

@@ -4,7 +4,7 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use crate::render::frame::pass::{Caps, DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
-use crate::render::frame::renderer::FrameStats;
+use crate::render::frame::stats::FrameStats;
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders;
 use crate::sky::starfield;
@@ -50,7 +50,7 @@ impl StarsPass {
         let (device, globals) = (b.device, b.globals_layout);
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("Stars::layout"),
-            entries: &[crate::render::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
+            entries: &[crate::render::gpu::parts::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Stars::pipeline_layout"),
@@ -89,12 +89,12 @@ impl StarsPass {
                     compilation_options: options.clone(),
                 },
                 primitive: wgpu::PrimitiveState { topology: wgpu::PrimitiveTopology::TriangleStrip, cull_mode: None, ..Default::default() },
-                depth_stencil: crate::render::depth_state(false, compare),
+                depth_stencil: crate::render::gpu::parts::depth_state(false, compare),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
                     entry_point: Some(entry),
-                    targets: &[Some(wgpu::ColorTargetState { format, blend: Some(crate::render::ADDITIVE_ALPHA), write_mask: wgpu::ColorWrites::ALL })],
+                    targets: &[Some(wgpu::ColorTargetState { format, blend: Some(crate::render::gpu::parts::ADDITIVE_ALPHA), write_mask: wgpu::ColorWrites::ALL })],
                     compilation_options: options.clone(),
                 }),
                 multiview_mask: None,

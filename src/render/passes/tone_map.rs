@@ -44,7 +44,7 @@ impl ToneMapPass {
         let device = b.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("ToneMap::layout"),
-            entries: &[crate::render::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), crate::render::texture_entry(1)],
+            entries: &[crate::render::gpu::parts::uniform_entry(0, wgpu::ShaderStages::FRAGMENT), crate::render::gpu::parts::texture_entry(1)],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("ToneMap::pipeline_layout"),

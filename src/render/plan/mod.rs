@@ -17,6 +17,7 @@
 //!    costly layers drawn apart at their own resolution and composited into the run's buffer.
 //! 6. Which clears the frame can skip.
 
+pub mod items;
 pub mod map_updates;
 pub mod mip_bounds;
 pub mod resolution;
@@ -25,7 +26,7 @@ pub mod visibility;
 
 use std::ops::Range;
 
-use crate::render::frame::pass::{DrawItem, OwnBuffer, Placement, Target};
+use self::items::{DrawItem, OwnBuffer, Placement, Target};
 use crate::render::plan::resolution::Divisor;
 use crate::render::plan::strategy::FillStrategy;
 
@@ -53,7 +54,7 @@ pub struct FrameFacts {
     /// The renderer has a pass that draws reduced buffers (without one, reduced items are drawn
     /// at full resolution).
     pub reduced_layers: bool,
-    /// Clears of what the frame overwrites may be skipped ([`crate::render::Skips::covered_clears`]).
+    /// Clears of what the frame overwrites may be skipped ([`crate::render::frame::options::Skips::covered_clears`]).
     pub covered_clears: bool,
     /// The depth view still holds the clear value (no scene drawn into it since it was cleared).
     pub depth_clean: bool,

@@ -185,6 +185,12 @@ impl DomeResolution {
     }
 }
 
+/// Size of the sky-view map, texels: Hillaire 2020's sky-view LUT's 192 x 108 over half the
+/// circle of azimuth (shaders/sky_model/sky_view_map.wgsl), 1.9 degrees a column. The plan
+/// bounds buffers by its texel density; the sky-view pass makes it
+/// (`SharedResources::SKY_VIEW_SIZE` is this).
+pub const SKY_VIEW_SIZE: (u32, u32) = (96, 108);
+
 /// What the choice of resolution knows about the frame.
 #[derive(Debug, Clone, Copy)]
 pub struct ResolutionFacts {
@@ -255,7 +261,7 @@ impl ResolutionFacts {
 pub fn map_texels_per_deg((lowest, highest): (f32, f32)) -> (f32, f32) {
     let nearest = if lowest <= 0.0 && highest >= 0.0 { 0.0 } else { lowest.abs().min(highest.abs()) };
     let farthest = lowest.abs().max(highest.abs()).min(90.0);
-    let (columns, rows) = crate::render::frame::pass::SharedResources::SKY_VIEW_SIZE;
+    let (columns, rows) = SKY_VIEW_SIZE;
     let down = (rows as f32 / 4.0 / (90.0 * nearest).max(1e-6).sqrt()).min(SKY_VIEW_TEXELS_PER_DEG);
     let across = columns as f32 / 180.0 / farthest.to_radians().cos().max(1e-6);
     (across.min(down), down)

@@ -189,7 +189,7 @@ pub struct FillStrategy {
     /// Where a costly layer of a finer run is drawn.
     pub costly_layers: CostlyLayers,
     /// How the `precomputed` model's tables are built: at once, or over frames.
-    pub table_builds: crate::render::passes::precomputed_tables::TableBuilds,
+    pub table_builds: TableBuilds,
     /// Where physical-model frames are drawn.
     pub physical_target: PhysicalTarget,
     /// How the sky-view map follows a sun that moves a little every frame.
@@ -223,7 +223,7 @@ impl FillStrategy {
             pairs: LayerPairs::AtOnce,
             costly_layers: CostlyLayers::OwnBuffer,
             // One r-layer of a default table per frame: about half a second each on lavapipe.
-            table_builds: crate::render::passes::precomputed_tables::TableBuilds::Spread { slices: 32 },
+            table_builds: TableBuilds::Spread { slices: 32 },
             // The HDR target and its display phase were 17 to 20 ms of a 25 ms frame at 1280x720.
             physical_target: PhysicalTarget::DisplayMatched,
             // The `lut` map costs about 9 ms at 96 x 108 on lavapipe: a twelfth per frame. Each
@@ -247,7 +247,7 @@ impl FillStrategy {
             flash: FlashPlacement::OverFrame,
             pairs: LayerPairs::OneByOne,
             costly_layers: CostlyLayers::InRun,
-            table_builds: crate::render::passes::precomputed_tables::TableBuilds::AtOnce,
+            table_builds: TableBuilds::AtOnce,
             physical_target: PhysicalTarget::Hdr,
             map_updates: crate::render::plan::map_updates::MapUpdates::Whole,
             display_curves: DisplayCurves::Exact,
@@ -353,6 +353,20 @@ impl Default for FillStrategy {
     fn default() -> Self {
         Self::software()
     }
+}
+
+/// How a frame builds the tables: all at once (a GPU: milliseconds), or spread over frames so
+/// that a software rasteriser keeps drawing while it builds (seconds to a minute at the default
+/// settings on lavapipe).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TableBuilds {
+    /// Every step in one frame.
+    AtOnce,
+    /// Each 4D stage in this many slices, one step per frame.
+    Spread {
+        /// Slices per 4D stage.
+        slices: u32,
+    },
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! The frame plan's decisions, without a GPU.
 
 use super::*;
-use crate::render::frame::pass::Caps;
+use crate::render::plan::items::Caps;
 use crate::render::plan::strategy::{CostlyLayers, LayerPairs, RunJoining, UnderBackground};
 
 fn item(key: usize, reduced: bool, additive: bool) -> (usize, DrawItem) {
@@ -308,7 +308,7 @@ fn the_plans_uses_are_every_draw_it_records_and_no_other() {
 
 #[test]
 fn physical_skies_go_to_the_hdr_target_only_when_the_strategy_asks() {
-    use crate::render::frame::pass::Target;
+    use crate::render::plan::items::Target;
     use crate::render::plan::strategy::PhysicalTarget;
     assert_eq!(frame_target(true, &FillStrategy::plain()), Target::Hdr);
     assert_eq!(frame_target(true, &FillStrategy::software()), Target::Display);

@@ -5,8 +5,11 @@
 use glam::Vec3;
 
 use crate::render::frame::camera::Camera;
-use crate::render::frame::renderer::SCENE_COVERS_BELOW_DEG;
 use crate::sky::resolved::Shape;
+
+/// The main-scene stand-in covers every direction more than this far below the horizon, degrees
+/// (its terrain reaches 2.5 km at a viewer height of 2 m; its lowest dip is 40 m down).
+pub const SCENE_COVERS_BELOW_DEG: f32 = 2.0;
 
 /// What culling knows about the frame.
 #[derive(Debug, Clone, Copy)]

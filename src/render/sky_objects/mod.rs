@@ -38,7 +38,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use self::texel_quads::{GpuTexelMesh, TexelSource, TexelVertex};
 use crate::render::frame::camera::Camera;
 use crate::render::frame::pass::{Caps, DrawItem, FrameContext, OwnBuffer, Pass, PassBuild, Phase, Pipelines, Placement, SkyUpload, Staged, Target};
-use crate::render::frame::renderer::FrameStats;
+use crate::render::frame::stats::FrameStats;
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::mesh::{outline_mesh, shape_key, shape_mesh, GpuMesh, MeshData, SkyVertex};
 use crate::render::gpu::shaders;
@@ -155,10 +155,10 @@ impl SkyObjectsPass {
     /// Builds the layouts and pipelines.
     pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
         let (device, globals) = (b.device, b.globals_layout);
-        let mut entries = vec![crate::render::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)];
-        entries.extend((0..4).map(|i| crate::render::texture_entry(1 + i)));
-        entries.extend((0..4).map(|i| crate::render::sampler_entry(5 + i)));
-        entries.extend([crate::render::texture_entry(9), crate::render::sampler_entry(10)]);
+        let mut entries = vec![crate::render::gpu::parts::uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)];
+        entries.extend((0..4).map(|i| crate::render::gpu::parts::texture_entry(1 + i)));
+        entries.extend((0..4).map(|i| crate::render::gpu::parts::sampler_entry(5 + i)));
+        entries.extend([crate::render::gpu::parts::texture_entry(9), crate::render::gpu::parts::sampler_entry(10)]);
         let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("SkyObjects::draw_layout"), entries: &entries });
         let run_layout = crate::render::passes::reduced_layers::run_layout(device, "SkyObjects::run_layout");
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -506,7 +506,7 @@ impl Pass for SkyObjectsPass {
             let view = FrameView::new(cx.camera, aspect, (lowest_deg, highest_deg), cx.frame.towards_sun, cx.frame.celestial_from_world);
             // Drawn or not, the scene's pixels there are the scene's (reduced buffers keep their
             // clear colour there, too far below the scene's edge for the upsampling to reach).
-            let covered_below_deg = if scene_covers_below { -crate::render::frame::renderer::SCENE_COVERS_BELOW_DEG } else { f32::NEG_INFINITY };
+            let covered_below_deg = if scene_covers_below { -crate::render::plan::visibility::SCENE_COVERS_BELOW_DEG } else { f32::NEG_INFINITY };
             for e in &mut self.visible {
                 let d = &draws.objects[e.index][e.version];
                 // Frame pixels per degree at the frame's centre (the fewest: a perspective frame

@@ -222,7 +222,7 @@ pub(super) fn blend_index(b: BlendMode) -> usize {
 pub(super) const BLENDS: [Option<wgpu::BlendState>; 4] = [
     None,
     Some(wgpu::BlendState::ALPHA_BLENDING),
-    Some(crate::render::ADDITIVE_ALPHA),
+    Some(crate::render::gpu::parts::ADDITIVE_ALPHA),
     Some(wgpu::BlendState {
         color: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::One, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
         alpha: wgpu::BlendComponent { src_factor: wgpu::BlendFactor::Zero, dst_factor: wgpu::BlendFactor::One, operation: wgpu::BlendOperation::Add },
@@ -277,7 +277,7 @@ pub(super) fn create_pipeline(
                 compilation_options: options.clone(),
             },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: depth.and_then(|compare| crate::render::depth_state(false, compare)),
+            depth_stencil: depth.and_then(|compare| crate::render::gpu::parts::depth_state(false, compare)),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module,
@@ -397,7 +397,7 @@ impl SkyObjectsPass {
         let constants = key.constants();
         let format = match (key.reduced, key.target) {
             (true, target) => crate::render::passes::reduced_layers::reduced_format(target),
-            (false, Target::Hdr) => crate::render::HDR_FORMAT,
+            (false, Target::Hdr) => crate::render::gpu::parts::HDR_FORMAT,
             (false, Target::Display) => self.display_format,
         };
         let blend = match (key.reduced, key.placement) {
