@@ -137,36 +137,25 @@ fn paths(code: &str) -> Vec<Vec<String>> {
             if j + 2 < bytes.len() && bytes[j] == ':' && bytes[j + 1] == ':' && (ident(bytes[j + 2]) || bytes[j + 2] == '{') {
                 j += 2;
                 if bytes[j] == '{' {
-                    // One level of a use group: each member's first segment.
-                    let mut depth = 0;
-                    let mut k = j + 1;
-                    let mut member = String::new();
-                    while k < bytes.len() {
-                        let c = bytes[k];
-                        if c == '{' {
-                            depth += 1;
-                        } else if c == '}' {
-                            if depth == 0 {
-                                break;
-                            }
-                            depth -= 1;
-                        } else if depth == 0 && (c == ',' || c.is_whitespace()) {
-                            if !member.is_empty() {
-                                let first = member.split("::").next().unwrap_or("").to_string();
-                                out.push(segs.iter().cloned().chain([first]).collect());
-                                member.clear();
-                            }
-                            k += 1;
-                            continue;
-                        }
-                        if depth == 0 {
-                            member.push(c);
+                    // One level of a use group: its members split at the group's own commas, each
+                    // taken to its first segment (`a` of `a::{x, y}` and of `a::x as y`).
+                    let (mut depth, mut k, mut member, mut members) = (0, j + 1, String::new(), Vec::new());
+                    while k < bytes.len() && !(bytes[k] == '}' && depth == 0) {
+                        match bytes[k] {
+                            '{' => depth += 1,
+                            '}' => depth -= 1,
+                            ',' if depth == 0 => members.push(std::mem::take(&mut member)),
+                            c if depth == 0 => member.push(c),
+                            _ => {}
                         }
                         k += 1;
                     }
-                    if !member.is_empty() {
-                        let first = member.split("::").next().unwrap_or("").to_string();
-                        out.push(segs.iter().cloned().chain([first]).collect());
+                    members.push(member);
+                    for m in &members {
+                        let first = m.trim().split("::").next().unwrap_or("").trim();
+                        if !first.is_empty() {
+                            out.push(segs.iter().cloned().chain([first.to_string()]).collect());
+                        }
                     }
                     j = k;
                     break;
