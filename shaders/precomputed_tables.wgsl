@@ -4,7 +4,7 @@
 // Transmittance, direct irradiance and single scattering first; then, per higher order, its
 // scattering density, the irradiance of the order below, and the order's scattering, each added
 // to the totals. One invocation per texel; the header and layout are in
-// sky_model/precomputed_sampling.wgsl. Keep in sync with src/render/passes/precomputed_tables.rs.
+// sky_model/precomputed_sampling.wgsl. Keep in sync with src/render/atmosphere/precomputed_tables.rs.
 @group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
 @group(1) @binding(1) var<storage, read_write> precomputed_tables: array<vec4<f32>>;
 // This dispatch's slice of its table: first texel, texel count (at a dynamic offset per step;

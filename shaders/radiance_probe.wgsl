@@ -1,6 +1,6 @@
 //! requires: sky_model/single, sky_model/lut_sampling, sky_model/analytic, sky_model/precomputed_sampling
 // Evaluates a sky model for a list of radiance cases (`skytune radiance`, tests, benchmarks).
-// Keep in sync with src/render/passes/radiance_probe.rs.
+// Keep in sync with src/render/atmosphere/radiance_probe.rs.
 @group(1) @binding(0) var<uniform> atmosphere: Atmosphere;
 @group(1) @binding(1) var<uniform> single_settings: SingleSettings;
 // Per case: camera_km, sun_elev_deg, view_elev_deg, rel_azimuth_deg.

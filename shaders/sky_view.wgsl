@@ -2,7 +2,7 @@
 // Sky-view pass (compute phase): the current physical model rendered into the sky-view map as
 // exposed linear radiance, for the skydome's gradient stage to sample into the HDR target (the
 // display phase, tone_map.wgsl, tone-maps the frame).
-// Keep `SkyViewParams` in sync with src/render/passes/sky_view.rs.
+// Keep `SkyViewParams` in sync with src/render/atmosphere/sky_view.rs.
 struct SkyViewParams {
     towards_sun: vec4<f32>, // xyz unit vector, w: camera altitude (km)
     exposure: vec4<f32>,    // x: radiance scale (2^EV), y: tone mapper as f32 (0 ACES, 1 neutral) for the scene's light, zw: map size (texels)

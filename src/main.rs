@@ -225,7 +225,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
                 },
             };
             let ctx = GpuContext::headless(adapter(args.cpu))?;
-            let probe = skytune::render::passes::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
+            let probe = skytune::render::atmosphere::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
             let out = probe.single(&ctx, &atm, &settings, &list)?;
             let out = out.into_iter().map(|c| c.map(f64::from)).collect();
             (out, units, format!("model single on {}: {settings:?}", ctx.adapter_line()))
@@ -241,7 +241,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             };
             settings.validate().map_err(|e| anyhow!("--{}: {}", e.field.replace('_', "-"), e.message))?;
             let ctx = GpuContext::headless(adapter(args.cpu))?;
-            let probe = skytune::render::passes::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
+            let probe = skytune::render::atmosphere::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
             let out = probe.lut(&ctx, &atm, &settings, &list)?;
             let out = out.into_iter().map(|c| c.map(f64::from)).collect();
             (out, units, format!("model lut on {}: {settings:?}", ctx.adapter_line()))
@@ -257,7 +257,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             };
             settings.validate().map_err(|e| anyhow!("--{}: {}", e.field.replace('_', "-"), e.message))?;
             let ctx = GpuContext::headless(adapter(args.cpu))?;
-            let probe = skytune::render::passes::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
+            let probe = skytune::render::atmosphere::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
             let out = probe.precomputed(&ctx, &atm, &settings, &list)?;
             let out = out.into_iter().map(|c| c.map(f64::from)).collect();
             (out, units, format!("model precomputed on {}: {settings:?}", ctx.adapter_line()))
@@ -307,7 +307,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
                     .collect()
             } else {
                 let ctx = GpuContext::headless(adapter(args.cpu))?;
-                let probe = skytune::render::passes::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
+                let probe = skytune::render::atmosphere::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
                 probe.analytic(&ctx, &list, per_case)?.into_iter().map(|c| c.map(f64::from)).collect()
             };
             let place = if args.on_cpu { "CPU" } else { "GPU" };

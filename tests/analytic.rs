@@ -7,7 +7,7 @@ mod common;
 
 use skytune::atmosphere::analytic::{self, AnalyticModel, LinearParams, Preetham, Ramp, PREETHAM_MIN_TURBIDITY};
 use skytune::atmosphere::reference::Case;
-use skytune::render::passes::radiance_probe::RadianceProbe;
+use skytune::render::atmosphere::radiance_probe::RadianceProbe;
 use skytune::render::{AdapterChoice, Camera, GpuContext, RenderOptions, ShaderLibrary};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::model::SkyModelKind;

@@ -257,7 +257,7 @@ fn switching_the_sky_model_live_leaves_the_bitmap_path_exact() {
     let (d, _) = common::diff(&single, &before, 10);
     assert!(d.differing > 0.2, "the physical model colours the skydome: {d:?}");
     // The sky-view map is recomputed only when something it depends on changes.
-    let maps = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::passes::sky_view::SkyViewPass>().unwrap().maps_computed;
+    let maps = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::atmosphere::sky_view::SkyViewPass>().unwrap().maps_computed;
     let single_input = FrameInput { sky_model: Some(single_model(&sky)), ..bitmap.clone() };
     let n = maps(&h);
     h.frame(&sky, &single_input, &camera(), &opts, 0.0);
@@ -279,7 +279,7 @@ fn render_lut(name: &str, hour: f32, weather: f32) {
     let img = h.render(&sky, &input, &camera(), &common::hdr_options()).unwrap();
     common::check_reference(name, &img);
     // The tables were built once; a moving sun only recomputes the sky-view map.
-    let builds = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::passes::sky_luts::SkyLutsPass>().unwrap().builds;
+    let builds = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::atmosphere::sky_luts::SkyLutsPass>().unwrap().builds;
     let before = builds(&h);
     h.frame(&sky, &FrameInput { hour: hour + 0.5, ..input.clone() }, &camera(), &common::hdr_options(), 0.0);
     assert_eq!(builds(&h), before, "the sun moved: the LUTs stay");
@@ -306,7 +306,7 @@ fn precomputed_model_noon_sunset_twilight() {
     let mut h = common::headless(W, H);
     h.set_sky(&sky).unwrap();
     let model = SkyModel { kind: SkyModelKind::Precomputed, ..sky.model };
-    let builds = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::passes::precomputed_tables::PrecomputedTablesPass>().unwrap().builds;
+    let builds = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::atmosphere::precomputed_tables::PrecomputedTablesPass>().unwrap().builds;
     let before = builds(&h);
     for (name, hour) in [("precomputed_noon", 12.0), ("precomputed_sunset", 18.0), ("precomputed_twilight", 18.6)] {
         let input = FrameInput { sky_model: Some(model), ..FrameInput::new(hour, 0.0) };
@@ -364,7 +364,7 @@ fn reference_model_renders_in_the_background() {
     let input = FrameInput { sky_model: Some(model), ..FrameInput::new(13.0, 0.0) };
     let opts = RenderOptions { glare: false, ..Default::default() };
     h.frame(&sky, &input, &camera(), &opts, 0.0);
-    let view = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::passes::sky_view::SkyViewPass>().unwrap().progress();
+    let view = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::atmosphere::sky_view::SkyViewPass>().unwrap().progress();
     assert!(h.renderer.busy() && view(&h).is_some(), "the first frame starts the background work");
     let img = h.render(&sky, &input, &camera(), &opts).unwrap();
     assert!(!h.renderer.busy() && view(&h).is_none(), "the still waited for it");
@@ -656,13 +656,13 @@ fn a_moving_sun_spreads_the_map_over_frames_and_a_still_shows_it_exactly() {
     let at = |hour: f32| lut_input(&sky, hour, 0.0);
     let options = RenderOptions::default();
     let MapUpdates::Spread { slices } = options.strategy.map_updates else { panic!("the software strategy spreads maps") };
-    let (w, h) = skytune::render::frame::pass::SharedResources::SKY_VIEW_SIZE;
+    let (w, h) = skytune::render::plan::resolution::SKY_VIEW_SIZE;
     let mut moving = common::headless(W, H);
     moving.set_sky(&sky).unwrap();
     moving.render(&sky, &at(16.5), &camera(), &options).unwrap();
     moving.frame(&sky, &at(17.0), &camera(), &options, 0.0);
     assert_eq!(moving.renderer.stats.map_texels, w * h, "a jump of the sun: the whole map");
-    let maps = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::passes::sky_view::SkyViewPass>().unwrap().maps_computed;
+    let maps = |h: &skytune::render::Headless| h.renderer.pass::<skytune::render::atmosphere::sky_view::SkyViewPass>().unwrap().maps_computed;
     let before = maps(&moving);
     let mut hour = 17.0;
     for frame in 0..2 * slices {

@@ -4,7 +4,7 @@
 
 use skytune::atmosphere::reference::{Case, Reference, ReferenceSettings};
 use skytune::atmosphere::{Atmosphere, OpticalDepth, SingleSettings};
-use skytune::render::passes::radiance_probe::RadianceProbe;
+use skytune::render::atmosphere::radiance_probe::RadianceProbe;
 use skytune::render::{AdapterChoice, GpuContext, ShaderLibrary};
 
 /// Sun elevations (fine near the horizon), view elevations and relative azimuths.

@@ -6,7 +6,7 @@
 
 mod common;
 
-use skytune::render::frame::pass::SharedResources;
+use skytune::render::plan::resolution::SKY_VIEW_SIZE;
 use skytune::render::{AdapterChoice, GpuContext, ShaderLibrary};
 
 /// Directions probed: a grid over azimuth and elevation (the poles, the horizon and the
@@ -70,7 +70,7 @@ fn map_coordinates_hold_to_a_hundredth_of_a_texel() {
     let padded: Vec<[f32; 4]> = pairs.iter().flat_map(|(d, s)| [[d[0], d[1], d[2], 0.0], [s[0], s[1], s[2], 0.0]]).collect();
     let bytes = common::run_compute_probe(&ctx, source, "cs_uv", &[], Some(bytemuck::cast_slice(&padded)), pairs.len() as u32, 16);
     let got: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-    let (w, h) = SharedResources::SKY_VIEW_SIZE;
+    let (w, h) = SKY_VIEW_SIZE;
     let texels = [f64::from(w), f64::from(h)];
     let (mut worst, mut worst_trip) = (0.0f64, 0.0f64);
     for ((d, sun), g) in pairs.iter().zip(got) {

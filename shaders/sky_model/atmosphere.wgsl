@@ -1,6 +1,6 @@
 // Atmosphere parameters, density profiles, phase functions and optical depths shared by the
 // physical sky models. Units: km, km^-1, radians. Keep in sync with `AtmosphereUniform` in
-// src/render/passes/sky_model.rs.
+// src/render/atmosphere/uniforms.rs.
 struct Atmosphere {
     rayleigh: vec4<f32>, // scattering rgb (km^-1), scale height (km)
     mie_scattering: vec4<f32>, // scattering rgb (km^-1), scale height (km)

@@ -2,7 +2,7 @@
 // The `lut` model (Hillaire 2020): look-up-table parametrisations, bilinear reads, and the sky
 // radiance from the LUTs. A library: the module that requires it declares `lut_params`,
 // `transmittance_lut` and `multiscattering_lut` (read-only where the LUTs are used, read-write
-// in the pass that builds them). Keep `LutParams` in sync with src/render/passes/sky_model.rs.
+// in the pass that builds them). Keep `LutParams` in sync with src/render/atmosphere/uniforms.rs.
 struct LutParams {
     sizes: vec4<u32>, // transmittance width, height; multiple-scattering size; sqrt of its direction count
     steps: vec4<u32>, // transmittance, multiple-scattering and view-ray samples; unused
@@ -10,7 +10,7 @@ struct LutParams {
 };
 
 // Values per multiple-scattering texel. Keep in sync with `MULTISCATTERING_LAYERS` in
-// src/render/passes/sky_model.rs.
+// src/render/atmosphere/tables.rs.
 const MS_LAYERS: u32 = 6u;
 
 // The six real spherical harmonics (orthonormal, bands 0 to 2) even in z, of a direction d in a

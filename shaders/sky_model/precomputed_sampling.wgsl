@@ -7,7 +7,7 @@
 // Everything lives in one storage buffer of vec4 (the stage's storage-buffer budget is 8):
 // a header (`PrecomputedHeader`, 4 vec4), then the 2D tables (transmittance; irradiance; its
 // delta of the order being built), then five 4D tables of the same size. Keep the header and the
-// offsets in sync with src/render/passes/precomputed_tables.rs.
+// offsets in sync with src/render/atmosphere/tables.rs (the header) and precomputed_tables.rs.
 struct PrecomputedHeader {
     sizes_2d: vec4<u32>, // transmittance width, height; irradiance width, height
     sizes_4d: vec4<u32>, // scattering table texels along nu, mu_s, mu (both halves), r

@@ -1,6 +1,6 @@
 //! requires: sky_model/atmosphere
 // Single scattering by ray marching (the `single` sky model). Radiance in sr^-1 per unit of solar
-// irradiance. Keep `SingleSettings` in sync with `SingleUniform` in src/render/passes/sky_model.rs.
+// irradiance. Keep `SingleSettings` in sync with `SingleUniform` in src/render/atmosphere/uniforms.rs.
 struct SingleSettings {
     view_steps: u32,    // samples along the view ray
     sun_steps: u32,     // samples towards the sun (numerical optical depth only)

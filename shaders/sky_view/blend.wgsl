@@ -1,9 +1,9 @@
-// The sky-view pass's shown map (src/render/passes/sky_view.rs): the older and the newer finished
+// The sky-view pass's shown map (src/render/atmosphere/sky_view.rs): the older and the newer finished
 // maps (exposed linear radiance per texel) blended by the newer's weight, as the rgba16float texels
 // copied into the sky-view texture. While the sun moves with the map spread over frames
 // (src/render/plan/map_updates.rs) the weight rises frame by frame, so the sky moves smoothly;
 // otherwise it is 1 and the newer map is shown as it is.
-// Keep `BlendParams` in sync with src/render/passes/sky_view.rs.
+// Keep `BlendParams` in sync with src/render/atmosphere/sky_view.rs.
 struct BlendParams {
     settings: vec4<f32>, // x: weight of the newer map, y: texels
 };

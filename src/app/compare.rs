@@ -228,7 +228,7 @@ impl CompareView {
         }
         let Some(image_b) = sides[1].0.try_render(sky_b, input_b, &inputs.camera, &inputs.options)? else {
             self.pending = true;
-            self.progress = sides[1].0.renderer.pass::<crate::render::passes::sky_view::SkyViewPass>().and_then(|p| p.progress());
+            self.progress = sides[1].0.renderer.pass::<crate::render::atmosphere::sky_view::SkyViewPass>().and_then(|p| p.progress());
             return Ok(());
         };
         self.pending = false;

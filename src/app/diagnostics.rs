@@ -65,7 +65,7 @@ fn skipped(ui: &mut egui::Ui, info: &UiInfo<'_>) {
     if s.map_skipped {
         skipped.push("the sky-view map (unchanged)".into());
     } else if s.map_texels > 0 {
-        let (w, h) = crate::render::frame::pass::SharedResources::SKY_VIEW_SIZE;
+        let (w, h) = crate::render::plan::resolution::SKY_VIEW_SIZE;
         skipped.push(format!("{} of the sky-view map's {} texels (the rest computed in other frames)", (w * h).saturating_sub(s.map_texels), w * h));
     }
     ui.label("skipped:");

@@ -289,9 +289,9 @@ impl App {
             last_capture: &self.last_capture,
             model_progress: gpu
                 .renderer
-                .pass::<crate::render::passes::sky_view::SkyViewPass>()
+                .pass::<crate::render::atmosphere::sky_view::SkyViewPass>()
                 .and_then(|p| p.progress())
-                .or_else(|| gpu.renderer.pass::<crate::render::passes::precomputed_tables::PrecomputedTablesPass>().and_then(|p| p.progress())),
+                .or_else(|| gpu.renderer.pass::<crate::render::atmosphere::precomputed_tables::PrecomputedTablesPass>().and_then(|p| p.progress())),
             compare: None,
             device_lost: gpu.ctx.lost_reason().is_some(),
             floor_ms: gpu.floor_ms(self.clock.frames()),

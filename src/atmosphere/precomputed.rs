@@ -1,6 +1,6 @@
 //! Settings of the `precomputed` model (after Bruneton 2017, precomputed atmospheric scattering):
 //! table sizes, scattering orders and sample counts, the accuracy axis of the benchmark. The
-//! tables themselves are built on the GPU (`render::passes::precomputed_tables`).
+//! tables themselves are built on the GPU (`render::atmosphere::precomputed_tables`).
 
 use serde::Deserialize;
 

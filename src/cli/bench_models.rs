@@ -191,7 +191,7 @@ fn cpu_fill_ms(ev: &Evaluator<'_>, prepared: &Prepared) -> anyhow::Result<f64> {
     if matches!(prepared, Prepared::Gpu(_) | Prepared::Analytic(..) | Prepared::Baked(_)) {
         return Ok(0.0);
     }
-    let (w, h) = skytune::render::frame::pass::SharedResources::SKY_VIEW_SIZE;
+    let (w, h) = skytune::render::plan::resolution::SKY_VIEW_SIZE;
     let cases: Vec<Case> = (0..w * h)
         .map(|k| Case {
             camera_km: dome::CAMERA_KM,
@@ -445,7 +445,7 @@ fn report(
     (w, h): (u32, u32),
     seconds: f64,
 ) -> String {
-    let (mw, mh) = skytune::render::frame::pass::SharedResources::SKY_VIEW_SIZE;
+    let (mw, mh) = skytune::render::plan::resolution::SKY_VIEW_SIZE;
     let mut md = String::new();
     let _ = writeln!(md, "# Sky models: speed against accuracy\n");
     let _ = writeln!(

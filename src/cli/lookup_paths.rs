@@ -15,7 +15,7 @@ use skytune::atmosphere::Rgb;
 use skytune::measure::model_points::{Evaluator, Method, Point, SunRow};
 use skytune::measure::sky_view_map::SkyViewMap;
 use skytune::measure::validation::median;
-use skytune::render::frame::pass::SharedResources;
+use skytune::render::plan::resolution::SKY_VIEW_SIZE;
 
 /// Accuracy and cost of one way of drawing a point.
 #[derive(Debug, Clone)]
@@ -41,7 +41,7 @@ pub struct PathRow {
 pub fn measure(ev: &Evaluator<'_>, reference: &ReferenceDome, suns: &[f64], points: &[Point], by_sun: &[SunRow], frame: (u32, u32)) -> anyhow::Result<Vec<PathRow>> {
     let atm = Haze::Default.atmosphere();
     let dirs = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
-    let size = (SharedResources::SKY_VIEW_SIZE.0 as usize, SharedResources::SKY_VIEW_SIZE.1 as usize);
+    let size = (SKY_VIEW_SIZE.0 as usize, SKY_VIEW_SIZE.1 as usize);
     let texels = SkyViewMap::texel_directions(size);
     let case =
         |sun_elev_deg: f64, view_elev_deg: f64, rel_azimuth_deg: f64| Case { camera_km: dome::CAMERA_KM, albedo: dome::ALBEDO, sun_elev_deg, view_elev_deg, rel_azimuth_deg };
@@ -95,7 +95,7 @@ pub fn markdown(rows: &[PathRow], frame: (u32, u32)) -> String {
     if rows.is_empty() {
         return md;
     }
-    let (mw, mh) = SharedResources::SKY_VIEW_SIZE;
+    let (mw, mh) = SKY_VIEW_SIZE;
     let _ = writeln!(md, "\n## Per-pixel lookup against the sky-view map (`precomputed`)\n");
     let _ = writeln!(
         md,

@@ -63,8 +63,7 @@ pub fn render_linear(hl: &mut Headless, sky: &Sky, input: &FrameInput, camera: &
     let (w, h) = (hl.target.width, hl.target.height);
     let texture = hl.renderer.hdr_texture().ok_or_else(|| RenderError::Readback("the frame drew no HDR target".into()))?;
     let texels = headless::read_texture(&hl.ctx, texture, w, h, 8)?;
-    let sky_view = hl.renderer.pass::<crate::render::passes::sky_view::SkyViewPass>().ok_or_else(|| RenderError::Readback("no sky-view pass".into()))?;
-    let light = headless::read_buffer(&hl.ctx, sky_view.sky_light_buffer(), 16)?;
+    let light = headless::read_buffer(&hl.ctx, &hl.renderer.atmosphere().sky_light, 16)?;
     let scale = f32::from_le_bytes([light[0], light[1], light[2], light[3]]);
     let scale = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
     log::debug!("render_linear: exposure scale {scale}");

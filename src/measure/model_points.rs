@@ -12,7 +12,7 @@ use crate::atmosphere::dome::{self, DomeDir};
 use crate::atmosphere::reference::Case;
 use crate::atmosphere::represent::{self, Baked, DomeMapTable, Regression};
 use crate::atmosphere::{Atmosphere, LutSettings, OpticalDepth, PrecomputedSettings, Rgb, SingleSettings, TablePrecision};
-use crate::render::passes::radiance_probe::RadianceProbe;
+use crate::render::atmosphere::radiance_probe::RadianceProbe;
 use crate::render::{GpuContext, ShaderLibrary};
 
 /// A model and its quality settings.

@@ -1,8 +1,9 @@
 //! wgpu renderer of sky scenes, organised as an ordered list of phases (see [`frame::pass`]).
-//! One pass = one module in [`passes`] (or the [`sky_objects`] folder) + one `.wgsl` file in
+//! One pass = one module in [`passes`] (or the [`sky_objects`] and [`atmosphere`] folders) + one `.wgsl` file in
 //! `shaders/` of the same name. [`plan`] decides how a frame is drawn without GPU types,
 //! [`frame`] carries it out, [`gpu`] holds what every pass builds on.
 
+pub mod atmosphere;
 pub mod frame;
 pub mod gpu;
 pub mod passes;

@@ -44,12 +44,12 @@ pub struct Globals {
 const _: () = assert!(std::mem::size_of::<Globals>() == 3 * 64 + 10 * 16);
 
 /// Byte offset of `cloud_sun` in [`Globals`], followed by `cloud_ambient` (a physical or analytic
-/// sky model overwrites both on the GPU: see `sky_view.rs`).
+/// sky model overwrites both on the GPU: see `render/atmosphere/sky_view.rs`).
 pub const CLOUD_LIGHT_OFFSET: u64 = std::mem::offset_of!(Globals, cloud_sun) as u64;
 const _: () = assert!(std::mem::offset_of!(Globals, cloud_ambient) - std::mem::offset_of!(Globals, cloud_sun) == 16);
 
 /// Byte offset of `fog_color` in [`Globals`], followed by `sun_ambient` and `sun_diffuse` (a
-/// physical sky model overwrites the three on the GPU: see `sky_view.rs`).
+/// physical sky model overwrites the three on the GPU: see `render/atmosphere/sky_view.rs`).
 pub const SCENE_LIGHT_OFFSET: u64 = std::mem::offset_of!(Globals, fog_color) as u64;
 const _: () = assert!(std::mem::offset_of!(Globals, sun_diffuse) - std::mem::offset_of!(Globals, fog_color) == 32);
 const _: () = assert!(std::mem::offset_of!(Globals, sun_ambient) - std::mem::offset_of!(Globals, fog_color) == 16);

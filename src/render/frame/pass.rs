@@ -10,6 +10,7 @@
 
 use std::any::Any;
 
+use crate::render::atmosphere::AtmosphereGpu;
 use crate::render::frame::camera::Camera;
 use crate::render::frame::options::RenderOptions;
 use crate::render::frame::stats::FrameStats;
@@ -33,8 +34,9 @@ pub struct PassBuild<'a> {
     /// Colour format of the display target (render pipelines are also built for
     /// [`crate::render::gpu::parts::HDR_FORMAT`]: see [`Pipelines::new_render`]).
     pub color_format: wgpu::TextureFormat,
-    /// Textures one pass writes and others read.
-    pub shared: &'a SharedResources,
+    /// The frame's atmosphere on the GPU: its uniform, tables and sky-view map, which one pass
+    /// writes and others read.
+    pub atmosphere: &'a AtmosphereGpu,
     /// The target the render pipelines being built draw into ([`Pipelines::new_render`] builds
     /// a set for each).
     pub target: Target,
@@ -45,64 +47,6 @@ impl PassBuild<'_> {
     /// pipelines draw into, so `to_target` compiles to one side.
     pub fn target_constants(&self) -> [(&'static str, f64); 1] {
         [("TARGET_KIND", if self.target == Target::Hdr { 2.0 } else { 1.0 })]
-    }
-}
-
-/// Textures and buffers shared between passes, made once by the renderer.
-pub struct SharedResources {
-    /// The `lut` model's tables: `sky_luts` builds them, `sky_view` reads them.
-    pub luts: crate::render::passes::sky_model::LutTables,
-    /// The `precomputed` model's tables: `precomputed_tables` builds them, `sky_view` reads them.
-    pub precomputed: crate::render::passes::sky_model::PrecomputedTables,
-    /// Whether they are complete (a software rasteriser builds them over several frames).
-    pub precomputed_state: std::sync::Arc<crate::render::passes::sky_model::PrecomputedState>,
-    /// The sky-view map: a physical model's exposed linear radiance by direction (`sky_view`
-    /// writes it in the compute phase, `sky_objects` samples it in the gradient stage).
-    pub sky_view: wgpu::Texture,
-    /// Its view.
-    pub sky_view_view: wgpu::TextureView,
-    /// Its sampler: both clamp (the azimuth's ends, towards the sun and away from it, are the
-    /// sky's planes of symmetry).
-    pub sky_view_sampler: wgpu::Sampler,
-}
-
-impl SharedResources {
-    /// Size of the sky-view map, texels: Hillaire 2020's sky-view LUT's 192 x 108 over half the
-    /// circle of azimuth (shaders/sky_model/sky_view_map.wgsl), 1.9 degrees a column.
-    pub const SKY_VIEW_SIZE: (u32, u32) = crate::render::plan::resolution::SKY_VIEW_SIZE;
-    /// Format of the sky-view map: linear radiance above 1 near the sun must survive.
-    pub const SKY_VIEW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-
-    /// Creates the shared resources.
-    pub fn new(device: &wgpu::Device) -> Self {
-        let (width, height) = Self::SKY_VIEW_SIZE;
-        let sky_view = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("SkyView::map"),
-            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: Self::SKY_VIEW_FORMAT,
-            usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let sky_view_view = sky_view.create_view(&Default::default());
-        let sky_view_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("SkyView::sampler"),
-            address_mode_u: wgpu::AddressMode::ClampToEdge,
-            address_mode_v: wgpu::AddressMode::ClampToEdge,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
-        Self {
-            luts: crate::render::passes::sky_model::LutTables::new(device),
-            precomputed: crate::render::passes::sky_model::PrecomputedTables::largest(device),
-            precomputed_state: Default::default(),
-            sky_view,
-            sky_view_view,
-            sky_view_sampler,
-        }
     }
 }
 

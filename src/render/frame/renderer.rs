@@ -1,11 +1,12 @@
 //! The sky renderer: runs the passes of [`PASSES`] phase by phase. It owns bind group 0 and the
-//! shared textures; each pass owns its pipelines, its per-sky resources and its state. It knows
+//! frame's atmosphere on the GPU ([`AtmosphereGpu`]); each pass owns its pipelines, its per-sky resources and its state. It knows
 //! nothing of egui or winit; the app and the CLI drive it.
 
+use crate::render::atmosphere::AtmosphereGpu;
 use crate::render::frame::camera::Camera;
 use crate::render::frame::globals::{Globals, GlobalsBinding};
 use crate::render::frame::options::RenderOptions;
-use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Placement, SharedResources, SkyUpload, Target};
+use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Placement, SkyUpload, Target};
 use crate::render::frame::stats::{FrameStats, UploadStats};
 use crate::render::gpu::context::GpuContext;
 use crate::render::gpu::error::RenderResult;
@@ -56,7 +57,7 @@ pub struct SkyRenderer {
     library: ShaderLibrary,
     color_format: wgpu::TextureFormat,
     textures: TextureCache,
-    shared: SharedResources,
+    atmosphere: AtmosphereGpu,
     passes: Vec<Box<dyn Pass>>,
     has_sky: bool,
     hdr: Option<HdrTarget>,
@@ -88,13 +89,20 @@ impl SkyRenderer {
     ) -> RenderResult<Self> {
         let device = &ctx.device;
         let globals = GlobalsBinding::new(device);
-        let shared = SharedResources::new(device);
-        let build =
-            PassBuild { device, globals_layout: &globals.layout, globals_buffer: &globals.buffer, library: &library, color_format, shared: &shared, target: Target::Display };
+        let atmosphere = AtmosphereGpu::new(device);
+        let build = PassBuild {
+            device,
+            globals_layout: &globals.layout,
+            globals_buffer: &globals.buffer,
+            library: &library,
+            color_format,
+            atmosphere: &atmosphere,
+            target: Target::Display,
+        };
         let passes = PASSES.iter().chain(extra).map(|(_, new)| new(&build)).collect::<RenderResult<Vec<_>>>()?;
         Ok(Self {
             textures: TextureCache::new(device, &ctx.queue),
-            shared,
+            atmosphere,
             globals,
             library,
             color_format,
@@ -139,7 +147,7 @@ impl SkyRenderer {
             globals_buffer: &self.globals.buffer,
             library: &self.library,
             color_format: self.color_format,
-            shared: &self.shared,
+            atmosphere: &self.atmosphere,
             target: Target::Display,
         };
         let result = self.passes.iter_mut().try_for_each(|p| p.stage_pipelines(&build));
@@ -168,6 +176,11 @@ impl SkyRenderer {
     /// Names and phases of the passes, in list order.
     pub fn pass_names(&self) -> Vec<(&'static str, Phase)> {
         self.passes.iter().map(|p| (p.name(), p.phase())).collect()
+    }
+
+    /// The frame's atmosphere on the GPU (its tables, the sky-view map and its light).
+    pub fn atmosphere(&self) -> &AtmosphereGpu {
+        &self.atmosphere
     }
 
     /// The pass of type `P`, if the renderer has one.
@@ -226,6 +239,7 @@ impl SkyRenderer {
             self.ensure_hdr(&ctx.device, target.size);
         }
         let hdr = self.hdr.as_ref().filter(|_| kind == Target::Hdr).map(|t| (&t.view, t.generation));
+        self.atmosphere.prepare(&ctx.queue, &frame.atmosphere);
         let cx = FrameContext { device: &ctx.device, queue: &ctx.queue, frame, camera, options, size: target.size, target: kind, matched, hdr };
         for pass in &mut self.passes {
             pass.prepare(&cx);

@@ -188,7 +188,7 @@ impl DomeResolution {
 /// Size of the sky-view map, texels: Hillaire 2020's sky-view LUT's 192 x 108 over half the
 /// circle of azimuth (shaders/sky_model/sky_view_map.wgsl), 1.9 degrees a column. The plan
 /// bounds buffers by its texel density; the sky-view pass makes it
-/// (`SharedResources::SKY_VIEW_SIZE` is this).
+/// (the sky-view map of `crate::render::atmosphere::AtmosphereGpu` has this size).
 pub const SKY_VIEW_SIZE: (u32, u32) = (96, 108);
 
 /// What the choice of resolution knows about the frame.

@@ -185,13 +185,13 @@ impl SkyObjectsPass {
                 entries: &[
                     wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
-                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&b.shared.sky_view_sampler) },
+                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&b.atmosphere.sky_view_sampler) },
                     wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&view) },
                 ],
             })
         };
         let pipelines = Pipelines::new_render(b, pipeline_layout.clone(), Self::build)?;
-        let sky_view = (b.shared.sky_view_view.clone(), b.shared.sky_view_sampler.clone());
+        let sky_view = (b.atmosphere.sky_view_view.clone(), b.atmosphere.sky_view_sampler.clone());
         Ok(Self {
             bind_layout,
             pipeline_layout,

@@ -7,13 +7,15 @@ use wgpu::util::DeviceExt;
 use crate::atmosphere::analytic::{self, AnalyticModel};
 use crate::atmosphere::reference::Case;
 use crate::atmosphere::{Atmosphere, LutSettings, PrecomputedSettings, SingleSettings};
+use crate::render::atmosphere::precomputed_tables::PrecomputedBuilder;
+use crate::render::atmosphere::sky_luts::LutBuilder;
+use crate::render::atmosphere::tables::{table_bytes, LutTables, PrecomputedHeader, PrecomputedTables};
+use crate::render::atmosphere::uniforms::{AtmosphereUniform, LutUniform, SingleUniform};
 use crate::render::gpu::context::GpuContext;
 use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::parts::storage_entry;
 use crate::render::gpu::shaders;
 use crate::render::gpu::shaders::ShaderLibrary;
-use crate::render::passes::precomputed_tables::PrecomputedBuilder;
-use crate::render::passes::sky_model::{storage_entry, AtmosphereUniform, LutBuilder, LutTables, LutUniform, SingleUniform};
-use crate::render::passes::sky_model::{table_bytes, PrecomputedHeader, PrecomputedTables};
 
 /// The probe's pipelines, and the `lut` and `precomputed` models' table builders.
 pub struct RadianceProbe {
@@ -269,7 +271,7 @@ impl RadianceProbe {
             match (build, &builder_group) {
                 (Build::Lut(settings), Some(group)) => self.builder.dispatch(&mut pass, group, settings),
                 (Build::Precomputed(settings, _), Some(group)) => {
-                    let steps = crate::render::passes::precomputed_tables::build_steps(settings, 1);
+                    let steps = crate::render::atmosphere::precomputed_tables::build_steps(settings, 1);
                     self.precomputed_builder.write_steps(&ctx.queue, &steps);
                     self.precomputed_builder.dispatch(&mut pass, group, &steps, 0..steps.len());
                 }

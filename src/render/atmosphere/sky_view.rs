@@ -10,22 +10,23 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, SharedResources};
-use crate::render::gpu::error::RenderResult;
-use crate::render::gpu::shaders;
-use crate::render::passes::sky_model::{AtmosphereUniform, SingleUniform};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
-use crate::atmosphere::cells::{CellModel, CellSettings};
-use crate::atmosphere::reference::{Case, Reference, ReferenceSettings};
-use crate::atmosphere::Atmosphere;
+use crate::atmosphere::cells::CellSettings;
+use crate::render::atmosphere::cpu_maps::{CpuJob, CpuModel, CpuWorker};
+use crate::render::atmosphere::tables::{PrecomputedHeader, PrecomputedState};
+use crate::render::atmosphere::uniforms::{AtmosphereUniform, LutUniform, SingleUniform};
+use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines};
+use crate::render::gpu::error::RenderResult;
+use crate::render::gpu::shaders;
+use crate::render::plan::resolution::SKY_VIEW_SIZE;
 use crate::sky::resolved::{SkyModel, SkyModelKind};
 
 /// Maps of CPU models kept (each 96 x 108 texels of 16 bytes: 165 KiB).
 const CPU_CACHE_MAPS: usize = 16;
 
-/// Bytes of one sky-view texel ([`SharedResources::SKY_VIEW_FORMAT`]).
+/// Bytes of one sky-view texel ([`crate::render::atmosphere::SKY_VIEW_FORMAT`]).
 const TEXEL_BYTES: u32 = 8;
 
 /// Bytes of one texel of the work and finished maps (four f32).
@@ -57,7 +58,7 @@ const _: () = assert!(std::mem::size_of::<SkyViewParams>() == 48);
 
 impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
     fn from((model, towards_sun): (&SkyModel, glam::Vec3)) -> Self {
-        let (w, h) = SharedResources::SKY_VIEW_SIZE;
+        let (w, h) = SKY_VIEW_SIZE;
         let kind = match model.kind {
             SkyModelKind::Lut => 1.0,
             SkyModelKind::Cells | SkyModelKind::Reference => 2.0,
@@ -82,8 +83,8 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
 struct Key {
     atmosphere: AtmosphereUniform,
     single: SingleUniform,
-    lut: crate::render::passes::sky_model::LutUniform,
-    precomputed: crate::render::passes::sky_model::PrecomputedHeader,
+    lut: LutUniform,
+    precomputed: PrecomputedHeader,
     /// Finished builds of the `precomputed` tables (a new build changes the map).
     precomputed_generation: u64,
     params: SkyViewParams,
@@ -93,151 +94,10 @@ struct Key {
     analytic: [[f32; 4]; 12],
 }
 
-/// A model computed on the CPU worker.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum CpuModel {
-    /// The cell model with its settings.
-    Cells(CellSettings),
-    /// The double-precision reference: Monte Carlo paths per direction, and the coarse grid of
-    /// directions it is evaluated on (then interpolated over the map).
-    Reference { paths: u32, grid: [u32; 2] },
-}
-
-/// A sky-view map for the CPU worker to compute.
-struct CpuJob {
-    id: u64,
-    atmosphere: Atmosphere,
-    albedo: f64,
-    model: CpuModel,
-    camera_km: f64,
-    towards_sun: glam::DVec3,
-}
-
-/// Directions done and directions in all, of the job in progress.
-#[derive(Default)]
-struct Progress {
-    done: AtomicUsize,
-    total: AtomicUsize,
-}
-
-/// The CPU worker of the `cells` and `reference` models: keeps the last cell solution and
-/// answers with radiance per texel of the sky-view map. Bursts of jobs (a moving sun) are
-/// coalesced to the latest.
-struct CpuWorker {
-    jobs: std::sync::mpsc::Sender<CpuJob>,
-    results: std::sync::mpsc::Receiver<(u64, Vec<[f32; 4]>)>,
-    progress: Arc<Progress>,
-}
-
-impl CpuWorker {
-    fn spawn() -> Option<Self> {
-        let (jobs, job_rx) = std::sync::mpsc::channel::<CpuJob>();
-        let (result_tx, results) = std::sync::mpsc::channel();
-        let progress = Arc::new(Progress::default());
-        let shared = progress.clone();
-        let spawned = std::thread::Builder::new().name("skytune-sky-model".into()).spawn(move || {
-            let mut cells: Option<CellModel> = None;
-            while let Ok(mut job) = job_rx.recv() {
-                while let Ok(next) = job_rx.try_recv() {
-                    job = next;
-                }
-                let map = match job.model {
-                    CpuModel::Cells(settings) => {
-                        if !cells.as_ref().is_some_and(|m| m.solved_for(&job.atmosphere, job.albedo, &settings)) {
-                            cells = Some(CellModel::solve(job.atmosphere, job.albedo, settings));
-                        }
-                        let Some(m) = cells.as_ref() else { continue };
-                        sky_view_radiance([SharedResources::SKY_VIEW_SIZE.0, SharedResources::SKY_VIEW_SIZE.1], job.towards_sun, &shared, |dir| {
-                            m.radiance_towards(job.camera_km, dir, job.towards_sun)
-                        })
-                    }
-                    CpuModel::Reference { paths, grid } => {
-                        let reference = Reference::new(job.atmosphere, ReferenceSettings { paths, ..Default::default() });
-                        let sun = job.towards_sun;
-                        let coarse = sky_view_radiance(grid, sun, &shared, |dir| {
-                            let az = |d: glam::DVec3| d.x.atan2(-d.z);
-                            let case = Case {
-                                camera_km: job.camera_km,
-                                albedo: job.albedo,
-                                sun_elev_deg: sun.y.clamp(-1.0, 1.0).asin().to_degrees(),
-                                view_elev_deg: dir.y.clamp(-1.0, 1.0).asin().to_degrees(),
-                                rel_azimuth_deg: (az(dir) - az(sun)).to_degrees(),
-                            };
-                            reference.radiance(&case)
-                        });
-                        upsample(&coarse, grid)
-                    }
-                };
-                if result_tx.send((job.id, map)).is_err() {
-                    break;
-                }
-            }
-        });
-        match spawned {
-            Ok(_) => Some(Self { jobs, results, progress }),
-            Err(e) => {
-                log::error!("cannot start the sky-model worker: {e}");
-                None
-            }
-        }
-    }
-}
-
-/// Bilinear interpolation of a coarse map (texel centres, both axes clamped at their ends, as the
-/// map's sampler does) onto the sky-view map.
-fn upsample(coarse: &[[f32; 4]], [gw, gh]: [u32; 2]) -> Vec<[f32; 4]> {
-    let (w, h) = SharedResources::SKY_VIEW_SIZE;
-    let at = |x: i64, y: i64| coarse[(y.clamp(0, gh as i64 - 1) as u32 * gw + x.clamp(0, gw as i64 - 1) as u32) as usize];
-    (0..w * h)
-        .map(|k| {
-            let (u, v) = ((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
-            let (x, y) = (u / w as f32 * gw as f32 - 0.5, v / h as f32 * gh as f32 - 0.5);
-            let (x0, y0) = (x.floor(), y.floor());
-            let (fx, fy) = (x - x0, y - y0);
-            let (x0, y0) = (x0 as i64, y0 as i64);
-            let (a, b, c, d) = (at(x0, y0), at(x0 + 1, y0), at(x0, y0 + 1), at(x0 + 1, y0 + 1));
-            std::array::from_fn(|i| (a[i] * (1.0 - fx) + b[i] * fx) * (1.0 - fy) + (c[i] * (1.0 - fx) + d[i] * fx) * fy)
-        })
-        .collect()
-}
-
-/// Radiance of every texel of a `w` x `h` sky-view map with the sun towards `towards_sun` (the
-/// direction of a texel as `sky_view_direction` in shaders/sky_model/sky_view_map.wgsl), rows
-/// split over the machine's cores; counts progress.
-fn sky_view_radiance([w, h]: [u32; 2], towards_sun: glam::DVec3, progress: &Progress, radiance: impl Fn(glam::DVec3) -> [f64; 3] + Sync) -> Vec<[f32; 4]> {
-    let sun_azimuth = towards_sun.x.atan2(-towards_sun.z);
-    let mut out = vec![[0.0f32; 4]; (w * h) as usize];
-    progress.done.store(0, Ordering::Relaxed);
-    progress.total.store(out.len(), Ordering::Relaxed);
-    let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let rows_per = (h as usize).div_ceil(workers).max(1);
-    std::thread::scope(|scope| {
-        for (chunk_index, chunk) in out.chunks_mut(rows_per * w as usize).enumerate() {
-            let radiance = &radiance;
-            scope.spawn(move || {
-                for (k, texel) in chunk.iter_mut().enumerate() {
-                    let index = chunk_index * rows_per * w as usize + k;
-                    let (x, y) = ((index % w as usize) as f64, (index / w as usize) as f64);
-                    let (u, v) = ((x + 0.5) / w as f64, (y + 0.5) / h as f64);
-                    let azimuth = sun_azimuth + u * std::f64::consts::PI;
-                    let e = (0.5 - v) * 2.0;
-                    let elevation = e.signum() * e * e * std::f64::consts::FRAC_PI_2;
-                    let dir = glam::DVec3::new(azimuth.sin() * elevation.cos(), elevation.sin(), -azimuth.cos() * elevation.cos());
-                    let l = radiance(dir);
-                    *texel = [l[0] as f32, l[1] as f32, l[2] as f32, 1.0];
-                    progress.done.fetch_add(1, Ordering::Relaxed);
-                }
-            });
-        }
-    });
-    out
-}
-
 /// The sky-view pass.
 pub struct SkyViewPass {
     pipeline: Pipelines<[wgpu::ComputePipeline; 2]>,
     blend_pipeline: Pipelines<wgpu::ComputePipeline>,
-    atmosphere: wgpu::Buffer,
     single: wgpu::Buffer,
     params: wgpu::Buffer,
     /// The texels `cs_main` computes this frame (first, count).
@@ -275,11 +135,12 @@ pub struct SkyViewPass {
     next_job: u64,
     /// The analytic models' coefficients (`AnalyticCoefficients::vectors`).
     analytic: wgpu::Buffer,
-    /// Exposure (16 bytes), then the scene's fog, ambient and diffuse in the layout of `Globals`.
+    /// [`crate::render::atmosphere::AtmosphereGpu::sky_light`]: exposure (16 bytes), then the
+    /// scene's fog, ambient and diffuse in the layout of `Globals`.
     sky_light: wgpu::Buffer,
     globals: wgpu::Buffer,
     /// Whether the `precomputed` tables are complete.
-    precomputed_state: std::sync::Arc<crate::render::passes::sky_model::PrecomputedState>,
+    precomputed_state: Arc<PrecomputedState>,
     /// Whether this frame's model lights the main scene (copied into the globals every frame).
     drive_scene: bool,
     /// Whether this frame's model has a map, and so the light of lit clouds.
@@ -315,14 +176,14 @@ impl SkyViewPass {
         entries.extend([
             // The slice: a uniform, as the stage's storage buffers are all taken.
             crate::render::gpu::parts::uniform_entry(11, wgpu::ShaderStages::COMPUTE),
-            crate::render::passes::sky_model::storage_entry(4, true),
-            crate::render::passes::sky_model::storage_entry(5, true),
-            crate::render::passes::sky_model::storage_entry(6, true),
-            crate::render::passes::sky_model::storage_entry(7, true),
-            crate::render::passes::sky_model::storage_entry(8, false),
+            crate::render::gpu::parts::storage_entry(4, true),
+            crate::render::gpu::parts::storage_entry(5, true),
+            crate::render::gpu::parts::storage_entry(6, true),
+            crate::render::gpu::parts::storage_entry(7, true),
+            crate::render::gpu::parts::storage_entry(8, false),
             // A uniform: the stage's eight storage buffers are taken.
             crate::render::gpu::parts::uniform_entry(9, wgpu::ShaderStages::COMPUTE),
-            crate::render::passes::sky_model::storage_entry(10, true),
+            crate::render::gpu::parts::storage_entry(10, true),
         ]);
         let analytic = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::analytic"),
@@ -330,13 +191,8 @@ impl SkyViewPass {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let sky_light = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("SkyView::sky_light"),
-            size: 64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let (w, h) = SharedResources::SKY_VIEW_SIZE;
+        let sky_light = b.atmosphere.sky_light.clone();
+        let (w, h) = SKY_VIEW_SIZE;
         let cpu_radiance = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::cpu_radiance"),
             size: (w * h * 16) as u64,
@@ -363,9 +219,9 @@ impl SkyViewPass {
         let blend_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("SkyView::blend_layout"),
             entries: &[
-                crate::render::passes::sky_model::storage_entry(0, true),
-                crate::render::passes::sky_model::storage_entry(1, true),
-                crate::render::passes::sky_model::storage_entry(2, false),
+                crate::render::gpu::parts::storage_entry(0, true),
+                crate::render::gpu::parts::storage_entry(1, true),
+                crate::render::gpu::parts::storage_entry(2, false),
                 crate::render::gpu::parts::uniform_entry(3, wgpu::ShaderStages::COMPUTE),
             ],
         });
@@ -390,7 +246,6 @@ impl SkyViewPass {
             bind_group_layouts: &[Some(b.globals_layout), Some(&layout)],
             immediate_size: 0,
         });
-        let atmosphere = uniform(device, "SkyView::atmosphere", std::mem::size_of::<AtmosphereUniform>());
         let single = uniform(device, "SkyView::single", std::mem::size_of::<SingleUniform>());
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SkyView::params"),
@@ -402,25 +257,24 @@ impl SkyViewPass {
             label: Some("SkyView::bind_group"),
             layout: &layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: atmosphere.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 0, resource: b.atmosphere.uniform.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: single.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: params.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: work.as_entire_binding() },
-                b.shared.luts.entries(4)[0].clone(),
-                b.shared.luts.entries(4)[1].clone(),
-                b.shared.luts.entries(4)[2].clone(),
+                b.atmosphere.luts.entries(4)[0].clone(),
+                b.atmosphere.luts.entries(4)[1].clone(),
+                b.atmosphere.luts.entries(4)[2].clone(),
                 wgpu::BindGroupEntry { binding: 7, resource: cpu_radiance.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 8, resource: sky_light.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 9, resource: analytic.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 10, resource: b.shared.precomputed.buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 10, resource: b.atmosphere.precomputed.buffer.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 11, resource: slice.as_entire_binding() },
             ],
         });
-        let map = b.shared.sky_view.clone();
+        let map = b.atmosphere.sky_view.clone();
         Ok(Self {
             pipeline: Pipelines::new(b, pipeline_layout, Self::build)?,
             blend_pipeline: Pipelines::new(b, blend_pipeline_layout, Self::build_blend)?,
-            atmosphere,
             single,
             params,
             slice,
@@ -446,7 +300,7 @@ impl SkyViewPass {
             sky_light,
             analytic,
             globals: b.globals_buffer.clone(),
-            precomputed_state: b.shared.precomputed_state.clone(),
+            precomputed_state: b.atmosphere.precomputed_state.clone(),
             drive_scene: false,
             model_light: false,
         })
@@ -469,11 +323,6 @@ impl SkyViewPass {
 }
 
 impl SkyViewPass {
-    /// The map's light: [0].x the exposure scale of the last map (2^EV, or the automatic one).
-    pub fn sky_light_buffer(&self) -> &wgpu::Buffer {
-        &self.sky_light
-    }
-
     /// Progress (0..1) of a CPU model's map being computed, if one is.
     pub fn progress(&self) -> Option<f32> {
         let worker = self.cells.as_ref().filter(|_| self.cells_pending.is_some())?;
@@ -614,8 +463,8 @@ impl SkyViewPass {
         let key = Key {
             atmosphere: (&cx.frame.atmosphere).into(),
             single: (&model.single).into(),
-            lut: crate::render::passes::sky_model::LutUniform::new(&model.lut, model.ground_albedo, cx.frame.atmosphere.mie_g),
-            precomputed: crate::render::passes::sky_model::PrecomputedHeader::new(&model.precomputed, model.ground_albedo),
+            lut: LutUniform::new(&model.lut, model.ground_albedo, cx.frame.atmosphere.mie_g),
+            precomputed: PrecomputedHeader::new(&model.precomputed, model.ground_albedo),
             precomputed_generation: self.precomputed_state.generation.load(Ordering::Relaxed),
             params: (model, cx.frame.towards_sun).into(),
             cpu: match model.kind {
@@ -637,7 +486,7 @@ impl SkyViewPass {
         } else if model.kind.on_cpu() && !self.cells_ready(cx, model, key) {
             return;
         }
-        let (w, h) = SharedResources::SKY_VIEW_SIZE;
+        let (w, h) = SKY_VIEW_SIZE;
         let updates = if model.kind.on_cpu() { MapUpdates::Whole } else { cx.options.strategy.map_updates };
         // The sun a map begun this frame is computed for: a spread map, for the frame that will
         // show it alone.
@@ -665,7 +514,6 @@ impl SkyViewPass {
             key.params.towards_sun = ahead.extend(key.params.towards_sun[3]).to_array();
         }
         if self.step.exposure {
-            cx.queue.write_buffer(&self.atmosphere, 0, bytemuck::bytes_of(&key.atmosphere));
             cx.queue.write_buffer(&self.single, 0, bytemuck::bytes_of(&key.single));
             cx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&key.params));
             cx.queue.write_buffer(&self.analytic, 0, bytemuck::cast_slice(&key.analytic));
@@ -698,7 +546,7 @@ impl SkyViewPass {
     /// Between the compute phase and the sky phase, so this frame samples this frame's map: a
     /// finished work map takes its place among the finished ones, and the shown map is written.
     fn copy_map(&self, encoder: &mut wgpu::CommandEncoder, globals: &wgpu::BindGroup) {
-        let (w, h) = SharedResources::SKY_VIEW_SIZE;
+        let (w, h) = SKY_VIEW_SIZE;
         if self.step.finish {
             let older_from = if self.step.whole { &self.work } else { &self.newer };
             encoder.copy_buffer_to_buffer(older_from, 0, &self.older, 0, None);

@@ -5,9 +5,11 @@
 //! and the lookup are in shaders/sky_model/precomputed_sampling.wgsl.
 
 use crate::atmosphere::{PrecomputedSettings, TablePrecision};
+use crate::render::atmosphere::tables::{PrecomputedHeader, PrecomputedState, PrecomputedTables};
+use crate::render::atmosphere::uniforms::AtmosphereUniform;
 use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Staged};
 use crate::render::gpu::error::RenderResult;
-use crate::render::passes::sky_model::{storage_entry, AtmosphereUniform, PrecomputedHeader, PrecomputedState, PrecomputedTables};
+use crate::render::gpu::parts::storage_entry;
 use crate::render::plan::strategy::TableBuilds;
 use crate::sky::resolved::SkyModelKind;
 
@@ -220,7 +222,6 @@ struct Building {
 /// The precomputed-tables pass.
 pub struct PrecomputedTablesPass {
     builder: Staged<PrecomputedBuilder>,
-    atmosphere: wgpu::Buffer,
     tables: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     /// What the tables hold when complete.
@@ -240,24 +241,17 @@ impl PrecomputedTablesPass {
     /// Builds the pipelines and binds the shared tables.
     pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
         let builder = PrecomputedBuilder::new(b.device, b.library, b.globals_layout)?;
-        let atmosphere = b.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("PrecomputedTables::atmosphere"),
-            size: std::mem::size_of::<AtmosphereUniform>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let bind_group = builder.bind_group(b.device, &atmosphere, &b.shared.precomputed);
+        let bind_group = builder.bind_group(b.device, &b.atmosphere.uniform, &b.atmosphere.precomputed);
         Ok(Self {
             builder: Staged::new(builder),
-            atmosphere,
-            tables: b.shared.precomputed.buffer.clone(),
+            tables: b.atmosphere.precomputed.buffer.clone(),
             bind_group,
             built: None,
             building: None,
             steps: Vec::new(),
             this_frame: 0..0,
             skipped: false,
-            state: b.shared.precomputed_state.clone(),
+            state: b.atmosphere.precomputed_state.clone(),
             builds: 0,
         })
     }
@@ -321,7 +315,6 @@ impl Pass for PrecomputedTablesPass {
                 TableBuilds::Spread { slices } => slices,
             };
             self.steps = build_steps(&model.precomputed, slices);
-            cx.queue.write_buffer(&self.atmosphere, 0, bytemuck::bytes_of(&key.0));
             cx.queue.write_buffer(&self.tables, 0, bytemuck::bytes_of(&header));
             self.builder.current.write_steps(cx.queue, &self.steps);
             self.building = Some(Building { key, next: 0 });
@@ -369,7 +362,7 @@ impl Pass for PrecomputedTablesPass {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::passes::sky_model::table_bytes;
+    use crate::render::atmosphere::tables::table_bytes;
 
     #[test]
     fn a_build_covers_every_texel_of_every_stage_in_order() {
