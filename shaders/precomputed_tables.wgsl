@@ -19,14 +19,6 @@ fn slice_texel(gid: u32, texels: u32) -> u32 {
     return cursor.x + gid;
 }
 
-fn pre_density_r(h_km: f32) -> f32 {
-    return exp(-h_km / atmosphere.rayleigh.w);
-}
-
-fn pre_density_m(h_km: f32) -> f32 {
-    return exp(-h_km / atmosphere.mie_scattering.w);
-}
-
 @compute @workgroup_size(64)
 fn cs_transmittance(@builtin(global_invocation_id) gid: vec3<u32>) {
     let h = pre_header();
@@ -108,14 +100,8 @@ struct MarchSample {
 };
 
 fn march_sample(g: PreGeometry, length: f32, i: u32, n: u32, tau: ptr<function, vec3<f32>>) -> MarchSample {
-    let sample = ray_sample(g, length, i, n);
-    let t = sample.x;
-    let dt = sample.y;
-    let alt = max(altitude_along(atmosphere, g.r, g.mu, t), 0.0);
-    let e = extinction_at(atmosphere, alt);
-    let tau_mid = *tau + e * (0.5 * dt);
-    *tau += e * dt;
-    return MarchSample(t, along(g, t), alt, exp(-tau_mid) * dt);
+    let step = march_step(atmosphere, g.r, g.mu, ray_sample(g, length, i, n), tau);
+    return MarchSample(step.t, along(g, step.t), max(step.altitude_km, 0.0), exp(-step.tau_mid) * step.dt);
 }
 
 // Single scattering by the midpoint rule (`ray_sample`), the view ray's optical depth summed along the march
@@ -137,8 +123,9 @@ fn cs_single(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var i = 0u; i < n; i++) {
         let m = march_sample(g, length, i, n, &tau);
         let light = m.weight * pre_sun_transmittance(atmosphere, h, m.at.x, m.at.y);
-        rayleigh += light * pre_density_r(m.alt);
-        mie += light * pre_density_m(m.alt);
+        let density = densities_at(atmosphere, m.alt);
+        rayleigh += light * density.x;
+        mie += light * density.y;
     }
     rayleigh *= atmosphere.rayleigh.xyz;
     mie *= atmosphere.mie_scattering.xyz;
@@ -179,8 +166,9 @@ fn density(invocation: u32, after_single: bool) {
     let view = vec3<f32>(sqrt(max(1.0 - g.mu * g.mu, 0.0)), g.mu, 0.0);
     let sun = sun_for(g.mu, g.mu_s, g.nu);
     let alt = g.r - atmosphere.shape.x;
-    let sigma_r = atmosphere.rayleigh.xyz * pre_density_r(alt);
-    let sigma_m = atmosphere.mie_scattering.xyz * pre_density_m(alt);
+    let scattering = scattering_at(atmosphere, alt);
+    let sigma_r = scattering.rayleigh;
+    let sigma_m = scattering.mie;
     let n_theta = max(h.steps.z, 2u);
     let d_angle = PI / f32(n_theta);
     let albedo = h.ground.x;

@@ -95,18 +95,17 @@ fn ms_order(index: u32, source: u32) -> MsOrder {
             var l = vec3<f32>(0.0);
             var f = vec3<f32>(0.0);
             for (var i = 0u; i < steps; i++) {
-                let sample = crowded_sample(ray_length, i, steps);
-                let t = sample.x;
-                let dt = sample.y;
-                let h = max(altitude_along(atmosphere, r, mu, t), 0.0);
-                let e = extinction_at(atmosphere, h);
-                let tau_mid = tau + e * (0.5 * dt);
-                tau += e * dt;
+                let step = march_step(atmosphere, r, mu, crowded_sample(ray_length, i, steps), &tau);
+                let t = step.t;
+                let dt = step.dt;
+                let h = max(step.altitude_km, 0.0);
+                let tau_mid = step.tau_mid;
                 let p = vec3<f32>(0.0, r, 0.0) + dir * t;
                 let r_p = atmosphere.shape.x + h;
                 let mu_p = dot(p, sun) / max(length(p), 1e-3);
-                let sigma_r = atmosphere.rayleigh.xyz * exp(-h / atmosphere.rayleigh.w);
-                let sigma_m = atmosphere.mie_scattering.xyz * exp(-h / atmosphere.mie_scattering.w);
+                let scattering = scattering_at(atmosphere, h);
+                let sigma_r = scattering.rayleigh;
+                let sigma_m = scattering.mie;
                 var scattered: vec3<f32>;
                 if (source == MS_FROM_SUN) {
                     scattered = (sigma_r * phase_r + sigma_m * phase_m) * sun_transmittance(atmosphere, r_p, mu_p);

@@ -323,6 +323,39 @@ fn precomputed_model_noon_sunset_twilight() {
 }
 
 #[test]
+fn atmosphere_tables_serve_every_physical_model() {
+    // The transmittance and multiple-scattering tables belong to the atmosphere, not to `lut`:
+    // any physical model's frame builds them once per atmosphere, and the next model reuses them.
+    use skytune::render::atmosphere::sky_luts::SkyLutsPass;
+    use skytune::sky::resolved::{SkyModel, SkyModelKind};
+    let sky = default_sky();
+    let mut h = common::headless(W, H);
+    h.set_sky(&sky).unwrap();
+    let builds = |h: &skytune::render::Headless| h.renderer.pass::<SkyLutsPass>().unwrap().builds;
+    // The first 256 texels (rgba f32) of the transmittance table.
+    let table = |h: &skytune::render::Headless| skytune::render::headless::read_buffer(&h.ctx, &h.renderer.atmosphere().luts.transmittance, 4096).unwrap();
+    let frame = |h: &mut skytune::render::Headless, kind: SkyModelKind, hour: f32| {
+        let input = FrameInput { sky_model: Some(SkyModel { kind, ..sky.model }), ..FrameInput::new(hour, 0.0) };
+        h.frame(&sky, &input, &camera(), &common::hdr_options(), 0.0);
+    };
+    frame(&mut h, SkyModelKind::Bitmap, 12.0);
+    assert_eq!(builds(&h), 0, "the NeL bitmaps need no table");
+    frame(&mut h, SkyModelKind::Single, 12.0);
+    assert_eq!(builds(&h), 1, "a physical model's frame has the atmosphere's tables");
+    let built = table(&h);
+    let values: Vec<f32> = bytemuck::cast_slice::<u8, f32>(&built).chunks(4).flat_map(|t| t[..3].to_vec()).collect();
+    // Transmittance towards the top of the atmosphere: in (0, 1], and not one constant.
+    assert!(values.iter().all(|&t| t > 0.0 && t <= 1.0), "{:?}", &values[..12]);
+    assert!(values.iter().any(|&t| t < 0.5) && values.iter().any(|&t| t > 0.8), "{:?}", &values[..12]);
+    for (kind, hour) in [(SkyModelKind::Precomputed, 13.0), (SkyModelKind::Lut, 14.0)] {
+        frame(&mut h, kind, hour);
+        assert_eq!(builds(&h), 1, "{kind:?}: same atmosphere, the tables stay");
+        assert_eq!(table(&h), built, "{kind:?} reads the tables `single`'s frame built");
+    }
+    h.ctx.wait_idle().unwrap();
+}
+
+#[test]
 fn cells_model_sunset() {
     // Solved on the CPU worker; the still waits for it.
     let sky = default_sky();

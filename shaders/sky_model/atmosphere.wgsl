@@ -23,10 +23,30 @@ fn ozone_density(atm: Atmosphere, altitude_km: f32) -> f32 {
     return max(0.0, 1.0 - abs(altitude_km - atm.ozone.w) / atm.shape.z);
 }
 
+// Relative densities of the air (x, Rayleigh) and of the aerosol (y, Mie) at an altitude (km;
+// below the ground, the ground's): 1 at the ground, falling off with their scale heights.
+fn densities_at(atm: Atmosphere, altitude_km: f32) -> vec2<f32> {
+    let h = max(altitude_km, 0.0);
+    return vec2<f32>(exp(-h / atm.rayleigh.w), exp(-h / atm.mie_scattering.w));
+}
+
+// Scattering coefficients at an altitude (km^-1, rgb; phase functions not applied). The one
+// place every marching shader takes them from.
+struct Scattering {
+    rayleigh: vec3<f32>,
+    mie: vec3<f32>,
+};
+
+fn scattering_at(atm: Atmosphere, altitude_km: f32) -> Scattering {
+    let d = densities_at(atm, altitude_km);
+    return Scattering(atm.rayleigh.xyz * d.x, atm.mie_scattering.xyz * d.y);
+}
+
 // Extinction at an altitude, km^-1.
 fn extinction_at(atm: Atmosphere, altitude_km: f32) -> vec3<f32> {
     let h = max(altitude_km, 0.0);
-    return atm.rayleigh.xyz * exp(-h / atm.rayleigh.w) + atm.mie_extinction.xyz * exp(-h / atm.mie_scattering.w) + atm.ozone.xyz * ozone_density(atm, h);
+    let d = densities_at(atm, h);
+    return atm.rayleigh.xyz * d.x + atm.mie_extinction.xyz * d.y + atm.ozone.xyz * ozone_density(atm, h);
 }
 
 // Altitude of p + t d for a point at radius r with direction cosine mu (to the local vertical),
@@ -174,6 +194,26 @@ fn view_ray(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>) ->
     }
     let nu = dot(view, sun);
     return ViewRay(r, mu, distance_km, rayleigh_phase(nu), cornette_shanks_phase(nu, atm.mie_extinction.w));
+}
+
+// One step of a march along a view ray from radius r with cosine mu to the vertical: `sample`
+// holds the step's midpoint distance and its length (km; `crowded_sample`). Adds the step's
+// optical depth to `tau` (steps come in order of distance). The altitude is not clamped: a ray
+// that meets the ground may end a hair below it.
+struct MarchStep {
+    t: f32,
+    dt: f32,
+    altitude_km: f32,
+    // Optical depth from the ray's start to the step's middle.
+    tau_mid: vec3<f32>,
+};
+
+fn march_step(atm: Atmosphere, r: f32, mu: f32, sample: vec2<f32>, tau: ptr<function, vec3<f32>>) -> MarchStep {
+    let altitude_km = altitude_along(atm, r, mu, sample.x);
+    let e = extinction_at(atm, altitude_km);
+    let tau_mid = *tau + e * (0.5 * sample.y);
+    *tau += e * sample.y;
+    return MarchStep(sample.x, sample.y, altitude_km, tau_mid);
 }
 
 // Sample i of n along a ray of `distance_km`, crowded near its start where the air is densest

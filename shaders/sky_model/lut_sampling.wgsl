@@ -173,21 +173,17 @@ fn lut_radiance(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>
         if (i % MS_SAMPLES_PER_READ == 0u) {
             c = ms_for_samples(atm, ray, view, sun, i, steps);
         }
-        let sample = crowded_sample(ray.distance_km, i, steps);
-        let t = sample.x;
-        let dt = sample.y;
-        let h = max(altitude_along(atm, r, mu, t), 0.0);
-        let e = extinction_at(atm, h);
-        let tau_mid = tau + e * (0.5 * dt);
-        tau += e * dt;
-        let p = vec3<f32>(0.0, r, 0.0) + view * t;
+        let step = march_step(atm, r, mu, crowded_sample(ray.distance_km, i, steps), &tau);
+        let h = max(step.altitude_km, 0.0);
+        let p = vec3<f32>(0.0, r, 0.0) + view * step.t;
         let r_p = atm.shape.x + h;
         let mu_s = dot(p, sun) / max(length(p), 1e-3);
-        let sigma_r = atm.rayleigh.xyz * exp(-h / atm.rayleigh.w);
-        let sigma_m = atm.mie_scattering.xyz * exp(-h / atm.mie_scattering.w);
+        let scattering = scattering_at(atm, h);
+        let sigma_r = scattering.rayleigh;
+        let sigma_m = scattering.mie;
         let single = (sigma_r * ray.phase_r + sigma_m * ray.phase_m) * sun_transmittance(atm, r_p, mu_s);
         let multiple = multiple_scattering_of(c, p, view, sun, sigma_r, sigma_m);
-        sum += (single + multiple) * exp(-tau_mid) * dt;
+        sum += (single + multiple) * exp(-step.tau_mid) * step.dt;
     }
     return sum;
 }

@@ -24,15 +24,10 @@ fn single_scattering(atm: Atmosphere, s: SingleSettings, camera_km: f32, view: v
     var tau = vec3<f32>(0.0);
     var sum = vec3<f32>(0.0);
     for (var i = 0u; i < n; i++) {
-        let sample = crowded_sample(ray.distance_km, i, n);
-        let t = sample.x;
-        let dt = sample.y;
-        let h = altitude_along(atm, r, mu, t);
-        let e = extinction_at(atm, h);
-        let tau_mid = tau + e * (0.5 * dt);
-        tau += e * dt;
+        let step = march_step(atm, r, mu, crowded_sample(ray.distance_km, i, n), &tau);
+        let h = step.altitude_km;
         // The sample's own frame: radius and the sun's cosine to its vertical.
-        let p = vec3<f32>(0.0, r, 0.0) + view * t;
+        let p = vec3<f32>(0.0, r, 0.0) + view * step.t;
         let r_p = atm.shape.x + h;
         let mu_s = dot(p, sun) / max(length(p), 1e-3);
         // The visible part of the sun's disc is seen at grazing incidence at worst.
@@ -40,9 +35,9 @@ fn single_scattering(atm: Atmosphere, s: SingleSettings, camera_km: f32, view: v
         if (visible > 0.0) {
             let tau_sun = sun_optical_depth(atm, s, r_p, h, max(mu_s, horizon_mu(atm, r_p) + 1e-4));
             if (tau_sun.x >= 0.0) {
-                let hh = max(h, 0.0);
-                let scattering = atm.rayleigh.xyz * exp(-hh / atm.rayleigh.w) * ray.phase_r + atm.mie_scattering.xyz * exp(-hh / atm.mie_scattering.w) * ray.phase_m;
-                sum += visible * scattering * exp(-(tau_mid + tau_sun)) * dt;
+                let sigma = scattering_at(atm, h);
+                let scattering = sigma.rayleigh * ray.phase_r + sigma.mie * ray.phase_m;
+                sum += visible * scattering * exp(-(step.tau_mid + tau_sun)) * step.dt;
             }
         }
     }

@@ -1,6 +1,8 @@
-//! Sky LUTs pass (compute phase): builds the `lut` model's transmittance and multiple-scattering
-//! tables (Hillaire 2020) into the shared buffers, only when the atmosphere, the LUT settings or
-//! the ground albedo change. Idle for every other model.
+//! Sky LUTs pass (compute phase): builds the atmosphere's transmittance and multiple-scattering
+//! tables (Hillaire 2020) into the shared buffers of [`crate::render::atmosphere::AtmosphereGpu`],
+//! only when the atmosphere, the LUT settings or the ground albedo change. Every physical model's
+//! frame has them (the `lut` model draws from them; what marches the atmosphere between the
+//! viewer and the scene reads them whatever the dome's model); idle under the NeL bitmaps.
 
 use crate::atmosphere::LutSettings;
 use crate::render::atmosphere::tables::LutTables;
@@ -8,7 +10,6 @@ use crate::render::atmosphere::uniforms::{AtmosphereUniform, LutUniform};
 use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Staged};
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::parts::storage_entry;
-use crate::sky::resolved::SkyModelKind;
 
 /// The `lut` model's table builders (shaders/sky_luts.wgsl), for the sky LUTs pass and the probe.
 pub struct LutBuilder {
@@ -118,7 +119,7 @@ impl Pass for SkyLutsPass {
         self.dirty = false;
         self.skipped = false;
         let model = &cx.frame.sky_model;
-        if model.kind != SkyModelKind::Lut {
+        if !model.kind.is_physical() {
             return;
         }
         let key = (AtmosphereUniform::from(&cx.frame.atmosphere), LutUniform::new(&model.lut, model.ground_albedo, cx.frame.atmosphere.mie_g));

@@ -35,8 +35,8 @@ impl LutTables {
         let m = LutSettings::MAX_MULTISCATTERING;
         Self {
             params: storage("LutTables::params", std::mem::size_of::<LutUniform>() as u64, wgpu::BufferUsages::COPY_DST),
-            transmittance: storage("LutTables::transmittance", (tw * th * 16) as u64, wgpu::BufferUsages::empty()),
-            multiscattering: storage("LutTables::multiscattering", (m * m * MULTISCATTERING_LAYERS * MULTISCATTERING_REGIONS * 16) as u64, wgpu::BufferUsages::empty()),
+            transmittance: storage("LutTables::transmittance", (tw * th * 16) as u64, wgpu::BufferUsages::COPY_SRC),
+            multiscattering: storage("LutTables::multiscattering", (m * m * MULTISCATTERING_LAYERS * MULTISCATTERING_REGIONS * 16) as u64, wgpu::BufferUsages::COPY_SRC),
         }
     }
 
