@@ -27,13 +27,13 @@ fn vs_main(@builtin(vertex_index) vi: u32, p: Particle) -> ParticleOut {
 // `FLASH_RUN_BLEND` in src/render/passes/particles.rs) for the display value `add` it adds over
 // the sky. Added as it is, or as exposed radiance on the HDR target. On a display-referred
 // physical frame matched to the HDR picture, where the HDR path's sum over a pixel showing d is
-// g(d) = T(E(d) + E(add)): the line through g at the sky's mean m (globals.cloud_ambient, the
+// g(d) = T(E(d) + E(add)): the line through g at the sky's mean m (`cloud_ambient()`, the
 // map's mean radiance as a display value) with g's mean slope there, clamped to [0, 1], so the
 // flash washes the sky out and flattens its contrast as the HDR frame does, exact at m. Constant
 // over the frame: computed per vertex.
 fn flash_blend(add: vec3<f32>) -> vec4<f32> {
     if globals.output.z > 0.5 {
-        let m = globals.cloud_ambient.rgb;
+        let m = cloud_ambient();
         let flash = exposed_from_display(add);
         let at_mean = flashed(m, flash);
         // A secant over a tenth of the display range about m (within [0, 1]): g's slope where

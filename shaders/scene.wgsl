@@ -20,11 +20,11 @@ fn vs_main(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>, @lo
     var out: VertexOut;
     out.clip = globals.clip_from_world * vec4<f32>(position, 1.0);
     let n = normalize(normal);
-    let light = globals.sun_ambient.rgb + globals.sun_diffuse.rgb * max(dot(n, globals.towards_sun.xyz), 0.0);
+    let light = scene_ambient() + scene_diffuse() * max(dot(n, globals.towards_sun.xyz), 0.0);
     let lit = albedo * light;
     let distance_m = length(position - globals.camera_position.xyz);
     let fog = 1.0 - exp(-distance_m * FOG_DENSITY);
-    out.color = mix(lit, globals.fog_color.rgb, fog);
+    out.color = mix(lit, scene_fog_color(), fog);
     return out;
 }
 

@@ -215,7 +215,7 @@ fn stage_sample(l: u32, d: Draw, i: u32, t: texture_2d<f32>, smp: sampler, at: P
 // a fake depth D, an isotropic phase function, so L = (E_sun / (4 pi) + L_ambient) (1 - exp(-rho D)).
 // `depth` is rho D (the material's alpha times the density); the sun term is modulated by a
 // normal faked from the depth's screen-space slope (thicker towards the middle of a cloud, so its
-// edges face outwards). The light is the sky model's (globals.cloud_sun = E T / pi as a display
+// edges face outwards). The light is the sky model's (`cloud_sun()` = E T / pi as a display
 // value, so E T / (4 pi) is a quarter of it), in the target's space.
 fn lit_cloud(world_dir: vec3<f32>, depth: f32) -> vec4<f32> {
     // The interpolated direction is a point on the grid's chords, or the layer's (any length).
@@ -230,8 +230,8 @@ fn lit_cloud(world_dir: vec3<f32>, depth: f32) -> vec4<f32> {
     let n = normalize(-dir - slope);
     let sun_dir = globals.towards_sun.xyz;
     let sun_facing = clamp(1.0 + 2.0 * dot(n, sun_dir), 0.0, 3.0);
-    let sun = to_target(globals.cloud_sun.rgb) * 0.25 * sun_facing;
-    let ambient = to_target(globals.cloud_ambient.rgb);
+    let sun = to_target(cloud_sun()) * 0.25 * sun_facing;
+    let ambient = to_target(cloud_ambient());
     let coverage = 1.0 - exp(-max(depth, 0.0));
     return vec4<f32>(sun + ambient, coverage);
 }

@@ -17,6 +17,7 @@ use crate::atmosphere::cells::CellSettings;
 use crate::render::atmosphere::cpu_maps::{CpuJob, CpuModel, CpuWorker};
 use crate::render::atmosphere::tables::{PrecomputedHeader, PrecomputedState};
 use crate::render::atmosphere::uniforms::{AtmosphereUniform, LutUniform, SingleUniform};
+use crate::render::frame::light::{LightSource, MODEL_LIGHT_OFFSET};
 use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines};
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders;
@@ -135,16 +136,15 @@ pub struct SkyViewPass {
     next_job: u64,
     /// The analytic models' coefficients (`AnalyticCoefficients::vectors`).
     analytic: wgpu::Buffer,
-    /// [`crate::render::atmosphere::AtmosphereGpu::sky_light`]: exposure (16 bytes), then the
-    /// scene's fog, ambient and diffuse in the layout of `Globals`.
+    /// [`crate::render::atmosphere::AtmosphereGpu::sky_light`]: exposure, then the scene's fog,
+    /// ambient and diffuse (16 bytes each).
     sky_light: wgpu::Buffer,
-    globals: wgpu::Buffer,
+    /// The renderer's scene light, whose `model` this pass fills ([`LightSource`]).
+    scene_light: wgpu::Buffer,
     /// Whether the `precomputed` tables are complete.
     precomputed_state: Arc<PrecomputedState>,
-    /// Whether this frame's model lights the main scene (copied into the globals every frame).
-    drive_scene: bool,
-    /// Whether this frame's model has a map, and so the light of lit clouds.
-    model_light: bool,
+    /// What this frame's model lights: nothing until a map, and so its light, exists for it.
+    light: LightSource,
 }
 
 fn uniform(device: &wgpu::Device, label: &str, size: usize) -> wgpu::Buffer {
@@ -299,10 +299,9 @@ impl SkyViewPass {
             next_job: 0,
             sky_light,
             analytic,
-            globals: b.globals_buffer.clone(),
+            scene_light: b.scene_light.clone(),
             precomputed_state: b.atmosphere.precomputed_state.clone(),
-            drive_scene: false,
-            model_light: false,
+            light: LightSource::Bitmaps,
         })
     }
 
@@ -405,8 +404,11 @@ impl Pass for SkyViewPass {
         let model = &cx.frame.sky_model;
         // Only once a map, and so its light, exists for the model in use.
         let kind = SkyViewParams::from((model, cx.frame.towards_sun)).model;
-        self.model_light = model.kind.is_physical() && self.computed.is_some_and(|k| k.params.model == kind);
-        self.drive_scene = self.model_light && model.drive_scene;
+        self.light = match model.kind.is_physical() && self.computed.is_some_and(|k| k.params.model == kind) {
+            false => LightSource::Bitmaps,
+            true if model.drive_scene => LightSource::Model,
+            true => LightSource::ModelClouds,
+        };
     }
 
     fn items(&self, _cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
@@ -426,15 +428,14 @@ impl Pass for SkyViewPass {
 
     fn after_phase(&self, encoder: &mut wgpu::CommandEncoder, globals: &wgpu::BindGroup) {
         self.copy_map(encoder, globals);
-        // Every frame: the renderer rewrites the globals each frame.
-        if self.drive_scene {
-            encoder.copy_buffer_to_buffer(&self.sky_light, 16, &self.globals, crate::render::frame::globals::SCENE_LIGHT_OFFSET, 48);
+        // Every frame the model's light is used: the renderer writes the scene light each frame.
+        if self.light != LightSource::Bitmaps {
+            encoder.copy_buffer_to_buffer(&self.sky_light, 0, &self.scene_light, MODEL_LIGHT_OFFSET, std::mem::size_of::<[[f32; 4]; 4]>() as u64);
         }
-        if self.model_light {
-            // Lit clouds: the model's sun (sky_light[3]) and ambient (sky_light[2]) light.
-            encoder.copy_buffer_to_buffer(&self.sky_light, 48, &self.globals, crate::render::frame::globals::CLOUD_LIGHT_OFFSET, 16);
-            encoder.copy_buffer_to_buffer(&self.sky_light, 32, &self.globals, crate::render::frame::globals::CLOUD_LIGHT_OFFSET + 16, 16);
-        }
+    }
+
+    fn light_source(&self) -> Option<LightSource> {
+        (self.light != LightSource::Bitmaps).then_some(self.light)
     }
 
     fn busy(&self) -> bool {

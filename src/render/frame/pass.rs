@@ -12,6 +12,7 @@ use std::any::Any;
 
 use crate::render::atmosphere::AtmosphereGpu;
 use crate::render::frame::camera::Camera;
+use crate::render::frame::light::LightSource;
 use crate::render::frame::options::RenderOptions;
 use crate::render::frame::stats::FrameStats;
 use crate::render::gpu::error::RenderResult;
@@ -27,8 +28,9 @@ pub struct PassBuild<'a> {
     pub device: &'a wgpu::Device,
     /// Layout of bind group 0 (per-frame globals), shared by every pipeline.
     pub globals_layout: &'a wgpu::BindGroupLayout,
-    /// The globals buffer itself (a pass may overwrite fields on the GPU, e.g. the scene's light).
-    pub globals_buffer: &'a wgpu::Buffer,
+    /// The scene's light, bind group 0's binding 1 ([`crate::render::frame::light::SceneLight`]): a pass that computes a
+    /// model's light copies it into its `model` on the GPU.
+    pub scene_light: &'a wgpu::Buffer,
     /// Shader sources.
     pub library: &'a ShaderLibrary,
     /// Colour format of the display target (render pipelines are also built for
@@ -163,6 +165,12 @@ pub trait Pass: Any {
 
     /// Adds this pass's counters to the frame's.
     fn stats(&self, _stats: &mut FrameStats) {}
+
+    /// Where this frame's scene light comes from, if this pass computes a model's light (at most
+    /// one pass does); asked after every pass's [`Pass::prepare`].
+    fn light_source(&self) -> Option<LightSource> {
+        None
+    }
 
     /// Adds the counters of what this pass recorded to the frame's, once every phase is recorded.
     fn stats_recorded(&self, _stats: &mut FrameStats) {}

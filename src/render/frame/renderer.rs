@@ -5,6 +5,7 @@
 use crate::render::atmosphere::AtmosphereGpu;
 use crate::render::frame::camera::Camera;
 use crate::render::frame::globals::{Globals, GlobalsBinding};
+use crate::render::frame::light::SceneLight;
 use crate::render::frame::options::RenderOptions;
 use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Placement, SkyUpload, Target};
 use crate::render::frame::stats::{FrameStats, UploadStats};
@@ -93,7 +94,7 @@ impl SkyRenderer {
         let build = PassBuild {
             device,
             globals_layout: &globals.layout,
-            globals_buffer: &globals.buffer,
+            scene_light: &globals.scene_light,
             library: &library,
             color_format,
             atmosphere: &atmosphere,
@@ -144,7 +145,7 @@ impl SkyRenderer {
         let build = PassBuild {
             device: &ctx.device,
             globals_layout: &self.globals.layout,
-            globals_buffer: &self.globals.buffer,
+            scene_light: &self.globals.scene_light,
             library: &self.library,
             color_format: self.color_format,
             atmosphere: &self.atmosphere,
@@ -244,6 +245,8 @@ impl SkyRenderer {
         for pass in &mut self.passes {
             pass.prepare(&cx);
         }
+        let source = self.passes.iter().find_map(|p| p.light_source()).unwrap_or_default();
+        ctx.queue.write_buffer(&self.globals.scene_light, 0, bytemuck::bytes_of(&SceneLight::new(frame, source)));
         let mut stats = FrameStats::default();
         for pass in &self.passes {
             pass.stats(&mut stats);
