@@ -1,4 +1,4 @@
-//! The window's GPU side: surface, renderer, depth target and egui's renderer. It presents a
+//! The window's GPU side: surface, renderer and egui's renderer. It presents a
 //! frame of the sky with the panels on top, and keeps going through resizes and lost surfaces.
 
 use std::sync::Arc;
@@ -8,7 +8,6 @@ use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
 use super::layout::SkyViewport;
-use crate::render::gpu::headless::depth_view;
 use crate::render::{AdapterChoice, Camera, GpuContext, Headless, Offscreen, RenderOptions, RenderTarget, ShaderLibrary, SkyRenderer};
 use crate::sky::{FrameSky, Sky};
 
@@ -35,7 +34,6 @@ pub struct WindowGpu {
     pub ctx: GpuContext,
     /// The sky renderer of the window.
     pub renderer: SkyRenderer,
-    depth: wgpu::TextureView,
     /// egui's window state.
     pub egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
@@ -111,7 +109,6 @@ impl WindowGpu {
             Some(ctx.device.limits().max_texture_dimension_2d as usize),
         );
         let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, format, egui_wgpu::RendererOptions::default());
-        let depth = depth_view(&ctx.device, surface_config.width, surface_config.height);
         let sky_view = SkyViewport::full((surface_config.width, surface_config.height));
         let gpu = Self {
             window,
@@ -119,7 +116,6 @@ impl WindowGpu {
             surface_config,
             ctx,
             renderer,
-            depth,
             egui_state,
             egui_renderer,
             capture: None,
@@ -143,7 +139,6 @@ impl WindowGpu {
         self.surface_config.width = width;
         self.surface_config.height = height;
         self.surface.configure(&self.ctx.device, &self.surface_config);
-        self.depth = depth_view(&self.ctx.device, width, height);
     }
 
     /// Surface size, pixels.
@@ -248,7 +243,7 @@ impl WindowGpu {
         let mut encoder = self.ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("App::frame") });
         if sky_view.is_full(size) {
             self.sky_target = None;
-            self.renderer.render(&self.ctx, &mut encoder, &RenderTarget { color: &view, depth: &self.depth, size }, frame, camera, options);
+            self.renderer.render(&self.ctx, &mut encoder, &RenderTarget { color: &view, size }, frame, camera, options);
         } else {
             // The sky at the view's own size (its aspect, its pixels), then into its place.
             let (w, h) = (sky_view.width, sky_view.height);

@@ -31,6 +31,11 @@ impl Default for Camera {
 pub const PRESETS: [(&str, f32, f32); 5] = [("south", 180.0, 12.0), ("east", 90.0, 8.0), ("west", 270.0, 8.0), ("north", 0.0, 12.0), ("zenith", 180.0, 89.0)];
 
 impl Camera {
+    /// Distance of the near plane, m (depth 0 before the viewport's range).
+    pub const NEAR_M: f32 = 0.05;
+    /// Distance of the far plane, m (depth 1): the stand-in scene ends well inside it.
+    pub const FAR_M: f32 = 5000.0;
+
     /// A preset view by name (`south`, `east`, `west`, `north`, `zenith`).
     pub fn preset(name: &str) -> Option<Camera> {
         PRESETS.iter().find(|p| p.0 == name).map(|&(_, yaw, pitch)| Camera { yaw_deg: yaw, pitch_deg: pitch, ..Camera::default() })
@@ -164,7 +169,7 @@ impl Camera {
 
     /// (clip_from_world, clip_from_sky): the scene camera and its rotation-only twin for the sky.
     pub fn matrices(&self, aspect: f32) -> (Mat4, Mat4) {
-        let proj = Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, 0.05, 5000.0);
+        let proj = Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, Self::NEAR_M, Self::FAR_M);
         let f = self.forward();
         let up = self.look.map_or(Vec3::Y, |(_, up)| up);
         let view = Mat4::look_to_rh(self.position(), f, up);

@@ -16,6 +16,11 @@ pub struct Globals {
     pub clip_from_sky: [[f32; 4]; 4],
     /// World -> rotating celestial frame.
     pub celestial_from_world: [[f32; 4]; 4],
+    /// Main-scene camera, clip -> world (view rays and scene positions from pixels).
+    pub world_from_clip: [[f32; 4]; 4],
+    /// The previous frame's main-scene camera, world -> clip (this frame's on the first frame):
+    /// what reprojects a history into this frame.
+    pub previous_clip_from_world: [[f32; 4]; 4],
     /// Unit vector towards the sun (w unused).
     pub towards_sun: [f32; 4],
     /// hour, hours_per_day, weather, game_hours.
@@ -29,8 +34,12 @@ pub struct Globals {
     /// ([`crate::render::passes::tone_map::ToneMapUniform`]), which display-referred colours are inverted through;
     /// z: 1 on a display-referred physical frame matched to the HDR picture.
     pub output: [f32; 4],
+    /// The scene's depth: the viewport's depth range it is stored in (x, y: [`crate::render::SCENE_DEPTH`]
+    /// with the depth split), the camera's near and far planes (z, w; m), for
+    /// `scene_distance_m` in shaders/globals.wgsl.
+    pub depth: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<Globals>() == 3 * 64 + 5 * 16);
+const _: () = assert!(std::mem::size_of::<Globals>() == 5 * 64 + 6 * 16);
 
 impl Globals {
     /// Globals for a frame seen by `camera` on a `width` x `height` target.
@@ -44,10 +53,13 @@ impl Globals {
             clip_from_world: clip_from_world.to_cols_array_2d(),
             clip_from_sky: clip_from_sky.to_cols_array_2d(),
             celestial_from_world: Mat4::from_quat(frame.celestial_from_world).to_cols_array_2d(),
+            world_from_clip: clip_from_world.inverse().to_cols_array_2d(),
+            previous_clip_from_world: clip_from_world.to_cols_array_2d(),
             towards_sun: [s.x, s.y, s.z, 0.0],
             time: [frame.hour, frame.hours_per_day, frame.weather, frame.game_hours as f32],
             viewport: [width as f32, height as f32, 1.0 / width.max(1) as f32, 1.0 / height.max(1) as f32],
             camera_position: camera.position().extend(1.0).to_array(),
+            depth: [0.0, 1.0, Camera::NEAR_M, Camera::FAR_M],
             output: [
                 if target == crate::render::frame::pass::Target::Hdr { 1.0 } else { 0.0 },
                 crate::render::passes::tone_map::ToneMapUniform::from(frame.sky_model.tone_mapper).settings[0] as f32,

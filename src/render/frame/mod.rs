@@ -3,6 +3,7 @@
 //! ([`stats`]), the camera and bind group 0: the globals and the scene's light ([`light`]).
 
 pub mod camera;
+pub mod depth;
 pub mod globals;
 pub mod light;
 pub mod options;

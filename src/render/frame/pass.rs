@@ -86,6 +86,10 @@ pub struct FrameContext<'a> {
     /// The frame's HDR target and a number that changes whenever it is recreated (`None` when
     /// the frame draws display values directly).
     pub hdr: Option<(&'a wgpu::TextureView, u64)>,
+    /// The scene's depth ([`crate::render::frame::depth::SceneDepth`]) and its generation: the
+    /// compute phase sees the last frame's; a phase after the scene's may sample it where it does
+    /// not also draw into it.
+    pub depth: (&'a wgpu::TextureView, u64),
 }
 
 impl FrameContext<'_> {
@@ -179,6 +183,13 @@ pub trait Pass: Any {
     /// its steady state (glare: one persistence period per frame).
     fn settle_dt_s(&self, _options: &RenderOptions) -> Option<f32> {
         None
+    }
+
+    /// Extra frames a still may need for this pass's history to reach its steady state (a
+    /// temporal accumulation's length); the renderer allows the most any pass asks, and at
+    /// least [`crate::render::frame::renderer::SETTLE_FRAMES`].
+    fn settle_frames(&self, _options: &RenderOptions) -> usize {
+        0
     }
 
     /// Whether the last frame showed the steady state (a still stops settling when all agree).

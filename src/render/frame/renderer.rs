@@ -4,6 +4,7 @@
 
 use crate::render::atmosphere::AtmosphereGpu;
 use crate::render::frame::camera::Camera;
+use crate::render::frame::depth::SceneDepth;
 use crate::render::frame::globals::{Globals, GlobalsBinding};
 use crate::render::frame::light::SceneLight;
 use crate::render::frame::options::RenderOptions;
@@ -24,6 +25,10 @@ pub const SCENE_DEPTH: (f32, f32) = (0.0, 0.95);
 /// Depth range of the sky.
 pub const SKY_DEPTH: (f32, f32) = (0.99, 1.0);
 
+/// Extra frames a still renders at most while its passes settle, unless one asks for more
+/// ([`Pass::settle_frames`]).
+pub const SETTLE_FRAMES: usize = 6;
+
 /// Plans of one frame at most after the first, each after a pipeline the previous one chose
 /// failed to build (each failure is remembered, so the plans converge; a draw whose pipeline
 /// still fails after them is not drawn, and was logged).
@@ -33,9 +38,6 @@ const MAX_REPLANS: usize = 4;
 pub struct RenderTarget<'a> {
     /// Colour view, in the renderer's colour format.
     pub color: &'a wgpu::TextureView,
-    /// Depth view ([`crate::render::gpu::parts::DEPTH_FORMAT`]), written by the renderer alone: it does not clear a
-    /// depth view again while it has drawn no main scene into it ([`crate::render::frame::options::Skips::covered_clears`]).
-    pub depth: &'a wgpu::TextureView,
     /// Size, pixels.
     pub size: (u32, u32),
 }
@@ -63,9 +65,10 @@ pub struct SkyRenderer {
     has_sky: bool,
     hdr: Option<HdrTarget>,
     timer: Option<GpuTimer>,
-    /// A depth view that still holds the clear value (1) everywhere: cleared by this renderer,
-    /// and no scene drawn into it since ([`crate::render::frame::options::Skips::covered_clears`]).
-    depth_untouched: Option<wgpu::TextureView>,
+    /// The scene's depth, sized like the last frame's target.
+    depth: Option<SceneDepth>,
+    /// The last frame's main-scene camera, world -> clip (the globals carry it as the previous one).
+    previous_clip_from_world: Option<glam::Mat4>,
     /// Counters of the last recorded frame.
     pub stats: FrameStats,
     /// The last frame's plan of its sky phase (diagnostics and tests read it).
@@ -111,7 +114,8 @@ impl SkyRenderer {
             has_sky: false,
             hdr: None,
             timer: ctx.timestamps.then(|| GpuTimer::new(device, &ctx.queue)),
-            depth_untouched: None,
+            depth: None,
+            previous_clip_from_world: None,
             stats: FrameStats::default(),
             plan: SkyPlan::default(),
             upload_stats: UploadStats::default(),
@@ -215,6 +219,11 @@ impl SkyRenderer {
         self.passes.iter().filter_map(|p| p.settle_dt_s(options)).reduce(f32::max)
     }
 
+    /// Extra frames a still renders at most while its passes settle.
+    pub fn settle_frames(&self, options: &RenderOptions) -> usize {
+        self.passes.iter().map(|p| p.settle_frames(options)).fold(SETTLE_FRAMES, usize::max)
+    }
+
     /// Whether the last frame showed every pass's steady state.
     pub fn settled(&self) -> bool {
         self.passes.iter().all(|p| p.settled())
@@ -231,7 +240,11 @@ impl SkyRenderer {
         let (w, h) = target.size;
         let physical = self.has_sky && frame.sky_model.kind.is_physical();
         let (kind, matched) = (plan::frame_target(physical, &options.strategy), plan::matches_hdr_picture(physical, &options.strategy));
-        let globals = Globals::new(frame, camera, w, h, (kind, matched));
+        let mut globals = Globals::new(frame, camera, w, h, (kind, matched));
+        let current = glam::Mat4::from_cols_array_2d(&globals.clip_from_world);
+        globals.previous_clip_from_world = self.previous_clip_from_world.replace(current).unwrap_or(current).to_cols_array_2d();
+        let range = if options.depth_split { SCENE_DEPTH } else { (0.0, 1.0) };
+        (globals.depth[0], globals.depth[1]) = range;
         ctx.queue.write_buffer(&self.globals.buffer, 0, bytemuck::bytes_of(&globals));
         if !self.has_sky {
             return;
@@ -239,9 +252,12 @@ impl SkyRenderer {
         if kind == Target::Hdr {
             self.ensure_hdr(&ctx.device, target.size);
         }
+        self.ensure_depth(&ctx.device, target.size);
         let hdr = self.hdr.as_ref().filter(|_| kind == Target::Hdr).map(|t| (&t.view, t.generation));
+        let depth = self.depth.as_ref().expect("made above");
         self.atmosphere.prepare(&ctx.queue, &frame.atmosphere);
-        let cx = FrameContext { device: &ctx.device, queue: &ctx.queue, frame, camera, options, size: target.size, target: kind, matched, hdr };
+        let cx =
+            FrameContext { device: &ctx.device, queue: &ctx.queue, frame, camera, options, size: target.size, target: kind, matched, hdr, depth: (&depth.view, depth.generation) };
         for pass in &mut self.passes {
             pass.prepare(&cx);
         }
@@ -257,7 +273,7 @@ impl SkyRenderer {
             scene_in_view: options.scene && camera.elevation_range_deg(wf / hf.max(1.0)).0 < -crate::render::plan::visibility::SCENE_COVERS_BELOW_DEG,
             reduced_layers: self.pass::<ReducedLayersPass>().is_some(),
             covered_clears: options.skips.covered_clears,
-            depth_clean: self.depth_untouched.as_ref() == Some(target.depth),
+            depth_clean: depth.untouched,
         };
         let mut plan = plan::plan(std::mem::take(&mut items[Phase::Sky.index()]), &options.strategy, facts);
         // Pipelines for what the plan uses and nothing else. A failed one withdraws the
@@ -319,7 +335,9 @@ impl SkyRenderer {
             t.resolve(encoder);
         }
         // Only the main scene writes depth: without it the view still holds the clear value.
-        self.depth_untouched = items[Phase::Scene.index()].is_empty().then(|| target.depth.clone());
+        if let Some(depth) = self.depth.as_mut() {
+            depth.untouched = items[Phase::Scene.index()].is_empty();
+        }
         for pass in &self.passes {
             pass.stats_recorded(&mut stats);
         }
@@ -414,7 +432,8 @@ impl SkyRenderer {
             Some(t) if kind == Target::Hdr => &t.view,
             _ => target.color,
         };
-        let mut rpass = begin_pass(encoder, &label, (color, target.depth), load, writes, queries);
+        let depth = &self.depth.as_ref().expect("made before the phases").view;
+        let mut rpass = begin_pass(encoder, &label, (color, depth), load, writes, queries);
         rpass.set_bind_group(0, &self.globals.bind_group, &[]);
         let range = match phase {
             Phase::Sky | Phase::Overlay if split || phase == Phase::Overlay => SKY_DEPTH,
@@ -559,6 +578,20 @@ impl SkyRenderer {
                 (SkyStep::Composite(_), None) => 0,
             })
             .sum()
+    }
+
+    /// Creates the depth target, or recreates it at a new size.
+    fn ensure_depth(&mut self, device: &wgpu::Device, size: (u32, u32)) {
+        if self.depth.as_ref().is_none_or(|d| d.size != size) {
+            let generation = self.depth.as_ref().map_or(0, |d| d.generation + 1);
+            self.depth = Some(SceneDepth::new(device, size, generation));
+        }
+    }
+
+    /// The scene's depth of the last frame ([`crate::render::gpu::parts::DEPTH_FORMAT`]; the
+    /// main scene's in [`SCENE_DEPTH`] with the depth split), once a frame was drawn.
+    pub fn depth(&self) -> Option<&SceneDepth> {
+        self.depth.as_ref()
     }
 
     /// Creates the HDR target, or recreates it at a new size.

@@ -1,4 +1,4 @@
-//! Offscreen rendering: a colour + depth target, readback to an image, and [`Headless`], the one
+//! Offscreen rendering: a colour target (the renderer owns the depth), readback to an image, and [`Headless`], the one
 //! path of headless renders, stills and the app's screenshots and contact sheets.
 
 use crate::render::frame::camera::Camera;
@@ -6,40 +6,22 @@ use crate::render::frame::options::RenderOptions;
 use crate::render::frame::renderer::{RenderTarget, SkyRenderer};
 use crate::render::gpu::context::GpuContext;
 use crate::render::gpu::error::{RenderError, RenderResult};
-use crate::render::gpu::parts::{DEPTH_FORMAT, OFFSCREEN_FORMAT};
+use crate::render::gpu::parts::OFFSCREEN_FORMAT;
 use crate::render::gpu::shaders::ShaderLibrary;
 use crate::sky::{FrameInput, Sky};
 
 pub use crate::render::gpu::readback::{read_buffer, read_texture};
 
-/// An offscreen colour and depth target.
+/// An offscreen colour target.
 pub struct Offscreen {
     /// Colour texture (RGBA8).
     pub color: wgpu::Texture,
     /// Its view.
     pub color_view: wgpu::TextureView,
-    /// Depth view.
-    pub depth_view: wgpu::TextureView,
     /// Width, pixels.
     pub width: u32,
     /// Height, pixels.
     pub height: u32,
-}
-
-/// Creates a depth texture view for a target size.
-pub fn depth_view(device: &wgpu::Device, width: u32, height: u32) -> wgpu::TextureView {
-    device
-        .create_texture(&wgpu::TextureDescriptor {
-            label: Some("SkyRenderer::depth"),
-            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats: &[],
-        })
-        .create_view(&Default::default())
 }
 
 impl Offscreen {
@@ -61,7 +43,7 @@ impl Offscreen {
             view_formats: &[],
         });
         let color_view = color.create_view(&Default::default());
-        Self { color, color_view, depth_view: depth_view(device, width, height), width, height }
+        Self { color, color_view, width, height }
     }
 
     /// Copies the colour target back to the CPU (blocks until the GPU is done).
@@ -72,12 +54,10 @@ impl Offscreen {
 
     /// The target as the renderer draws into it.
     pub fn target(&self) -> RenderTarget<'_> {
-        RenderTarget { color: &self.color_view, depth: &self.depth_view, size: (self.width, self.height) }
+        RenderTarget { color: &self.color_view, size: (self.width, self.height) }
     }
 }
 
-/// Most extra frames a still renders while its passes settle.
-const STILL_SETTLE_FRAMES: usize = 6;
 /// Longest a still waits for a pass's background work (the `cells` model's solve).
 const STILL_BUSY_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(300);
 
@@ -136,12 +116,13 @@ impl Headless {
     /// steady state shows, so the same input always gives the same picture.
     pub fn render(&mut self, sky: &Sky, input: &FrameInput, camera: &Camera, options: &RenderOptions) -> RenderResult<image::RgbaImage> {
         let dt = self.renderer.settle_dt_s(options).unwrap_or(0.0);
+        let settle_frames = self.renderer.settle_frames(options);
         self.frame(sky, input, camera, options, dt);
         let started = std::time::Instant::now();
         let mut extra = 0;
         while !self.renderer.settled() {
             let busy = self.renderer.busy();
-            if (!busy && extra >= STILL_SETTLE_FRAMES) || started.elapsed() > STILL_BUSY_TIMEOUT {
+            if (!busy && extra >= settle_frames) || started.elapsed() > STILL_BUSY_TIMEOUT {
                 break;
             }
             self.ctx.wait_idle()?;
@@ -161,7 +142,7 @@ impl Headless {
     pub fn try_render(&mut self, sky: &Sky, input: &FrameInput, camera: &Camera, options: &RenderOptions) -> RenderResult<Option<image::RgbaImage>> {
         let dt = self.renderer.settle_dt_s(options).unwrap_or(0.0);
         self.frame(sky, input, camera, options, dt);
-        for _ in 0..STILL_SETTLE_FRAMES {
+        for _ in 0..self.renderer.settle_frames(options) {
             if self.renderer.busy() {
                 return Ok(None);
             }
