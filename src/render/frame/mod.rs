@@ -5,6 +5,7 @@
 pub mod camera;
 pub mod depth;
 pub mod globals;
+pub mod history;
 pub mod light;
 pub mod options;
 pub mod pass;

@@ -12,6 +12,7 @@ use std::any::Any;
 
 use crate::render::atmosphere::AtmosphereGpu;
 use crate::render::frame::camera::Camera;
+use crate::render::frame::history::{Histories, HistoryRequest};
 use crate::render::frame::light::LightSource;
 use crate::render::frame::options::RenderOptions;
 use crate::render::frame::stats::FrameStats;
@@ -90,6 +91,8 @@ pub struct FrameContext<'a> {
     /// compute phase sees the last frame's; a phase after the scene's may sample it where it does
     /// not also draw into it.
     pub depth: (&'a wgpu::TextureView, u64),
+    /// The passes' histories, made for this frame's size: a pass finds its own by its name.
+    pub histories: &'a Histories,
 }
 
 impl FrameContext<'_> {
@@ -184,6 +187,10 @@ pub trait Pass: Any {
     fn settle_dt_s(&self, _options: &RenderOptions) -> Option<f32> {
         None
     }
+
+    /// The histories this pass keeps from frame to frame ([`crate::render::frame::history`]),
+    /// asked before every frame's [`Pass::prepare`], which finds them in [`FrameContext::histories`].
+    fn histories(&self, _options: &RenderOptions, _out: &mut Vec<HistoryRequest>) {}
 
     /// Extra frames a still may need for this pass's history to reach its steady state (a
     /// temporal accumulation's length); the renderer allows the most any pass asks, and at

@@ -6,6 +6,7 @@ use crate::render::atmosphere::AtmosphereGpu;
 use crate::render::frame::camera::Camera;
 use crate::render::frame::depth::SceneDepth;
 use crate::render::frame::globals::{Globals, GlobalsBinding};
+use crate::render::frame::history::Histories;
 use crate::render::frame::light::SceneLight;
 use crate::render::frame::options::RenderOptions;
 use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Placement, SkyUpload, Target};
@@ -67,6 +68,8 @@ pub struct SkyRenderer {
     timer: Option<GpuTimer>,
     /// The scene's depth, sized like the last frame's target.
     depth: Option<SceneDepth>,
+    /// The passes' histories.
+    histories: Histories,
     /// The last frame's main-scene camera, world -> clip (the globals carry it as the previous one).
     previous_clip_from_world: Option<glam::Mat4>,
     /// Counters of the last recorded frame.
@@ -115,6 +118,7 @@ impl SkyRenderer {
             hdr: None,
             timer: ctx.timestamps.then(|| GpuTimer::new(device, &ctx.queue)),
             depth: None,
+            histories: Histories::default(),
             previous_clip_from_world: None,
             stats: FrameStats::default(),
             plan: SkyPlan::default(),
@@ -255,9 +259,26 @@ impl SkyRenderer {
         self.ensure_depth(&ctx.device, target.size);
         let hdr = self.hdr.as_ref().filter(|_| kind == Target::Hdr).map(|t| (&t.view, t.generation));
         let depth = self.depth.as_ref().expect("made above");
+        let mut requests = Vec::new();
+        for pass in &self.passes {
+            requests.clear();
+            pass.histories(options, &mut requests);
+            self.histories.ensure(&ctx.device, pass.name(), &requests, target.size);
+        }
         self.atmosphere.prepare(&ctx.queue, &frame.atmosphere);
-        let cx =
-            FrameContext { device: &ctx.device, queue: &ctx.queue, frame, camera, options, size: target.size, target: kind, matched, hdr, depth: (&depth.view, depth.generation) };
+        let cx = FrameContext {
+            device: &ctx.device,
+            queue: &ctx.queue,
+            frame,
+            camera,
+            options,
+            size: target.size,
+            target: kind,
+            matched,
+            hdr,
+            depth: (&depth.view, depth.generation),
+            histories: &self.histories,
+        };
         for pass in &mut self.passes {
             pass.prepare(&cx);
         }
@@ -338,6 +359,7 @@ impl SkyRenderer {
         if let Some(depth) = self.depth.as_mut() {
             depth.untouched = items[Phase::Scene.index()].is_empty();
         }
+        self.histories.swap();
         for pass in &self.passes {
             pass.stats_recorded(&mut stats);
         }
@@ -592,6 +614,11 @@ impl SkyRenderer {
     /// main scene's in [`SCENE_DEPTH`] with the depth split), once a frame was drawn.
     pub fn depth(&self) -> Option<&SceneDepth> {
         self.depth.as_ref()
+    }
+
+    /// The passes' histories (made for the last frame's size).
+    pub fn histories(&self) -> &Histories {
+        &self.histories
     }
 
     /// Creates the HDR target, or recreates it at a new size.
