@@ -12,6 +12,7 @@ use cli::{bench_frame, bench_models, bench_passes, stability_report};
 use cli::{Cli, Command, FrameArgs, RenderArgs};
 use skytune::files::hot_reload::{LiveSky, ReloadEvent, SkySpec};
 use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions};
+use skytune::sky::resolved::SkyModelKind;
 use skytune::sky::{procedural, FrameInput, Sky, Tier};
 use skytune::support::shard::{self, Shard};
 
@@ -119,12 +120,13 @@ fn bake(args: &cli::BakeArgs) -> anyhow::Result<()> {
         let sky = spec_for(path, None)?.load().map_err(|e| anyhow!("{e}"))?;
         let m = &sky.model;
         let method = match args.model {
-            cli::BakeModel::Single => Method::Single(m.single),
-            cli::BakeModel::Lut => Method::Lut(m.lut),
-            cli::BakeModel::Precomputed => Method::Precomputed(m.precomputed),
-            cli::BakeModel::Cells => Method::Cells(m.cell_iterations as usize),
-            cli::BakeModel::Preetham => Method::Preetham,
-            cli::BakeModel::Hosek => Method::Hosek,
+            SkyModelKind::Single => Method::Single(m.single),
+            SkyModelKind::Lut => Method::Lut(m.lut),
+            SkyModelKind::Precomputed => Method::Precomputed(m.precomputed),
+            SkyModelKind::Cells => Method::Cells(m.cell_iterations as usize),
+            SkyModelKind::Preetham => Method::Preetham,
+            SkyModelKind::Hosek => Method::Hosek,
+            other => bail!("--model: cannot bake from {}", other.name()),
         };
         let started = std::time::Instant::now();
         let baked = skytune::measure::bake::bake(&ev, &sky, method, args.rows, args.weathers)?;
@@ -209,13 +211,13 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     // The reference's standard errors and paths, written beside its radiance.
     let mut estimates = None;
     let (out, units, comment) = match args.model {
-        cli::RadianceModel::Reference => {
+        SkyModelKind::Reference => {
             let (e, comment) = reference_radiance(args, atm, &list)?;
             let out = e.iter().map(|e| e.all).collect();
             estimates = Some(e);
             (out, units, comment)
         }
-        cli::RadianceModel::Single => {
+        SkyModelKind::Single => {
             let settings = skytune::atmosphere::SingleSettings {
                 view_steps: args.view_steps,
                 sun_steps: args.sun_steps,
@@ -230,7 +232,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             let out = out.into_iter().map(|c| c.map(f64::from)).collect();
             (out, units, format!("model single on {}: {settings:?}", ctx.adapter_line()))
         }
-        cli::RadianceModel::Lut => {
+        SkyModelKind::Lut => {
             let (tw, th) = cli::parse_size(&args.transmittance_size)?;
             let settings = skytune::atmosphere::LutSettings {
                 transmittance_size: [tw, th],
@@ -246,7 +248,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             let out = out.into_iter().map(|c| c.map(f64::from)).collect();
             (out, units, format!("model lut on {}: {settings:?}", ctx.adapter_line()))
         }
-        cli::RadianceModel::Precomputed => {
+        SkyModelKind::Precomputed => {
             let d = skytune::atmosphere::PrecomputedSettings::default();
             let settings = skytune::atmosphere::PrecomputedSettings {
                 orders: args.orders,
@@ -262,7 +264,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             let out = out.into_iter().map(|c| c.map(f64::from)).collect();
             (out, units, format!("model precomputed on {}: {settings:?}", ctx.adapter_line()))
         }
-        cli::RadianceModel::Cells => {
+        SkyModelKind::Cells => {
             use skytune::atmosphere::cells::{CellModel, CellSettings};
             anyhow::ensure!(args.iterations <= 32, "--iterations: expected 0..=32, found {}", args.iterations);
             let settings = CellSettings { iterations: args.iterations, ..Default::default() };
@@ -278,13 +280,13 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             }
             (out, units, format!("model cells: {settings:?}"))
         }
-        cli::RadianceModel::Preetham | cli::RadianceModel::Hosek | cli::RadianceModel::Linear => {
+        SkyModelKind::Preetham | SkyModelKind::Hosek | SkyModelKind::Linear => {
             use skytune::atmosphere::analytic::{self, AnalyticModel, LinearParams};
             anyhow::ensure!(args.turbidity.is_finite(), "--turbidity: expected a finite number, found {}", args.turbidity);
             let units = if args.published_units { analytic::AnalyticUnits::Published } else { analytic::AnalyticUnits::Calibrated };
             let model = match args.model {
-                cli::RadianceModel::Preetham => AnalyticModel::Preetham { turbidity: args.turbidity, units },
-                cli::RadianceModel::Hosek => AnalyticModel::Hosek { turbidity: args.turbidity, albedo: 0.0, units },
+                SkyModelKind::Preetham => AnalyticModel::Preetham { turbidity: args.turbidity, units },
+                SkyModelKind::Hosek => AnalyticModel::Hosek { turbidity: args.turbidity, albedo: 0.0, units },
                 _ => AnalyticModel::Linear(
                     LinearParams::preset(&args.preset)
                         .ok_or_else(|| anyhow!("--preset: unknown table \"{}\"; expected one of {}", args.preset, analytic::LINEAR_PRESETS.map(|p| p.0).join(", ")))?,
@@ -313,8 +315,9 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             let place = if args.on_cpu { "CPU" } else { "GPU" };
             (out, model.units().into(), format!("model {} on the {place}: turbidity {}{albedo_note}", model.name(), args.turbidity))
         }
+        other => bail!("--model: {} has no radiance to evaluate", other.name()),
     };
-    let name = clap::ValueEnum::to_possible_value(&args.model).map_or_else(String::new, |v| v.get_name().to_string());
+    let name = args.model.name();
     let mut comment = format!("skytune radiance --model {name}: {units}\n{comment}");
     if !shard.is_whole() {
         comment = format!("{}\n{comment}", shard.table_line(all.len(), 1, inputs).trim_start_matches("# "));

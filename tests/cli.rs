@@ -417,3 +417,18 @@ fn validation_on_a_committed_scan_matches_the_committed_table() {
         }
     }
 }
+
+#[test]
+fn each_command_names_the_sky_file_models_it_takes() {
+    // One enum of models (the sky file's names); each command takes its own subset and names it.
+    for (args, taken, refused) in [
+        (&["radiance", "--cases", "none.csv", "--out", "none.csv", "--model"][..], "reference, single, lut, precomputed, cells, preetham, hosek, linear", "bitmap"),
+        (&["bake", "--out", "none", "--model"][..], "single, lut, precomputed, cells, preetham, hosek", "reference"),
+        (&["validate", "none.csv", "--models"][..], "preetham, hosek, single, lut, reference", "cells"),
+    ] {
+        let o = skytune().args(args).arg(refused).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} {refused}");
+        assert!(err.contains(&format!("invalid value '{refused}'")) && err.contains(taken), "{args:?} {refused}: {err}");
+    }
+}

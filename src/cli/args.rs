@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
+use skytune::sky::resolved::SkyModelKind;
 use skytune::support::shard::Shard;
 
 /// Author and debug real-time skies: live preview, headless renders, validation and benchmarks.
@@ -166,28 +167,6 @@ pub struct CompareArgs {
     pub max_differing: Option<f64>,
 }
 
-/// Physical sky models that `radiance` can evaluate.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum RadianceModel {
-    /// The CPU double-precision reference (every order of scattering, ozone, ground albedo).
-    Reference,
-    /// Single scattering ray-marched on the GPU, erf or numerical optical depth towards the sun.
-    Single,
-    /// Multiple scattering from look-up tables on the GPU (Hillaire 2020).
-    Lut,
-    /// Every order precomputed into 4D tables on the GPU (after Bruneton 2017).
-    Precomputed,
-    /// The cell model of the procedural-sky text (CPU, solved per ground albedo).
-    Cells,
-    /// Preetham, Shirley and Smits 1999 (GPU; `--on-cpu` for the CPU evaluation).
-    Preetham,
-    /// Hosek and Wilkie 2012, RGB (GPU; `--on-cpu` for the `hw-skymodel` crate's evaluation).
-    Hosek,
-    /// Braun and Cohen's simple model: display values, the time of day from the sun's elevation
-    /// on an equinox morning (6:00 on the horizon, 15 degrees an hour).
-    Linear,
-}
-
 /// Optical depth towards the sun of the `single` model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum OpticalDepthArg {
@@ -195,21 +174,6 @@ pub enum OpticalDepthArg {
     Erf,
     /// Numerical integration.
     Numerical,
-}
-
-/// A sky model `validate` compares with measured skies.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, clap::ValueEnum)]
-pub enum ValidateModel {
-    /// Preetham, Shirley and Smits 1999 (turbidity fitted).
-    Preetham,
-    /// Hosek and Wilkie 2012 (turbidity fitted).
-    Hosek,
-    /// Single scattering (aerosol optical depth fitted).
-    Single,
-    /// Hillaire 2020's tables (aerosol optical depth fitted).
-    Lut,
-    /// The double-precision reference (aerosol optical depth fitted near `lut`'s).
-    Reference,
 }
 
 /// `export-env` arguments.
@@ -260,8 +224,8 @@ pub struct ValidateArgs {
     #[arg(required = true)]
     pub scans: Vec<PathBuf>,
     /// Models to compare, comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "preetham,hosek,single,lut,reference")]
-    pub models: Vec<ValidateModel>,
+    #[arg(long, value_delimiter = ',', default_value = "preetham,hosek,single,lut,reference", value_parser = model_among(VALIDATE_MODELS))]
+    pub models: Vec<SkyModelKind>,
     /// The aerosol the physical models assume while its optical depth is fitted (a preset of
     /// `[atmosphere] aerosol`).
     #[arg(long, default_value = "continental", value_parser = parse_aerosol)]
@@ -297,9 +261,36 @@ pub struct ValidateArgs {
     pub cpu: bool,
 }
 
-fn parse_sky_model_kind(s: &str) -> Result<skytune::sky::resolved::SkyModelKind, String> {
-    use skytune::sky::resolved::SkyModelKind;
-    SkyModelKind::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| format!("expected one of {}", SkyModelKind::ALL.map(|k| k.name()).join(", ")))
+fn parse_sky_model_kind(s: &str) -> Result<SkyModelKind, String> {
+    SkyModelKind::from_name(s).ok_or_else(|| format!("expected one of {}", SkyModelKind::ALL.map(|k| k.name()).join(", ")))
+}
+
+/// Sky models `radiance` can evaluate: every physical one (`reference` and `cells` on the CPU;
+/// `preetham` and `hosek` on the GPU, or with `--on-cpu` their CPU evaluations; `linear` in
+/// display values, the time of day from the sun's elevation on an equinox morning).
+pub const RADIANCE_MODELS: &[SkyModelKind] = &[
+    SkyModelKind::Reference,
+    SkyModelKind::Single,
+    SkyModelKind::Lut,
+    SkyModelKind::Precomputed,
+    SkyModelKind::Cells,
+    SkyModelKind::Preetham,
+    SkyModelKind::Hosek,
+    SkyModelKind::Linear,
+];
+
+/// Sky models `validate` compares with measured skies, in the order it fits them (`reference`
+/// is searched near `lut`'s fit): turbidity fitted for the analytic ones, the aerosol optical
+/// depth for the physical ones.
+pub const VALIDATE_MODELS: &[SkyModelKind] = &[SkyModelKind::Preetham, SkyModelKind::Hosek, SkyModelKind::Single, SkyModelKind::Lut, SkyModelKind::Reference];
+
+/// Sky models `bake` can bake from, each with the sky file's settings.
+pub const BAKE_MODELS: &[SkyModelKind] = &[SkyModelKind::Single, SkyModelKind::Lut, SkyModelKind::Precomputed, SkyModelKind::Cells, SkyModelKind::Preetham, SkyModelKind::Hosek];
+
+/// A `--model` parser: the sky file's model names (one enum, [`SkyModelKind`]), those of `allowed` only.
+fn model_among(allowed: &'static [SkyModelKind]) -> impl clap::builder::TypedValueParser<Value = SkyModelKind> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(allowed.iter().map(|k| k.name())).try_map(|s: String| parse_sky_model_kind(&s))
 }
 
 fn parse_aerosol(s: &str) -> Result<skytune::atmosphere::aerosol::AerosolPreset, String> {
@@ -310,9 +301,9 @@ fn parse_aerosol(s: &str) -> Result<skytune::atmosphere::aerosol::AerosolPreset,
 /// `radiance` arguments.
 #[derive(Debug, Args, Clone)]
 pub struct RadianceArgs {
-    /// Model to evaluate.
-    #[arg(long, value_enum, default_value = "reference")]
-    pub model: RadianceModel,
+    /// Model to evaluate ([`RADIANCE_MODELS`]).
+    #[arg(long, default_value = "reference", value_parser = model_among(RADIANCE_MODELS))]
+    pub model: SkyModelKind,
     /// Input CSV: camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg.
     #[arg(long)]
     pub cases: PathBuf,
@@ -603,23 +594,6 @@ pub struct ReferenceBenchArgs {
     pub out: PathBuf,
 }
 
-/// The models `bake` can bake from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum BakeModel {
-    /// Single scattering (the sky file's settings).
-    Single,
-    /// LUT multiple scattering (the sky file's settings).
-    Lut,
-    /// Precomputed scattering (the sky file's settings).
-    Precomputed,
-    /// The cell model (the sky file's iterations).
-    Cells,
-    /// Preetham (the sky file's turbidity).
-    Preetham,
-    /// Hosek-Wilkie (the sky file's turbidity).
-    Hosek,
-}
-
 /// `bake` arguments.
 #[derive(Debug, Args, Clone)]
 pub struct BakeArgs {
@@ -627,8 +601,8 @@ pub struct BakeArgs {
     /// more than one, `--out` holds one folder per sky, named after the sky's folder.
     pub skies: Vec<PathBuf>,
     /// The model to bake from.
-    #[arg(long, value_enum, default_value = "lut")]
-    pub model: BakeModel,
+    #[arg(long, default_value = "lut", value_parser = model_among(BAKE_MODELS))]
+    pub model: SkyModelKind,
     /// Gradient rows (zenith to 10 degrees below the horizon).
     #[arg(long, default_value_t = 32)]
     pub rows: usize,

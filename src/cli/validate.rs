@@ -10,7 +10,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::{ValidateArgs, ValidateModel};
+use super::{ValidateArgs, VALIDATE_MODELS};
 use skytune::atmosphere::aerosol::Aerosol;
 use skytune::atmosphere::analytic::PREETHAM_MIN_TURBIDITY;
 use skytune::atmosphere::reference::{estimate_many, Case, Reference, ReferenceSettings};
@@ -18,6 +18,7 @@ use skytune::atmosphere::{Atmosphere, LutSettings, Rgb, SingleSettings};
 use skytune::measure::model_points::{Evaluator, Method};
 use skytune::measure::validation::{agreement, median, minimise_log, Agreement, Scan, Split};
 use skytune::render::{AdapterChoice, GpuContext};
+use skytune::sky::resolved::SkyModelKind;
 
 /// The search range of the aerosol optical depth at 550 nm.
 const OPTICAL_DEPTHS: (f64, f64) = (0.003, 2.0);
@@ -205,16 +206,15 @@ fn fit_scan_with(ev: &Evaluator<'_>, scan: &Scan, args: &ValidateArgs, fitted: &
         luminance_median: a.luminance_median,
         blue_red_median: a.blue_red_median,
     };
-    let mut models = args.models.clone();
-    models.sort();
-    models.dedup();
+    // In the fitting order: `reference` is searched near `lut`'s fit.
+    let models: Vec<SkyModelKind> = VALIDATE_MODELS.iter().copied().filter(|m| args.models.contains(m)).collect();
     let angstroms: Vec<f64> = if args.fit_angstrom { ANGSTROMS.to_vec() } else { vec![args.aerosol.aerosol().angstrom_exponent] };
     let mut rows = Vec::new();
     let mut lut_fit = None;
     for model in models {
         match model {
-            ValidateModel::Preetham | ValidateModel::Hosek => {
-                let (method, lo) = if model == ValidateModel::Preetham { (Method::Preetham, PREETHAM_MIN_TURBIDITY) } else { (Method::Hosek, 1.0) };
+            SkyModelKind::Preetham | SkyModelKind::Hosek => {
+                let (method, lo) = if model == SkyModelKind::Preetham { (Method::Preetham, PREETHAM_MIN_TURBIDITY) } else { (Method::Hosek, 1.0) };
                 let values = |t: f64| ev.gpu(&method, &Atmosphere::default(), t, &cases);
                 let (t, _) = minimise_log(lo, 10.0, FIT_STEPS, |t| Ok(agreement(&values(t)?, &measured).objective))?;
                 let v = values(round3(t))?;
@@ -222,8 +222,8 @@ fn fit_scan_with(ev: &Evaluator<'_>, scan: &Scan, args: &ValidateArgs, fitted: &
                 fitted.push((method.model_name().to_string(), v, a.scale));
                 rows.push(row(method.model_name(), "turbidity", round3(t), None, a));
             }
-            ValidateModel::Single | ValidateModel::Lut => {
-                let method = if model == ValidateModel::Single { Method::Single(SingleSettings::default()) } else { Method::Lut(LutSettings::default()) };
+            SkyModelKind::Single | SkyModelKind::Lut => {
+                let method = if model == SkyModelKind::Single { Method::Single(SingleSettings::default()) } else { Method::Lut(LutSettings::default()) };
                 let values = |tau: f64, a: f64| ev.gpu(&method, &atmosphere(args, tau, a), 0.0, &cases);
                 let mut best: Option<(f64, f64, f64)> = None;
                 for &a in &angstroms {
@@ -233,7 +233,7 @@ fn fit_scan_with(ev: &Evaluator<'_>, scan: &Scan, args: &ValidateArgs, fitted: &
                     }
                 }
                 let (tau, a, _) = best.context("no fit")?;
-                if model == ValidateModel::Lut {
+                if model == SkyModelKind::Lut {
                     lut_fit = Some((tau, a));
                 }
                 let v = values(round3(tau), a)?;
@@ -241,7 +241,7 @@ fn fit_scan_with(ev: &Evaluator<'_>, scan: &Scan, args: &ValidateArgs, fitted: &
                 fitted.push((method.model_name().to_string(), v, agreed.scale));
                 rows.push(row(method.model_name(), "aerosol_optical_depth", round3(tau), Some(a), agreed));
             }
-            ValidateModel::Reference => {
+            SkyModelKind::Reference => {
                 // Dear: searched near lut's fit (or the preset's amount), with lut's exponent.
                 let (centre, a) = lut_fit.unwrap_or((args.aerosol.aerosol().optical_depth_550, angstroms[0]));
                 let settings = ReferenceSettings { paths: args.reference_paths, target_rel_se: Some(0.02), ..Default::default() };
@@ -252,6 +252,7 @@ fn fit_scan_with(ev: &Evaluator<'_>, scan: &Scan, args: &ValidateArgs, fitted: &
                 fitted.push(("reference".to_string(), v, agreed.scale));
                 rows.push(row("reference", "aerosol_optical_depth", round3(tau), Some(a), agreed));
             }
+            other => anyhow::bail!("--models: {} is not compared with measured skies", other.name()),
         }
     }
     Ok(rows)

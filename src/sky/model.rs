@@ -281,6 +281,11 @@ impl SkyModelKind {
         }
     }
 
+    /// The model of a name ([`Self::name`]), if one has it.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
     /// Whether the model is evaluated from a few coefficients per sun (`shaders/sky_model/analytic.wgsl`).
     pub fn is_analytic(self) -> bool {
         matches!(self, SkyModelKind::Preetham | SkyModelKind::Hosek | SkyModelKind::Linear)
