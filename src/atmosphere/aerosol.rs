@@ -175,6 +175,67 @@ impl Aerosol {
     }
 }
 
+/// What a sky file's `[atmosphere]` table (or a weather step's) states of the aerosol, in the
+/// atmosphere's terms: a preset, one amount, and keys that refine them. The sky file checks
+/// which keys may go together; this says what they mean.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct AerosolStatement {
+    /// A preset to start from.
+    pub preset: Option<AerosolPreset>,
+    /// The amount, stated one way.
+    pub amount: Option<AerosolAmount>,
+    /// The Cornette-Shanks asymmetry.
+    pub g: Option<f64>,
+    /// The scale height, km.
+    pub scale_height_km: Option<f64>,
+    /// The Angstrom exponent.
+    pub angstrom_exponent: Option<f64>,
+    /// The single-scattering albedo.
+    pub single_scattering_albedo: Option<f64>,
+}
+
+impl AerosolStatement {
+    /// Whether it states anything that makes an aerosol (the asymmetry and the scale height alone
+    /// only refine the Mie coefficients as written).
+    pub fn states_aerosol(&self) -> bool {
+        self.preset.is_some() || self.amount.is_some() || self.angstrom_exponent.is_some() || self.single_scattering_albedo.is_some()
+    }
+
+    /// `raw` (the atmosphere with any Mie coefficients written by hand, or the parent's aerosol)
+    /// with this aerosol. `parent_stated`: the table this one sits in stated an aerosol, so
+    /// `raw` holds it. A step changes what it states and keeps the rest, its spectral slope
+    /// included once the parent gave one or the coefficients have one; grey coefficients given an
+    /// amount get the default slope.
+    pub fn apply(&self, raw: Atmosphere, parent_stated: bool) -> Result<Atmosphere, Vec<AtmosphereError>> {
+        if !self.states_aerosol() {
+            return Ok(raw);
+        }
+        let mut aerosol = match self.preset {
+            Some(p) => p.aerosol(),
+            None if parent_stated || raw.mie_extinction_per_km[0] != raw.mie_extinction_per_km[2] => Aerosol::of(&raw),
+            None => Aerosol { angstrom_exponent: DEFAULT_ANGSTROM_EXPONENT, ..Aerosol::of(&raw) },
+        };
+        // Keys written beside a preset refine it.
+        if let Some(g) = self.g {
+            aerosol.g = g;
+        }
+        if let Some(h) = self.scale_height_km {
+            aerosol.scale_height_km = h;
+        }
+        if let Some(a) = self.angstrom_exponent {
+            aerosol.angstrom_exponent = a;
+        }
+        if let Some(w) = self.single_scattering_albedo {
+            aerosol.single_scattering_albedo = w;
+        }
+        if let Some(amount) = self.amount {
+            aerosol.optical_depth_550 = amount.optical_depth_550(&raw, aerosol.scale_height_km).map_err(|e| vec![e])?;
+        }
+        aerosol.validate()?;
+        Ok(aerosol.apply(raw))
+    }
+}
+
 impl AerosolAmount {
     /// The sky file's key for this way of stating the amount.
     pub fn key(self) -> &'static str {
