@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
-use crate::render::gpu::headless;
+use crate::render::headless;
 use crate::render::{Camera, Headless, RenderError, RenderOptions, RenderResult};
 use crate::sky::{FrameInput, Sky};
 

@@ -11,13 +11,13 @@ pub mod plan;
 pub mod sky_objects;
 
 pub use frame::camera::Camera;
+pub use frame::headless::{self, Headless, Offscreen};
 pub use frame::options::{Occluder, RenderOptions, Skips};
 pub use frame::pass::{Pass, Phase};
 pub use frame::renderer::{release_freed_memory, RenderTarget, SkyRenderer, SCENE_DEPTH, SKY_DEPTH};
 pub use frame::stats::{FrameStats, UploadStats};
 pub use gpu::context::{AdapterChoice, GpuContext};
 pub use gpu::error::{RenderError, RenderResult};
-pub use gpu::headless::{self, Headless, Offscreen};
 pub use gpu::shaders::ShaderLibrary;
 pub use passes::PASSES;
 pub use plan::resolution::{Divisor, DomeResolution};

@@ -287,7 +287,7 @@ impl RadianceProbe {
             pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
         }
         ctx.queue.submit([encoder.finish()]);
-        let bytes = crate::render::gpu::headless::read_buffer(ctx, &output, size)?;
+        let bytes = crate::render::gpu::readback::read_buffer(ctx, &output, size)?;
         let out = bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes).iter().map(|v| [v[0], v[1], v[2]]).collect();
         Ok(out)
     }
