@@ -3,12 +3,10 @@
 
 mod common;
 
-use std::path::Path;
-
 use skytune::render::frame::history::HistoryRequest;
 use skytune::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, PassConstructor, Phase, Pipelines};
 use skytune::render::gpu::error::RenderResult;
-use skytune::render::{Camera, FillStrategy, Headless, RenderOptions, ShaderLibrary, SkyRenderer, OFFSCREEN_FORMAT};
+use skytune::render::{Camera, FillStrategy, Headless, RenderOptions, SkyRenderer, OFFSCREEN_FORMAT};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::FrameInput;
 
@@ -141,11 +139,9 @@ fn counts(h: &Headless) -> ((u32, u32), Vec<[f32; 2]>) {
 #[test]
 fn a_history_carries_frames_over_plan_changes_and_restarts_on_a_resize() {
     let sky = default_sky();
-    let dir = tempfile::tempdir().unwrap();
-    common::copy_shaders(dir.path());
-    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/passes/history_probe.wgsl"), dir.path().join("history_probe.wgsl")).unwrap();
+    let (_dir, library) = common::library_with_test_passes();
     let mut h = common::headless(W, H);
-    h.renderer = SkyRenderer::with_passes(&h.ctx, OFFSCREEN_FORMAT, ShaderLibrary { dir: Some(dir.path().to_path_buf()) }, EXTRA).unwrap();
+    h.renderer = SkyRenderer::with_passes(&h.ctx, OFFSCREEN_FORMAT, library, EXTRA).unwrap();
     h.set_sky(&sky).unwrap();
     let input = FrameInput::new(13.0, 0.0);
     let camera = Camera::default();

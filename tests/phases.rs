@@ -4,8 +4,6 @@
 
 mod common;
 
-use std::path::Path;
-
 use skytune::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, PassConstructor, Phase, Pipelines, Target};
 use skytune::render::gpu::error::RenderResult;
 use skytune::render::{Camera, GpuContext, Headless, RenderOptions, ShaderLibrary, SkyRenderer, OFFSCREEN_FORMAT};
@@ -176,22 +174,10 @@ impl Pass for Tint {
 const EXTRA: &[(&str, PassConstructor)] =
     &[("hour_probe", |b| skytune::render::frame::pass::boxed(HourProbe::new, b)), ("tint", |b| skytune::render::frame::pass::boxed(Tint::new, b))];
 
-/// The checkout's shaders plus the test passes' files, in one folder.
-fn library_with_test_passes() -> (tempfile::TempDir, ShaderLibrary) {
-    let dir = tempfile::tempdir().unwrap();
-    common::copy_shaders(dir.path());
-    for e in std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/passes")).unwrap() {
-        let p = e.unwrap().path();
-        std::fs::copy(&p, dir.path().join(p.file_name().unwrap())).unwrap();
-    }
-    let lib = ShaderLibrary { dir: Some(dir.path().to_path_buf()) };
-    (dir, lib)
-}
-
 #[test]
 fn added_passes_run_in_their_phases_and_are_timed() {
     let sky = default_sky();
-    let (_dir, library) = library_with_test_passes();
+    let (_dir, library) = common::library_with_test_passes();
     let ctx = GpuContext::headless(skytune::render::AdapterChoice::Cpu).unwrap();
     let mut plain = Headless::new(ctx.clone(), W, H).unwrap();
     plain.set_sky(&sky).unwrap();

@@ -211,3 +211,16 @@ pub fn run_compute_probe(ctx: &GpuContext, source: String, entry: &str, constant
     let view = read.slice(..).get_mapped_range().expect("the probe's buffer");
     view.to_vec()
 }
+
+/// The checkout's shaders plus the test passes' files (tests/passes/), in one folder: the
+/// library of a renderer with passes added by a test (`SkyRenderer::with_passes`).
+pub fn library_with_test_passes() -> (tempfile::TempDir, skytune::render::ShaderLibrary) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    copy_shaders(dir.path());
+    for e in std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/passes")).expect("reading tests/passes") {
+        let p = e.expect("a folder entry").path();
+        std::fs::copy(&p, dir.path().join(p.file_name().expect("a file name"))).expect("copying a test pass's shader");
+    }
+    let library = skytune::render::ShaderLibrary { dir: Some(dir.path().to_path_buf()) };
+    (dir, library)
+}
