@@ -120,10 +120,10 @@ fn bake(args: &cli::BakeArgs) -> anyhow::Result<()> {
         let sky = spec_for(path, None)?.load().map_err(|e| anyhow!("{e}"))?;
         let m = &sky.model;
         let method = match args.model {
-            SkyModelKind::Single => Method::Single(m.single),
-            SkyModelKind::Lut => Method::Lut(m.lut),
-            SkyModelKind::Precomputed => Method::Precomputed(m.precomputed),
-            SkyModelKind::Cells => Method::Cells(m.cell_iterations as usize),
+            SkyModelKind::Single => Method::Single(m.settings.single),
+            SkyModelKind::Lut => Method::Lut(m.settings.lut),
+            SkyModelKind::Precomputed => Method::Precomputed(m.settings.precomputed),
+            SkyModelKind::Cells => Method::Cells(m.settings.cell_iterations as usize),
             SkyModelKind::Preetham => Method::Preetham,
             SkyModelKind::Hosek => Method::Hosek,
             other => bail!("--model: cannot bake from {}", other.name()),
@@ -571,12 +571,12 @@ fn model_override(sky: &Sky, f: &cli::FrameArgs) -> anyhow::Result<Option<skytun
     }
     model.drive_scene |= f.drive_scene;
     if f.auto_exposure {
-        model.auto_exposure = true;
-        model.exposure_ev = 0.0;
+        model.camera.auto_exposure = true;
+        model.camera.exposure_ev = 0.0;
     }
     if let Some(ev) = f.exposure_ev {
         anyhow::ensure!(ev.is_finite(), "--exposure-ev: expected a finite number of stops");
-        model.exposure_ev = ev;
+        model.camera.exposure_ev = ev;
     }
     Ok(Some(model))
 }
@@ -609,7 +609,7 @@ fn compare(args: &cli::CompareArgs) -> anyhow::Result<()> {
         if side.model.is_some() || side.exposure_ev.is_some() {
             let mut model = input.sky_model.unwrap_or(sky.model);
             model.kind = side.model.unwrap_or(model.kind);
-            model.exposure_ev = side.exposure_ev.unwrap_or(model.exposure_ev);
+            model.camera.exposure_ev = side.exposure_ev.unwrap_or(model.camera.exposure_ev);
             input.sky_model = Some(model);
         }
         let mut headless = Headless::new(ctx.clone(), w, h)?;

@@ -176,7 +176,7 @@ fn braun_cohen_layers_follow_the_light_in_the_frame() {
     sky.objects[galaxy].layer = Some(skytune::sky::model::LayerKind::Night);
     sky.objects[clouds].layer = Some(skytune::sky::model::LayerKind::Day);
     sky.model.kind = SkyModelKind::Linear;
-    sky.model.linear = LinearParams::preset("snow").unwrap();
+    sky.model.settings.linear = LinearParams::preset("snow").unwrap();
     let alpha = |hour: f32, index: usize, kind: SkyModelKind| {
         let input = FrameInput { sky_model: Some(skytune::sky::resolved::SkyModel { kind, ..sky.model }), ..FrameInput::new(hour, 0.0) };
         let f = sky.evaluate(&input);

@@ -61,9 +61,10 @@ fn auto_pick_meets_its_budget_against_the_reference_on_every_committed_sky() {
         for (w, atm) in auto_model::sky_atmospheres(&sky).iter().enumerate() {
             let reference = Reference::new(*atm, ReferenceSettings { paths: 2048, seed: 0xbeef + w as u64, ..Default::default() });
             let prepared = match pick.chosen.method {
-                Method::Preetham | Method::Hosek => {
-                    Prepared::Analytic(pick.chosen.method, skytune::measure::model_points::Fit { turbidity: model.turbidity as f64, scale: 1.0, units: model.analytic_units })
-                }
+                Method::Preetham | Method::Hosek => Prepared::Analytic(
+                    pick.chosen.method,
+                    skytune::measure::model_points::Fit { turbidity: model.settings.analytic.turbidity as f64, scale: 1.0, units: model.settings.analytic.units },
+                ),
                 m => ev.prepare(&m, atm, &[]).expect("prepared"),
             };
             for &hour in &hours {
@@ -188,7 +189,7 @@ fn auto_measures_at_the_skys_camera_altitude() {
     let ground = skytune::sky::builtin::default_sky();
     assert_eq!(ground.model.ground(), dome::Ground::BENCH, "the default sky is seen from the benchmark's ground: the committed reference serves it");
     let mut high = ground.clone();
-    high.model.camera_km = 5.0;
+    high.model.world.camera_km = 5.0;
     assert_ne!(auto_model::scores_key(&ground), auto_model::scores_key(&high), "the altitude is part of the scores' key");
     let job = skytune::support::progress::Job::new();
     let (low_scores, high_scores) = (auto_model::score(&ground, &ev, &job).expect("scored"), auto_model::score(&high, &ev, &job).expect("scored"));

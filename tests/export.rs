@@ -8,12 +8,12 @@ use skytune::files::export::{self, Format, CUBE_FACES};
 use skytune::render::{Camera, RenderOptions};
 use skytune::sky::builtin::default_sky;
 use skytune::sky::model::SkyModelKind;
-use skytune::sky::resolved::SkyModel;
+use skytune::sky::resolved::{CameraResponse, SkyModel};
 use skytune::sky::FrameInput;
 
 fn input(kind: SkyModelKind, exposure_ev: f32, hour: f32) -> FrameInput {
     let sky = default_sky();
-    FrameInput { sky_model: Some(SkyModel { kind, exposure_ev, ..sky.model }), ..FrameInput::new(hour, 0.0) }
+    FrameInput { sky_model: Some(SkyModel { kind, camera: CameraResponse { exposure_ev, ..sky.model.camera }, ..sky.model }), ..FrameInput::new(hour, 0.0) }
 }
 
 #[test]

@@ -224,8 +224,8 @@ fn sky_model_and_atmosphere_sections_load() {
     let (sky, _, _) = with_sections("[sky_model]\nkind = \"single\"\nexposure_ev = 4.5\ntone_mapper = \"neutral\"\noptical_depth = \"numerical\"\nview_steps = 48\n\n[atmosphere]\nmie_scattering_per_km = 0.02\nmie_extinction_per_km = 0.022\n");
     let sky = sky.unwrap();
     assert_eq!(sky.model.kind, skytune::sky::resolved::SkyModelKind::Single);
-    assert_eq!((sky.model.exposure_ev, sky.model.single.view_steps), (4.5, 48));
-    assert_eq!(sky.model.single.optical_depth, skytune::atmosphere::OpticalDepth::Numerical);
+    assert_eq!((sky.model.camera.exposure_ev, sky.model.settings.single.view_steps), (4.5, 48));
+    assert_eq!(sky.model.settings.single.optical_depth, skytune::atmosphere::OpticalDepth::Numerical);
     assert!((sky.atmosphere.mie_scattering_per_km[2] - 0.02).abs() < 1e-9 && sky.atmosphere.rayleigh_scale_height_km == 8.0);
     // Without the sections: the NeL bitmaps and Earth.
     assert_eq!(default_sky().model, skytune::sky::resolved::SkyModel::default());
@@ -338,16 +338,20 @@ fn aerosol_knobs_become_mie_coefficients() {
     let t = Atmosphere::default().rayleigh_optical_depth_550();
     assert!((Aerosol::of(&sky.atmosphere).optical_depth_550 - 2.0 * t).abs() < 1e-6);
     // ... and the analytic models take the atmosphere's turbidity.
-    assert!((sky.model.turbidity - 3.0).abs() < 1e-5, "{}", sky.model.turbidity);
+    assert!((sky.model.settings.analytic.turbidity - 3.0).abs() < 1e-5, "{}", sky.model.settings.analytic.turbidity);
     let (sky, _, _) = with_sections("[sky_model]\nkind = \"preetham\"\n\n[atmosphere]\naerosol = \"urban\"\n");
     let sky = sky.unwrap();
-    assert!((sky.model.turbidity as f64 - sky.atmosphere.turbidity()).abs() < 1e-4 && sky.model.turbidity > 5.0, "{}", sky.model.turbidity);
+    assert!(
+        (sky.model.settings.analytic.turbidity as f64 - sky.atmosphere.turbidity()).abs() < 1e-4 && sky.model.settings.analytic.turbidity > 5.0,
+        "{}",
+        sky.model.settings.analytic.turbidity
+    );
     let (sky, _, _) = with_sections("[sky_model]\nkind = \"preetham\"\nturbidity = 2\n\n[atmosphere]\naerosol = \"urban\"\n");
-    assert_eq!(sky.unwrap().model.turbidity, 2.0, "a stated turbidity wins");
+    assert_eq!(sky.unwrap().model.settings.analytic.turbidity, 2.0, "a stated turbidity wins");
     // The analytic models follow the weather steps' aerosol too.
     let (sky, _, _) = with_sections("[sky_model]\nkind = \"hosek\"\n\n[atmosphere]\naerosol = \"clean\"\n[[atmosphere.weather]]\n[[atmosphere.weather]]\naerosol = \"urban\"\n");
     let sky = sky.unwrap();
-    let turbidity = |w: f32| sky.evaluate(&skytune::sky::FrameInput::new(12.0, w)).sky_model.turbidity as f64;
+    let turbidity = |w: f32| sky.evaluate(&skytune::sky::FrameInput::new(12.0, w)).sky_model.settings.analytic.turbidity as f64;
     let (clean, urban) = (AerosolPreset::Clean.aerosol().apply(Atmosphere::default()), AerosolPreset::Urban.aerosol().apply(Atmosphere::default()));
     assert!((turbidity(0.0) - clean.turbidity()).abs() < 1e-4 && (turbidity(1.0) - urban.turbidity()).abs() < 1e-4, "{} {}", turbidity(0.0), turbidity(1.0));
     // A weather step changes the amount and keeps the preset's slope and albedo.
@@ -380,7 +384,7 @@ fn a_precomputed_sky_states_its_tables() {
     let (sky, _, _) = with_sections("[sky_model]\nkind = \"precomputed\"\n[sky_model.precomputed]\norders = 6\nscattering_size = [8, 16, 64, 16]\n");
     let model = sky.unwrap().model;
     assert_eq!(model.kind, skytune::sky::resolved::SkyModelKind::Precomputed);
-    assert_eq!((model.precomputed.orders, model.precomputed.scattering_size), (6, [8, 16, 64, 16]));
+    assert_eq!((model.settings.precomputed.orders, model.settings.precomputed.scattering_size), (6, [8, 16, 64, 16]));
     // Keys left out keep their defaults.
-    assert_eq!(model.precomputed.ray_steps, skytune::atmosphere::PrecomputedSettings::default().ray_steps);
+    assert_eq!(model.settings.precomputed.ray_steps, skytune::atmosphere::PrecomputedSettings::default().ray_steps);
 }

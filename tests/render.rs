@@ -265,7 +265,20 @@ fn switching_the_sky_model_live_leaves_the_bitmap_path_exact() {
     assert_eq!(maps(&h), n, "an unchanged sun, model and atmosphere reuse the map");
     h.frame(&sky, &FrameInput { hour: 14.0, ..single_input.clone() }, &camera(), &opts, 0.0);
     assert_eq!(maps(&h), n + 1, "the sun moved: the map is recomputed");
-    h.frame(&sky, &FrameInput { sky_model: Some(skytune::sky::resolved::SkyModel { exposure_ev: 3.0, ..single_model(&sky) }), ..single_input }, &camera(), &opts, 0.0);
+    h.frame(
+        &sky,
+        &FrameInput {
+            sky_model: Some({
+                let mut m = single_model(&sky);
+                m.camera.exposure_ev = 3.0;
+                m
+            }),
+            ..single_input
+        },
+        &camera(),
+        &opts,
+        0.0,
+    );
     assert_eq!(maps(&h), n + 2, "the exposure changed: the map is recomputed");
     h.ctx.wait_idle().unwrap();
 }
@@ -283,7 +296,7 @@ fn render_lut(name: &str, hour: f32, weather: f32) {
     let before = builds(&h);
     h.frame(&sky, &FrameInput { hour: hour + 0.5, ..input.clone() }, &camera(), &common::hdr_options(), 0.0);
     assert_eq!(builds(&h), before, "the sun moved: the LUTs stay");
-    let hazy = skytune::sky::resolved::SkyModel { ground_albedo: 0.8, ..model };
+    let hazy = skytune::sky::resolved::SkyModel { world: skytune::sky::resolved::World { ground_albedo: 0.8, ..model.world }, ..model };
     h.frame(&sky, &FrameInput { sky_model: Some(hazy), ..input }, &camera(), &common::hdr_options(), 0.0);
     assert_eq!(builds(&h), before + 1, "the ground albedo changed: the LUTs are rebuilt");
     h.ctx.wait_idle().unwrap();
@@ -314,7 +327,8 @@ fn precomputed_model_noon_sunset_twilight() {
         common::check_reference(name, &img);
     }
     assert_eq!(builds(&h), before + 1, "the sun moved: the tables were built once");
-    let smaller = SkyModel { precomputed: skytune::atmosphere::PrecomputedSettings::SMALL, ..model };
+    let mut smaller = model;
+    smaller.settings.precomputed = skytune::atmosphere::PrecomputedSettings::SMALL;
     h.frame(&sky, &FrameInput { sky_model: Some(smaller), ..FrameInput::new(12.0, 0.0) }, &camera(), &common::hdr_options(), 0.0);
     assert_eq!(builds(&h), before + 2, "the settings changed: the tables are rebuilt");
     h.frame(&sky, &FrameInput { sky_model: Some(smaller), ..FrameInput::new(12.5, 0.0) }, &camera(), &common::hdr_options(), 0.0);
@@ -375,8 +389,11 @@ fn automatic_exposure_adapts_to_the_sky() {
     h.set_sky(&sky).unwrap();
     let opts = RenderOptions { glare: false, scene: false, ..Default::default() };
     let mut brightness = |hour: f32, auto: bool| {
-        let model =
-            skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Lut, auto_exposure: auto, exposure_ev: if auto { 0.0 } else { 5.0 }, ..sky.model };
+        let model = skytune::sky::resolved::SkyModel {
+            kind: skytune::sky::resolved::SkyModelKind::Lut,
+            camera: skytune::sky::resolved::CameraResponse { auto_exposure: auto, exposure_ev: if auto { 0.0 } else { 5.0 }, ..sky.model.camera },
+            ..sky.model
+        };
         let img = h.render(&sky, &FrameInput { sky_model: Some(model), ..FrameInput::new(hour, 0.0) }, &camera(), &opts).unwrap();
         img.pixels().map(|p| p[0] as f64 + p[1] as f64 + p[2] as f64).sum::<f64>() / (3.0 * 255.0 * (W * H) as f64)
     };
@@ -393,7 +410,8 @@ fn reference_model_renders_in_the_background() {
     let mut h = common::headless(W, H);
     h.set_sky(&sky).unwrap();
     // Few paths on a coarse grid keep the test short; the app's defaults are 256 paths on 48 x 27.
-    let model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Reference, reference_paths: 8, reference_grid: [12, 6], ..sky.model };
+    let mut model = skytune::sky::resolved::SkyModel { kind: skytune::sky::resolved::SkyModelKind::Reference, ..sky.model };
+    model.settings.reference = skytune::sky::resolved::ReferenceSampling { paths: 8, grid: [12, 6] };
     let input = FrameInput { sky_model: Some(model), ..FrameInput::new(13.0, 0.0) };
     let opts = RenderOptions { glare: false, ..Default::default() };
     h.frame(&sky, &input, &camera(), &opts, 0.0);
@@ -466,7 +484,8 @@ fn physical_models_draw_through_the_hdr_target_and_keep_nel_layers_as_authored()
         h.set_sky(&sky).unwrap();
         let opts = RenderOptions { glare: false, strategy, ..Default::default() };
         let mut frame = |kind, tone_mapper| {
-            let model = skytune::sky::resolved::SkyModel { kind, tone_mapper, drive_scene: false, ..sky.model };
+            let model =
+                skytune::sky::resolved::SkyModel { kind, drive_scene: false, camera: skytune::sky::resolved::CameraResponse { tone_mapper, ..sky.model.camera }, ..sky.model };
             let img = h.render(&sky, &FrameInput { sky_model: Some(model), ..FrameInput::new(15.0, 0.0) }, &camera(), &opts).unwrap();
             (img, h.renderer.stats.draw_calls)
         };

@@ -500,51 +500,51 @@ fn sky_model_controls(ui: &mut egui::Ui, c: &mut Controls, sky: &Sky) {
         }
     });
     if model.kind == SkyModelKind::Linear {
-        linear_controls(ui, &mut model.linear);
+        linear_controls(ui, &mut model.settings.linear);
     } else if model.kind.is_physical() {
-        ui.checkbox(&mut model.auto_exposure, "automatic exposure (EV below compensates)");
+        ui.checkbox(&mut model.camera.auto_exposure, "automatic exposure (EV below compensates)");
         ui.checkbox(&mut model.drive_scene, "light the scene from the model (fog, ambient, sun)");
-        ui.add(egui::Slider::new(&mut model.exposure_ev, -4.0..=12.0).text("exposure (EV)"));
+        ui.add(egui::Slider::new(&mut model.camera.exposure_ev, -4.0..=12.0).text("exposure (EV)"));
         ui.horizontal_wrapped(|ui| {
             ui.label("tone mapper:");
             for t in ToneMapper::ALL {
-                ui.radio_value(&mut model.tone_mapper, t, t.name());
+                ui.radio_value(&mut model.camera.tone_mapper, t, t.name());
             }
         });
         if model.kind == SkyModelKind::Single {
             ui.horizontal_wrapped(|ui| {
                 ui.label("optical depth:");
-                ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Erf, "erf");
-                ui.radio_value(&mut model.single.optical_depth, OpticalDepth::Numerical, "numerical");
+                ui.radio_value(&mut model.settings.single.optical_depth, OpticalDepth::Erf, "erf");
+                ui.radio_value(&mut model.settings.single.optical_depth, OpticalDepth::Numerical, "numerical");
             });
         }
         if matches!(model.kind, SkyModelKind::Preetham | SkyModelKind::Hosek) {
-            if ui.add(egui::Slider::new(&mut model.turbidity, 1.0..=10.0).text("turbidity")).changed() {
-                model.turbidity_from_atmosphere = false;
+            if ui.add(egui::Slider::new(&mut model.settings.analytic.turbidity, 1.0..=10.0).text("turbidity")).changed() {
+                model.settings.analytic.turbidity_from_atmosphere = false;
             }
             if model.kind == SkyModelKind::Hosek {
-                ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
-            } else if (model.turbidity as f64) < crate::atmosphere::analytic::PREETHAM_MIN_TURBIDITY {
+                ui.add(egui::Slider::new(&mut model.world.ground_albedo, 0.0..=1.0).text("ground albedo"));
+            } else if (model.settings.analytic.turbidity as f64) < crate::atmosphere::analytic::PREETHAM_MIN_TURBIDITY {
                 ui.label(format!("below {} Preetham's fit goes negative: clamped", crate::atmosphere::analytic::PREETHAM_MIN_TURBIDITY));
             }
         } else if model.kind == SkyModelKind::Reference {
-            ui.add(egui::Slider::new(&mut model.reference_paths, 1..=1024).text("paths per direction"));
-            ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
+            ui.add(egui::Slider::new(&mut model.settings.reference.paths, 1..=1024).text("paths per direction"));
+            ui.add(egui::Slider::new(&mut model.world.ground_albedo, 0.0..=1.0).text("ground albedo"));
         } else if model.kind == SkyModelKind::Cells {
-            ui.add(egui::Slider::new(&mut model.cell_iterations, 1..=12).text("iterations"));
-            ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
+            ui.add(egui::Slider::new(&mut model.settings.cell_iterations, 1..=12).text("iterations"));
+            ui.add(egui::Slider::new(&mut model.world.ground_albedo, 0.0..=1.0).text("ground albedo"));
         } else if model.kind == SkyModelKind::Lut {
-            ui.add(egui::Slider::new(&mut model.lut.view_steps, 1..=256).text("view steps"));
-            ui.add(egui::Slider::new(&mut model.lut.multiscattering_grid, 1..=16).text("multiple-scattering directions (grid)"));
-            ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
+            ui.add(egui::Slider::new(&mut model.settings.lut.view_steps, 1..=256).text("view steps"));
+            ui.add(egui::Slider::new(&mut model.settings.lut.multiscattering_grid, 1..=16).text("multiple-scattering directions (grid)"));
+            ui.add(egui::Slider::new(&mut model.world.ground_albedo, 0.0..=1.0).text("ground albedo"));
         } else if model.kind == SkyModelKind::Precomputed {
             // Each change rebuilds the tables (seconds on a software rasteriser).
-            ui.add(egui::Slider::new(&mut model.precomputed.orders, 1..=crate::atmosphere::PrecomputedSettings::MAX_ORDERS).text("scattering orders"));
-            ui.add(egui::Slider::new(&mut model.ground_albedo, 0.0..=1.0).text("ground albedo"));
+            ui.add(egui::Slider::new(&mut model.settings.precomputed.orders, 1..=crate::atmosphere::PrecomputedSettings::MAX_ORDERS).text("scattering orders"));
+            ui.add(egui::Slider::new(&mut model.world.ground_albedo, 0.0..=1.0).text("ground albedo"));
         } else {
-            ui.add(egui::Slider::new(&mut model.single.view_steps, 1..=256).text("view steps"));
-            if model.single.optical_depth == OpticalDepth::Numerical {
-                ui.add(egui::Slider::new(&mut model.single.sun_steps, 1..=256).text("sun steps"));
+            ui.add(egui::Slider::new(&mut model.settings.single.view_steps, 1..=256).text("view steps"));
+            if model.settings.single.optical_depth == OpticalDepth::Numerical {
+                ui.add(egui::Slider::new(&mut model.settings.single.sun_steps, 1..=256).text("sun steps"));
             }
         }
     }

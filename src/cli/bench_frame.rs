@@ -428,7 +428,7 @@ fn with_models(skies: Vec<(String, Sky)>, models: &[SkyModelKind]) -> Vec<(Strin
                 if *k == SkyModelKind::Precomputed {
                     // A frame's cost does not depend on the tables' size, their build does: the
                     // default tables take 80 s to build on lavapipe, these a few seconds.
-                    copy.model.precomputed = skytune::atmosphere::PrecomputedSettings::SMALL;
+                    copy.model.settings.precomputed = skytune::atmosphere::PrecomputedSettings::SMALL;
                 }
                 copy
             });

@@ -16,7 +16,7 @@ use skytune::measure::model_points::{self, ChartRow, Evaluator, FitTarget, Metho
 use skytune::render::passes::baseline::Baseline;
 use skytune::render::{AdapterChoice, Camera, GpuContext, Headless, RenderOptions, ShaderLibrary, OFFSCREEN_FORMAT};
 use skytune::sky::builtin::default_sky;
-use skytune::sky::resolved::{SkyModel, SkyModelKind};
+use skytune::sky::resolved::{ModelSettings, SkyModel, SkyModelKind};
 use skytune::sky::{FrameInput, Sky};
 use skytune::support::progress::Reporter;
 use skytune::support::shard::Shard;
@@ -72,17 +72,19 @@ enum Draw {
 
 fn draw_of(method: &Method) -> Draw {
     let with = |kind| SkyModel { kind, ..SkyModel::default() };
+    let with_settings = |kind, settings| SkyModel { kind, settings, ..SkyModel::default() };
+    let defaults = ModelSettings::default();
     match *method {
-        Method::Single(s) => Draw::Model(SkyModel { single: s, ..with(SkyModelKind::Single) }),
-        Method::Lut(s) => Draw::Model(SkyModel { lut: s, ..with(SkyModelKind::Lut) }),
+        Method::Single(single) => Draw::Model(with_settings(SkyModelKind::Single, ModelSettings { single, ..defaults })),
+        Method::Lut(lut) => Draw::Model(with_settings(SkyModelKind::Lut, ModelSettings { lut, ..defaults })),
         // Every table size and order count is looked up alike (16 texels per table and pixel): one
         // measurement per storage precision, with the small tables (quick to build), so that the
         // frames do not rebuild tables between the points; the build itself is the point's
         // `build_ms`.
-        Method::Precomputed(s) => Draw::Model(SkyModel {
-            precomputed: skytune::atmosphere::PrecomputedSettings { precision: s.precision, ..skytune::atmosphere::PrecomputedSettings::SMALL },
-            ..with(SkyModelKind::Precomputed)
-        }),
+        Method::Precomputed(s) => Draw::Model(with_settings(
+            SkyModelKind::Precomputed,
+            ModelSettings { precomputed: skytune::atmosphere::PrecomputedSettings { precision: s.precision, ..skytune::atmosphere::PrecomputedSettings::SMALL }, ..defaults },
+        )),
         Method::Preetham => Draw::Model(with(SkyModelKind::Preetham)),
         Method::Hosek => Draw::Model(with(SkyModelKind::Hosek)),
         Method::Linear => Draw::Model(with(SkyModelKind::Linear)),

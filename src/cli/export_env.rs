@@ -154,7 +154,7 @@ fn sun_json(sky: &Sky, input: &skytune::sky::FrameInput) -> String {
     let azimuth = d.x.atan2(-d.z).to_degrees().rem_euclid(360.0);
     let atm = frame.atmosphere;
     let (irradiance, units) = if frame.sky_model.kind.is_physical() {
-        let camera_km = f64::from(frame.sky_model.camera_km);
+        let camera_km = f64::from(frame.sky_model.world.camera_km);
         let tau = skytune::atmosphere::reference::Reference::new(atm, Default::default()).optical_depth(camera_km, f64::from(elevation));
         (
             tau.map(|t| if t.is_finite() { (-t).exp() } else { 0.0 }),

@@ -82,15 +82,37 @@ impl Pick {
     /// The sky model the pick stands for, from `base` (exposure, tone mapper, ...).
     pub fn model(&self, base: &SkyModel) -> SkyModel {
         let c = &self.chosen;
-        match c.method {
-            Method::Single(s) => SkyModel { kind: SkyModelKind::Single, single: s, ..*base },
-            Method::Lut(s) => SkyModel { kind: SkyModelKind::Lut, lut: s, ..*base },
-            Method::Precomputed(s) => SkyModel { kind: SkyModelKind::Precomputed, precomputed: s, ..*base },
-            Method::Cells(i) => SkyModel { kind: SkyModelKind::Cells, cell_iterations: i as u32, ..*base },
-            Method::Preetham => SkyModel { kind: SkyModelKind::Preetham, turbidity: c.turbidity as f32, turbidity_from_atmosphere: false, ..*base },
-            Method::Hosek => SkyModel { kind: SkyModelKind::Hosek, turbidity: c.turbidity as f32, turbidity_from_atmosphere: false, ..*base },
-            _ => *base,
-        }
+        let mut m = *base;
+        let s = &mut m.settings;
+        m.kind = match c.method {
+            Method::Single(single) => {
+                s.single = single;
+                SkyModelKind::Single
+            }
+            Method::Lut(lut) => {
+                s.lut = lut;
+                SkyModelKind::Lut
+            }
+            Method::Precomputed(precomputed) => {
+                s.precomputed = precomputed;
+                SkyModelKind::Precomputed
+            }
+            Method::Cells(i) => {
+                s.cell_iterations = i as u32;
+                SkyModelKind::Cells
+            }
+            Method::Preetham | Method::Hosek => {
+                s.analytic.turbidity = c.turbidity as f32;
+                s.analytic.turbidity_from_atmosphere = false;
+                if c.method == Method::Preetham {
+                    SkyModelKind::Preetham
+                } else {
+                    SkyModelKind::Hosek
+                }
+            }
+            _ => return *base,
+        };
+        m
     }
 }
 
@@ -357,7 +379,7 @@ fn score_from(sky: &Sky, ev: &Evaluator<'_>, job: &Job, known: Option<Scores>, u
         for (w, (atm, refs)) in atmospheres.iter().zip(&references).enumerate() {
             let targets: Vec<FitTarget<'_>> = suns.iter().zip(refs).map(|(s, r)| FitTarget { sun_elev_deg: *s, dirs: &dirs, radiance: r }).collect();
             // Analytic models render in the sky's units: fit the turbidity only (scale 1).
-            let units = sky.model.analytic_units;
+            let units = sky.model.settings.analytic.units;
             let prepared = match point.method {
                 Method::Preetham | Method::Hosek => {
                     let t = ev.fit_turbidity_unscaled(&point.method, units, &targets)?;
@@ -407,7 +429,7 @@ pub fn scores_key(sky: &Sky) -> u64 {
         hash_of(&model_points::COMMITTED_CSV),
         dome::ReferenceDome::header(dome::committed_settings(), dome::BENCH_DOME),
         sky.model.ground(),
-        sky.model.analytic_units,
+        sky.model.settings.analytic.units,
     ))
 }
 

@@ -44,7 +44,9 @@ pub fn bake(ev: &Evaluator<'_>, sky: &Sky, method: Method, rows: usize, weathers
     let prepared: Vec<Prepared> = atmospheres
         .iter()
         .map(|atm| match method {
-            Method::Preetham | Method::Hosek => Ok(Prepared::Analytic(method, Fit { turbidity: sky.model.turbidity as f64, scale: 1.0, units: sky.model.analytic_units })),
+            Method::Preetham | Method::Hosek => {
+                Ok(Prepared::Analytic(method, Fit { turbidity: sky.model.settings.analytic.turbidity as f64, scale: 1.0, units: sky.model.settings.analytic.units }))
+            }
             m => ev.prepare(&m, atm, &[]),
         })
         .collect::<anyhow::Result<_>>()?;
@@ -146,10 +148,10 @@ pub fn bake_target(sky: &Sky, key: &str) -> Option<BakeTarget> {
 pub fn method_of(model: &crate::sky::resolved::SkyModel) -> Option<Method> {
     use crate::sky::model::SkyModelKind as K;
     match model.kind {
-        K::Single => Some(Method::Single(model.single)),
-        K::Lut => Some(Method::Lut(model.lut)),
-        K::Precomputed => Some(Method::Precomputed(model.precomputed)),
-        K::Cells => Some(Method::Cells(model.cell_iterations as usize)),
+        K::Single => Some(Method::Single(model.settings.single)),
+        K::Lut => Some(Method::Lut(model.settings.lut)),
+        K::Precomputed => Some(Method::Precomputed(model.settings.precomputed)),
+        K::Cells => Some(Method::Cells(model.settings.cell_iterations as usize)),
         K::Preetham => Some(Method::Preetham),
         K::Hosek => Some(Method::Hosek),
         _ => None,

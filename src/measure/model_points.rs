@@ -499,10 +499,10 @@ pub fn point_for(model: &crate::sky::resolved::SkyModel) -> Option<String> {
     use crate::sky::resolved::SkyModelKind;
     let all = points();
     let exact = all.iter().find(|p| match p.method {
-        Method::Single(s) => model.kind == SkyModelKind::Single && model.single == s,
-        Method::Lut(s) => model.kind == SkyModelKind::Lut && model.lut == s,
-        Method::Precomputed(s) => model.kind == SkyModelKind::Precomputed && model.precomputed == s,
-        Method::Cells(i) => model.kind == SkyModelKind::Cells && model.cell_iterations as usize == i,
+        Method::Single(s) => model.kind == SkyModelKind::Single && model.settings.single == s,
+        Method::Lut(s) => model.kind == SkyModelKind::Lut && model.settings.lut == s,
+        Method::Precomputed(s) => model.kind == SkyModelKind::Precomputed && model.settings.precomputed == s,
+        Method::Cells(i) => model.kind == SkyModelKind::Cells && model.settings.cell_iterations as usize == i,
         Method::Preetham => model.kind == SkyModelKind::Preetham,
         Method::Hosek => model.kind == SkyModelKind::Hosek,
         Method::Linear => model.kind == SkyModelKind::Linear,

@@ -37,13 +37,13 @@ impl Sky {
 
         let mut sky_model = input.sky_model.unwrap_or(self.model);
         let atmosphere = crate::atmosphere::Atmosphere::at_weather(&self.atmosphere_by_weather, weather as f64).unwrap_or(self.atmosphere);
-        if sky_model.turbidity_from_atmosphere {
-            sky_model.turbidity = atmosphere.turbidity().clamp(1.0, 10.0) as f32;
+        if sky_model.settings.analytic.turbidity_from_atmosphere {
+            sky_model.settings.analytic.turbidity = atmosphere.turbidity().clamp(1.0, 10.0) as f32;
         }
         // Braun and Cohen's layers: alpha from the light factor (equations 3 and 4).
         let layer_alpha = |layer: Option<super::model::LayerKind>| -> f32 {
             match (sky_model.kind, layer) {
-                (super::model::SkyModelKind::Linear, Some(kind)) => sky_model.linear.layer_alpha(hour as f64, kind == super::model::LayerKind::Night) as f32,
+                (super::model::SkyModelKind::Linear, Some(kind)) => sky_model.settings.linear.layer_alpha(hour as f64, kind == super::model::LayerKind::Night) as f32,
                 _ => 1.0,
             }
         };

@@ -370,22 +370,26 @@ impl Validator<'_> {
                     ModelChoice::Model(k) => k,
                     ModelChoice::Auto => SkyModelKind::Lut,
                 },
-                single: crate::atmosphere::SingleSettings { view_steps: m.view_steps.0, sun_steps: m.sun_steps.0, optical_depth: m.optical_depth },
-                exposure_ev: m.exposure_ev.map_or(if m.auto_exposure { 0.0 } else { 5.0 }, |e| e.get()),
-                tone_mapper: m.tone_mapper,
-                camera_km: m.camera_km.get(),
-                lut,
-                precomputed: m.precomputed.as_ref().map_or_else(Default::default, |p| p.settings()),
-                ground_albedo: m.ground_albedo.get(),
-                cell_iterations: m.cell_iterations.map_or(6, |s| s.0),
-                auto_exposure: m.auto_exposure,
-                reference_paths: m.reference_paths.map_or(256, |s| s.0),
-                reference_grid: m.reference_grid.map_or([48, 27], |[a, b]| [a.0.max(2), b.0.max(2)]),
                 drive_scene: m.drive_scene,
-                turbidity: m.turbidity.map_or(crate::atmosphere::analytic::DEFAULT_TURBIDITY as f32, |t| t.get()),
-                turbidity_from_atmosphere: false,
-                analytic_units: m.analytic_units,
-                linear: crate::atmosphere::analytic::LinearParams { hours_per_day: hours as f64, ..m.linear.as_ref().map_or_else(Default::default, |l| self.linear(l)) },
+                settings: ModelSettings {
+                    single: crate::atmosphere::SingleSettings { view_steps: m.view_steps.0, sun_steps: m.sun_steps.0, optical_depth: m.optical_depth },
+                    lut,
+                    precomputed: m.precomputed.as_ref().map_or_else(Default::default, |p| p.settings()),
+                    cell_iterations: m.cell_iterations.map_or(6, |s| s.0),
+                    reference: ReferenceSampling { paths: m.reference_paths.map_or(256, |s| s.0), grid: m.reference_grid.map_or([48, 27], |[a, b]| [a.0.max(2), b.0.max(2)]) },
+                    analytic: AnalyticSettings {
+                        turbidity: m.turbidity.map_or(crate::atmosphere::analytic::DEFAULT_TURBIDITY as f32, |t| t.get()),
+                        turbidity_from_atmosphere: false,
+                        units: m.analytic_units,
+                    },
+                    linear: crate::atmosphere::analytic::LinearParams { hours_per_day: hours as f64, ..m.linear.as_ref().map_or_else(Default::default, |l| self.linear(l)) },
+                },
+                camera: CameraResponse {
+                    exposure_ev: m.exposure_ev.map_or(if m.auto_exposure { 0.0 } else { 5.0 }, |e| e.get()),
+                    auto_exposure: m.auto_exposure,
+                    tone_mapper: m.tone_mapper,
+                },
+                world: World { camera_km: m.camera_km.get(), ground_albedo: m.ground_albedo.get() },
             }
         });
         let auto_model = match f.sky_model.as_ref() {
@@ -398,13 +402,13 @@ impl Validator<'_> {
             }
             None => None,
         };
-        if model.cell_iterations > 32 {
-            self.err_in("[sky_model]", "cell_iterations", "sky_model.cell_iterations", format!("expected 1..=32, found {}", model.cell_iterations));
+        if model.settings.cell_iterations > 32 {
+            self.err_in("[sky_model]", "cell_iterations", "sky_model.cell_iterations", format!("expected 1..=32, found {}", model.settings.cell_iterations));
         }
-        if let Err(e) = model.lut.validate() {
+        if let Err(e) = model.settings.lut.validate() {
             self.err_in("[sky_model]", e.field, &format!("sky_model.{}", e.field), e.message);
         }
-        if let Err(e) = model.precomputed.validate() {
+        if let Err(e) = model.settings.precomputed.validate() {
             self.err_in("[sky_model.precomputed]", e.field, &format!("sky_model.precomputed.{}", e.field), e.message);
         }
         let atmosphere = match f.atmosphere.as_ref().map(|a| a.apply(crate::atmosphere::Atmosphere::default(), None)) {
@@ -437,10 +441,10 @@ impl Validator<'_> {
         // aerosol is written out sets their turbidity unless [sky_model] states one.
         let stated_turbidity = f.sky_model.as_ref().is_some_and(|m| m.turbidity.is_some());
         if !stated_turbidity && f.atmosphere.as_ref().is_some_and(|a| a.states_aerosol()) {
-            model.turbidity = atmosphere.turbidity().clamp(1.0, 10.0) as f32;
-            model.turbidity_from_atmosphere = true;
+            model.settings.analytic.turbidity = atmosphere.turbidity().clamp(1.0, 10.0) as f32;
+            model.settings.analytic.turbidity_from_atmosphere = true;
         }
-        if model.camera_km as f64 >= atmosphere.thickness_km() {
+        if model.world.camera_km as f64 >= atmosphere.thickness_km() {
             self.err_in("[sky_model]", "camera_km", "sky_model.camera_km", format!("expected an altitude below the top of the atmosphere ({} km)", atmosphere.thickness_km()));
         }
 

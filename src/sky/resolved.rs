@@ -13,6 +13,7 @@ pub struct Budget {
 }
 
 pub use super::model::{BlendMode, ColorMode, Lighting, RefColor, Shape, SkyModelKind, StageOp, ToneMapper, UvSource};
+pub use super::sky_model::{AnalyticSettings, CameraResponse, ModelSettings, ReferenceSampling, SkyModel, World};
 
 /// Most texture stages a material may use (the best GPU tier).
 pub const MAX_STAGES: usize = 4;
@@ -75,93 +76,6 @@ pub struct Sky {
     pub auto_model: Option<Budget>,
     /// What the loader found questionable without refusing the sky (file, line and field each).
     pub warnings: Vec<super::error::SkyError>,
-}
-
-/// A skydome colour source and its settings.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SkyModel {
-    /// Which model.
-    pub kind: SkyModelKind,
-    /// `single` settings.
-    pub single: crate::atmosphere::SingleSettings,
-    /// Exposure of physical models, stops.
-    pub exposure_ev: f32,
-    /// Tone mapper of physical models.
-    pub tone_mapper: ToneMapper,
-    /// Viewer altitude, km.
-    pub camera_km: f32,
-    /// `lut` settings.
-    pub lut: crate::atmosphere::LutSettings,
-    /// `precomputed` settings.
-    pub precomputed: crate::atmosphere::PrecomputedSettings,
-    /// Ground albedo of multiple scattering.
-    pub ground_albedo: f32,
-    /// `cells` refinement iterations.
-    pub cell_iterations: u32,
-    /// Expose for the sky's mean luminance (then `exposure_ev` is a compensation).
-    pub auto_exposure: bool,
-    /// `reference`: Monte Carlo paths per direction.
-    pub reference_paths: u32,
-    /// `reference`: the coarse grid of directions (azimuths, elevations).
-    pub reference_grid: [u32; 2],
-    /// The model also lights the main scene (fog colour, sun ambient and diffuse).
-    pub drive_scene: bool,
-    /// `preetham`, `hosek`: turbidity.
-    pub turbidity: f32,
-    /// `preetham`, `hosek`: the turbidity is the atmosphere's at the frame's weather (its
-    /// `[atmosphere]` states the aerosol and `[sky_model]` no turbidity); moving the window's
-    /// turbidity slider ends it.
-    pub turbidity_from_atmosphere: bool,
-    /// `preetham`, `hosek`: the unit of their radiance (calibrated to the physical models'
-    /// by default).
-    pub analytic_units: crate::atmosphere::analytic::AnalyticUnits,
-    /// `linear`: Braun and Cohen's parameters.
-    pub linear: crate::atmosphere::analytic::LinearParams,
-}
-
-impl SkyModel {
-    /// Where the sky is seen from: its camera's altitude and ground albedo, each read as the
-    /// decimal the file wrote (0.3, not the f32's 0.30000001), so that the benchmark's ground
-    /// ([`crate::atmosphere::dome::Ground::BENCH`]) is recognised and its reference used.
-    pub fn ground(&self) -> crate::atmosphere::dome::Ground {
-        let decimal = |x: f32| x.to_string().parse::<f64>().unwrap_or(f64::from(x));
-        crate::atmosphere::dome::Ground { camera_km: decimal(self.camera_km), albedo: decimal(self.ground_albedo) }
-    }
-
-    /// The analytic model this is, if it is one.
-    pub fn analytic(&self) -> Option<crate::atmosphere::analytic::AnalyticModel> {
-        use crate::atmosphere::analytic::AnalyticModel;
-        match self.kind {
-            SkyModelKind::Preetham => Some(AnalyticModel::Preetham { turbidity: self.turbidity as f64, units: self.analytic_units }),
-            SkyModelKind::Hosek => Some(AnalyticModel::Hosek { turbidity: self.turbidity as f64, albedo: self.ground_albedo as f64, units: self.analytic_units }),
-            SkyModelKind::Linear => Some(AnalyticModel::Linear(self.linear)),
-            _ => None,
-        }
-    }
-}
-
-impl Default for SkyModel {
-    fn default() -> Self {
-        Self {
-            kind: SkyModelKind::Bitmap,
-            single: Default::default(),
-            exposure_ev: 5.0,
-            tone_mapper: ToneMapper::Aces,
-            camera_km: 0.0,
-            lut: Default::default(),
-            precomputed: Default::default(),
-            ground_albedo: 0.3,
-            cell_iterations: 6,
-            auto_exposure: false,
-            reference_paths: 256,
-            reference_grid: [48, 27],
-            drive_scene: false,
-            turbidity: crate::atmosphere::analytic::DEFAULT_TURBIDITY as f32,
-            turbidity_from_atmosphere: false,
-            analytic_units: Default::default(),
-            linear: Default::default(),
-        }
-    }
 }
 
 /// A named path over the day.

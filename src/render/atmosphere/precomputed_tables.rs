@@ -304,8 +304,8 @@ impl Pass for PrecomputedTablesPass {
             self.building = None;
             return;
         }
-        let header = PrecomputedHeader::new(&model.precomputed, model.ground_albedo);
-        let key = (AtmosphereUniform::from(&cx.frame.atmosphere), header, model.precomputed.orders);
+        let header = PrecomputedHeader::new(&model.settings.precomputed, model.world.ground_albedo);
+        let key = (AtmosphereUniform::from(&cx.frame.atmosphere), header, model.settings.precomputed.orders);
         let current = self.building.as_ref().map(|b| b.key).or(self.built);
         if current == Some(key) && (cx.options.skips.unchanged_tables || self.building.is_some()) {
             self.skipped = self.building.is_none();
@@ -314,7 +314,7 @@ impl Pass for PrecomputedTablesPass {
                 TableBuilds::AtOnce => 1,
                 TableBuilds::Spread { slices } => slices,
             };
-            self.steps = build_steps(&model.precomputed, slices);
+            self.steps = build_steps(&model.settings.precomputed, slices);
             cx.queue.write_buffer(&self.tables, 0, bytemuck::bytes_of(&header));
             self.builder.current.write_steps(cx.queue, &self.steps);
             self.building = Some(Building { key, next: 0 });

@@ -122,14 +122,14 @@ impl Pass for SkyLutsPass {
         if !model.kind.is_physical() {
             return;
         }
-        let key = (AtmosphereUniform::from(&cx.frame.atmosphere), LutUniform::new(&model.lut, model.ground_albedo, cx.frame.atmosphere.mie_g));
+        let key = (AtmosphereUniform::from(&cx.frame.atmosphere), LutUniform::new(&model.settings.lut, model.world.ground_albedo, cx.frame.atmosphere.mie_g));
         if self.built == Some(key) && cx.options.skips.unchanged_tables {
             self.skipped = true;
             return;
         }
         cx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&key.1));
         self.built = Some(key);
-        self.settings = model.lut;
+        self.settings = model.settings.lut;
         self.dirty = true;
         self.builds += 1;
     }

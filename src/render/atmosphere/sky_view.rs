@@ -69,11 +69,11 @@ impl From<(&SkyModel, glam::Vec3)> for SkyViewParams {
         };
         // Braun and Cohen's colours are display values: no exposure, the tone mapper's inverse.
         let display_referred = model.kind == SkyModelKind::Linear;
-        let exposure = if display_referred { 1.0 } else { model.exposure_ev.exp2() };
-        let auto = model.auto_exposure && !display_referred;
+        let exposure = if display_referred { 1.0 } else { model.camera.exposure_ev.exp2() };
+        let auto = model.camera.auto_exposure && !display_referred;
         Self {
-            towards_sun: towards_sun.extend(model.camera_km).to_array(),
-            exposure: [exposure, crate::render::passes::tone_map::ToneMapUniform::from(model.tone_mapper).settings[0] as f32, w as f32, h as f32],
+            towards_sun: towards_sun.extend(model.world.camera_km).to_array(),
+            exposure: [exposure, crate::render::passes::tone_map::ToneMapUniform::from(model.camera.tone_mapper).settings[0] as f32, w as f32, h as f32],
             model: [kind, if auto { 1.0 } else { 0.0 }, 0.0, 0.0],
         }
     }
@@ -346,12 +346,12 @@ impl SkyViewPass {
             let job = CpuJob {
                 id: self.next_job,
                 atmosphere: cx.frame.atmosphere,
-                albedo: model.ground_albedo as f64,
+                albedo: model.world.ground_albedo as f64,
                 model: match model.kind {
-                    SkyModelKind::Reference => CpuModel::Reference { paths: model.reference_paths, grid: model.reference_grid },
-                    _ => CpuModel::Cells(CellSettings { iterations: model.cell_iterations as usize, ..Default::default() }),
+                    SkyModelKind::Reference => CpuModel::Reference { paths: model.settings.reference.paths, grid: model.settings.reference.grid },
+                    _ => CpuModel::Cells(CellSettings { iterations: model.settings.cell_iterations as usize, ..Default::default() }),
                 },
-                camera_km: model.camera_km as f64,
+                camera_km: model.world.camera_km as f64,
                 towards_sun: cx.frame.towards_sun.as_dvec3(),
             };
             if worker.jobs.send(job).is_err() {
@@ -463,14 +463,14 @@ impl SkyViewPass {
         }
         let key = Key {
             atmosphere: (&cx.frame.atmosphere).into(),
-            single: (&model.single).into(),
-            lut: LutUniform::new(&model.lut, model.ground_albedo, cx.frame.atmosphere.mie_g),
-            precomputed: PrecomputedHeader::new(&model.precomputed, model.ground_albedo),
+            single: (&model.settings.single).into(),
+            lut: LutUniform::new(&model.settings.lut, model.world.ground_albedo, cx.frame.atmosphere.mie_g),
+            precomputed: PrecomputedHeader::new(&model.settings.precomputed, model.world.ground_albedo),
             precomputed_generation: self.precomputed_state.generation.load(Ordering::Relaxed),
             params: (model, cx.frame.towards_sun).into(),
             cpu: match model.kind {
-                SkyModelKind::Reference => [model.reference_paths, model.reference_grid[0], model.reference_grid[1]],
-                _ => [model.cell_iterations, 0, 0],
+                SkyModelKind::Reference => [model.settings.reference.paths, model.settings.reference.grid[0], model.settings.reference.grid[1]],
+                _ => [model.settings.cell_iterations, 0, 0],
             },
             analytic: model.analytic().map_or([[0.0; 4]; 12], |m| m.coefficients(cx.frame.towards_sun.as_dvec3().to_array(), cx.frame.hour as f64).vectors),
         };

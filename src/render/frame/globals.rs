@@ -62,7 +62,7 @@ impl Globals {
             depth: [0.0, 1.0, Camera::NEAR_M, Camera::FAR_M],
             output: [
                 if target == crate::render::frame::pass::Target::Hdr { 1.0 } else { 0.0 },
-                crate::render::passes::tone_map::ToneMapUniform::from(frame.sky_model.tone_mapper).settings[0] as f32,
+                crate::render::passes::tone_map::ToneMapUniform::from(frame.sky_model.camera.tone_mapper).settings[0] as f32,
                 if matched { 1.0 } else { 0.0 },
                 0.0,
             ],

@@ -98,7 +98,7 @@ impl Pass for ToneMapPass {
             });
             self.bound = Some((bind_group, generation));
         }
-        cx.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&ToneMapUniform::from(cx.frame.sky_model.tone_mapper)));
+        cx.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&ToneMapUniform::from(cx.frame.sky_model.camera.tone_mapper)));
         self.active = true;
     }
 

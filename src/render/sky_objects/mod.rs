@@ -451,7 +451,7 @@ impl Pass for SkyObjectsPass {
         self.missing_pipelines.set(0);
         self.background_rects.set(0);
         let Some(draws) = &self.draws.current else { return };
-        let neutral = crate::render::passes::tone_map::ToneMapUniform::from(cx.frame.sky_model.tone_mapper).settings[0] != 0;
+        let neutral = crate::render::passes::tone_map::ToneMapUniform::from(cx.frame.sky_model.camera.tone_mapper).settings[0] != 0;
         self.keys.clear();
         let shading = FrameShading { target: cx.target, matched: cx.matched, neutral_tone: neutral, curves: cx.options.strategy.display_curves };
         self.stages_skipped = draws.prepare(cx.queue, cx.frame, cx.camera, cx.options.skips.dark_stages, shading, &mut self.keys);
