@@ -192,6 +192,15 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             (c.camera_km, c.albedo) = (g.camera_km, g.albedo);
         }
     }
+    let finite = cases::has_finite_rays(&all);
+    // The runtime models answer finite rays through the renderer's aerial-perspective volume
+    // (issue 67); until it exists only the reference stops a ray short.
+    anyhow::ensure!(
+        !finite || args.model == SkyModelKind::Reference,
+        "{}: distance_km: --model {} answers rays to the edge of the atmosphere only; finite rays are answered by --model reference",
+        args.cases.display(),
+        args.model.name()
+    );
     let shard = args.shard.unwrap_or(Shard::WHOLE);
     let list = shard.take(&all);
     // Everything a shard's rows depend on: its arguments but where it writes, and its cases.
@@ -206,7 +215,11 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     }
     let started = std::time::Instant::now();
     let units: std::borrow::Cow<str> =
-        format!("sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); {}; sun disc and ground surface excluded", atmosphere_line)
+        if finite {
+            format!("radiance scattered into each view ray before distance_km (empty: the edge of the atmosphere), in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere), and the ray's transmittance t_r,t_g,t_b; the surface at the distance emits and reflects nothing; {}; sun disc and ground surface excluded", atmosphere_line)
+        } else {
+            format!("sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); {}; sun disc and ground surface excluded", atmosphere_line)
+        }
             .into();
     // The reference's standard errors and paths, written beside its radiance.
     let mut estimates = None;

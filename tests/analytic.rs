@@ -19,7 +19,7 @@ fn grid() -> Vec<Case> {
     for sun in [-18.0, -6.0, -0.5, 0.0, 2.0, 10.0, 30.0, 60.0, 89.0] {
         for view in [-30.0, -1.0, 0.0, 1.0, 5.0, 20.0, 45.0, 90.0] {
             for az in [0.0, 1.0, 45.0, 120.0, 180.0] {
-                cases.push(Case { camera_km: 0.0, albedo: 0.3, sun_elev_deg: sun, view_elev_deg: view, rel_azimuth_deg: az });
+                cases.push(Case { camera_km: 0.0, albedo: 0.3, sun_elev_deg: sun, view_elev_deg: view, rel_azimuth_deg: az, distance_km: None });
             }
         }
     }

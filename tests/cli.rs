@@ -256,6 +256,40 @@ fn radiance_answers_every_case_and_locates_bad_rows() {
 }
 
 #[test]
+fn radiance_stops_rays_at_a_distance_and_reports_their_transmittance() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = dir.path().join("cases.csv");
+    let header = "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg,distance_km\n";
+    std::fs::write(&cases, format!("{header}0,0.3,30,2,90,\n0,0.3,30,2,90,1\n0,0.3,30,2,90,20\n")).unwrap();
+    let out = dir.path().join("out.csv");
+    let o = skytune().args(["radiance", "--model", "reference", "--max-order", "1", "--cases"]).arg(&cases).arg("--out").arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.lines().any(|l| l == "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg,distance_km,r,g,b,t_r,t_g,t_b,se_r,se_g,se_b,paths"), "{text}");
+    let rows: Vec<Vec<Option<f64>>> = text.lines().filter(|l| !l.starts_with('#')).skip(1).map(|l| l.split(',').map(|x| x.parse().ok()).collect()).collect();
+    assert_eq!(rows.len(), 3);
+    assert_eq!((rows[0][5], rows[1][5], rows[2][5]), (None, Some(1.0), Some(20.0)), "the distance is repeated, empty for the edge");
+    let [sky, near, far] = [0, 1, 2].map(|k| rows[k][6..12].iter().map(|x| x.unwrap()).collect::<Vec<f64>>());
+    for c in 0..3 {
+        // The in-scatter grows with the distance towards the sky's; the transmittance falls.
+        assert!(0.0 < near[c] && near[c] < far[c] && far[c] < sky[c], "{near:?} {far:?} {sky:?}");
+        assert!(1.0 > near[c + 3] && near[c + 3] > far[c + 3] && far[c + 3] > sky[c + 3], "{near:?} {far:?} {sky:?}");
+    }
+    // Blue light is scattered, and lost, fastest.
+    assert!(far[2] > far[0] && far[5] < far[3], "{far:?}");
+
+    // A bad distance names its line; a model that cannot stop a ray short says so.
+    std::fs::write(&cases, format!("{header}0,0.3,30,2,90,1\n0,0.3,30,2,90,-4\n")).unwrap();
+    let o = skytune().args(["radiance", "--model", "reference", "--cases"]).arg(&cases).arg("--out").arg(&out).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("cases.csv:3: distance_km: expected a distance > 0 km"), "{stderr}");
+    std::fs::write(&cases, format!("{header}0,0.3,30,2,90,1\n")).unwrap();
+    let o = skytune().args(["radiance", "--model", "cells", "--cases"]).arg(&cases).arg("--out").arg(&out).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("distance_km: --model cells answers rays to the edge of the atmosphere only"), "{stderr}");
+}
+
+#[test]
 fn radiance_progress_in_a_log_is_whole_lines() {
     let dir = tempfile::tempdir().unwrap();
     let cases = dir.path().join("cases.csv");

@@ -13,7 +13,7 @@ fn grid() -> Vec<Case> {
     for sun in [-6.0, -2.0, 0.0, 1.0, 3.0, 6.0, 10.0, 20.0, 45.0, 80.0] {
         for view in [-10.0, -1.0, 0.5, 2.0, 5.0, 15.0, 40.0, 90.0] {
             for az in [0.0, 60.0, 180.0] {
-                cases.push(Case { camera_km: 0.2, albedo: 0.0, sun_elev_deg: sun, view_elev_deg: view, rel_azimuth_deg: az });
+                cases.push(Case { camera_km: 0.2, albedo: 0.0, sun_elev_deg: sun, view_elev_deg: view, rel_azimuth_deg: az, distance_km: None });
             }
         }
     }
@@ -59,7 +59,7 @@ fn multiple_scattering_models_match_the_reference() {
     for sun in [-4.0, 2.0, 8.0, 30.0, 70.0] {
         for view in [-5.0, 3.0, 20.0, 80.0] {
             for az in [30.0, 150.0] {
-                cases.push(Case { camera_km: 0.2, albedo: 0.3, sun_elev_deg: sun, view_elev_deg: view, rel_azimuth_deg: az });
+                cases.push(Case { camera_km: 0.2, albedo: 0.3, sun_elev_deg: sun, view_elev_deg: view, rel_azimuth_deg: az, distance_km: None });
             }
         }
     }
@@ -226,7 +226,7 @@ fn precomputed_matches_the_reference() {
     for sun in [-4.0, 2.0, 8.0, 30.0, 70.0] {
         for view in [-5.0, 3.0, 20.0, 80.0] {
             for az in [30.0, 150.0] {
-                cases.push(Case { camera_km: 0.2, albedo: 0.3, sun_elev_deg: sun, view_elev_deg: view, rel_azimuth_deg: az });
+                cases.push(Case { camera_km: 0.2, albedo: 0.3, sun_elev_deg: sun, view_elev_deg: view, rel_azimuth_deg: az, distance_km: None });
             }
         }
     }

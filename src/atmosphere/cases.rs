@@ -1,7 +1,9 @@
 //! Radiance cases as CSV: the interface of `skytune radiance`, the tests and the benchmarks.
 //!
-//! Input header: `camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg`; the output
-//! repeats those columns and adds `r,g,b` (sr^-1 per unit of solar irradiance).
+//! Input header: `camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg`, and optionally
+//! `distance_km` (where the view ray stops; empty: at the edge of the atmosphere). The output
+//! repeats those columns and adds `r,g,b` (sr^-1 per unit of solar irradiance); where a case
+//! has a distance, the in-scattered light along the ray, and `t_r,t_g,t_b`, its transmittance.
 
 use std::path::Path;
 
@@ -18,6 +20,9 @@ struct CaseRow {
     sun_elev_deg: f64,
     view_elev_deg: f64,
     rel_azimuth_deg: f64,
+    /// Empty or absent: to the edge of the atmosphere.
+    #[serde(default)]
+    distance_km: Option<f64>,
 }
 
 /// One row of an output file.
@@ -52,6 +57,29 @@ struct RadianceErrorRow {
     paths: u32,
 }
 
+/// One row of a reference's file where the cases have distances: the in-scattering along each
+/// finite ray, its standard errors, and the ray's transmittance.
+#[derive(Serialize)]
+struct FiniteRayRow {
+    camera_km: f64,
+    albedo: f64,
+    sun_elev_deg: f64,
+    view_elev_deg: f64,
+    rel_azimuth_deg: f64,
+    /// Empty: to the edge of the atmosphere.
+    distance_km: Option<f64>,
+    r: f64,
+    g: f64,
+    b: f64,
+    t_r: f64,
+    t_g: f64,
+    t_b: f64,
+    se_r: f64,
+    se_g: f64,
+    se_b: f64,
+    paths: u32,
+}
+
 impl RadianceRow {
     /// Case `c`'s row with radiance `l`.
     fn new(c: &Case, l: Rgb) -> Self {
@@ -72,6 +100,18 @@ impl RadianceRow {
         let Self { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b } = self;
         RadianceErrorRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b, se_r: se[0], se_g: se[1], se_b: se[2], paths }
     }
+
+    /// The same row as a finite ray of `distance_km` with the reference's estimate `e`.
+    fn finite(self, distance_km: Option<f64>, e: &crate::atmosphere::reference::Estimate) -> FiniteRayRow {
+        let Self { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b } = self;
+        let ([t_r, t_g, t_b], [se_r, se_g, se_b]) = (e.transmittance, e.std_err);
+        FiniteRayRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, distance_km, r, g, b, t_r, t_g, t_b, se_r, se_g, se_b, paths: e.paths }
+    }
+}
+
+/// Whether any case stops its ray short of the edge of the atmosphere.
+pub fn has_finite_rays(cases: &[Case]) -> bool {
+    cases.iter().any(|c| c.distance_km.is_some())
 }
 
 /// A bad cases file: where and why.
@@ -131,7 +171,17 @@ pub fn read_cases(path: &Path, top_km: f64) -> Result<Vec<Case>, CasesError> {
                 return Err(bad(field, format!("expected -90..90 degrees, found {v}")));
             }
         }
-        out.push(Case { camera_km: row.camera_km, albedo: row.albedo, sun_elev_deg: row.sun_elev_deg, view_elev_deg: row.view_elev_deg, rel_azimuth_deg: row.rel_azimuth_deg });
+        if let Some(d) = row.distance_km.filter(|d| !(d.is_finite() && *d > 0.0)) {
+            return Err(bad("distance_km", format!("expected a distance > 0 km, or empty for the edge of the atmosphere, found {d}")));
+        }
+        out.push(Case {
+            camera_km: row.camera_km,
+            albedo: row.albedo,
+            sun_elev_deg: row.sun_elev_deg,
+            view_elev_deg: row.view_elev_deg,
+            rel_azimuth_deg: row.rel_azimuth_deg,
+            distance_km: row.distance_km,
+        });
     }
     Ok(out)
 }
@@ -153,7 +203,9 @@ pub fn write_radiance(path: &Path, comment: &str, cases: &[Case], radiance: &[Rg
 }
 
 /// As [`write_radiance`], with the standard error of each value in `se_r, se_g, se_b` columns
-/// and the paths each case drew in a `paths` column: the reference's estimates.
+/// and the paths each case drew in a `paths` column: the reference's estimates. Where any case
+/// has a distance, every row also gives `distance_km` (after the case's columns) and the ray's
+/// transmittance `t_r, t_g, t_b` (after `r, g, b`).
 pub fn write_reference(path: &Path, comment: &str, cases: &[Case], estimates: &[crate::atmosphere::reference::Estimate]) -> Result<(), CasesError> {
     let radiance: Vec<Rgb> = estimates.iter().map(|e| e.all).collect();
     write_radiance_rows(path, comment, cases, &radiance, Some(estimates))
@@ -167,9 +219,11 @@ fn write_radiance_rows(path: &Path, comment: &str, cases: &[Case], radiance: &[R
         text.push_str(&format!("# {line}\n"));
     }
     let mut writer = csv::Writer::from_writer(Vec::new());
+    let finite = has_finite_rays(cases);
     for (k, (c, l)) in cases.iter().zip(radiance).enumerate() {
         let row = RadianceRow::new(c, *l);
         let written = match estimates.and_then(|e| e.get(k)) {
+            Some(e) if finite => writer.serialize(row.finite(c.distance_km, e)),
             Some(e) => writer.serialize(row.with_errors(e.std_err, e.paths)),
             None => writer.serialize(row),
         };

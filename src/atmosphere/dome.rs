@@ -124,7 +124,9 @@ pub fn cases(sun_elev_deg: f64, dirs: &[DomeDir]) -> Vec<Case> {
 
 /// The radiance cases of one sun elevation over `dirs`, seen from `ground`.
 pub fn cases_from(ground: Ground, sun_elev_deg: f64, dirs: &[DomeDir]) -> Vec<Case> {
-    dirs.iter().map(|d| Case { camera_km: ground.camera_km, albedo: ground.albedo, sun_elev_deg, view_elev_deg: d.elev_deg, rel_azimuth_deg: d.rel_az_deg }).collect()
+    dirs.iter()
+        .map(|d| Case { camera_km: ground.camera_km, albedo: ground.albedo, sun_elev_deg, view_elev_deg: d.elev_deg, rel_azimuth_deg: d.rel_az_deg, distance_km: None })
+        .collect()
 }
 
 /// Fixed exposure of the error figures, stops: the sky file's default `exposure_ev`.

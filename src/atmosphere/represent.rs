@@ -41,7 +41,7 @@ fn lerp3(a: Rgb, b: Rgb, t: f64) -> Rgb {
 }
 
 fn case(sun_elev_deg: f64, elev_deg: f64, rel_az_deg: f64) -> Case {
-    Case { camera_km: dome::CAMERA_KM, albedo: dome::ALBEDO, sun_elev_deg, view_elev_deg: elev_deg, rel_azimuth_deg: rel_az_deg }
+    Case { camera_km: dome::CAMERA_KM, albedo: dome::ALBEDO, sun_elev_deg, view_elev_deg: elev_deg, rel_azimuth_deg: rel_az_deg, distance_km: None }
 }
 
 /// The sky-dome map, tabulated over sun elevations.

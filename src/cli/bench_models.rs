@@ -201,6 +201,7 @@ fn cpu_fill_ms(ev: &Evaluator<'_>, prepared: &Prepared) -> anyhow::Result<f64> {
             sun_elev_deg: 30.0,
             view_elev_deg: 90.0 - ((k / w) as f64 + 0.5) / h as f64 * 180.0,
             rel_azimuth_deg: ((k % w) as f64 + 0.5) / w as f64 * 360.0,
+            distance_km: None,
         })
         .collect();
     let t = Instant::now();

@@ -30,8 +30,8 @@ fn cases(regime: Regime) -> Vec<Case> {
     let mut out = Vec::new();
     for sun_elev_deg in suns {
         for camera_km in [0.2, 5.0] {
-            out.push(Case { camera_km, albedo: 0.0, sun_elev_deg, view_elev_deg: 0.0, rel_azimuth_deg: 90.0 });
-            out.push(Case { camera_km, albedo: 0.3, sun_elev_deg, view_elev_deg: 10.0, rel_azimuth_deg: 180.0 });
+            out.push(Case { camera_km, albedo: 0.0, sun_elev_deg, view_elev_deg: 0.0, rel_azimuth_deg: 90.0, distance_km: None });
+            out.push(Case { camera_km, albedo: 0.3, sun_elev_deg, view_elev_deg: 10.0, rel_azimuth_deg: 180.0, distance_km: None });
         }
     }
     out

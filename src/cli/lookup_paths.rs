@@ -43,8 +43,14 @@ pub fn measure(ev: &Evaluator<'_>, reference: &ReferenceDome, suns: &[f64], poin
     let dirs = dome::dome_directions(dome::BENCH_DOME.0, dome::BENCH_DOME.1);
     let size = (SKY_VIEW_SIZE.0 as usize, SKY_VIEW_SIZE.1 as usize);
     let texels = SkyViewMap::texel_directions(size);
-    let case =
-        |sun_elev_deg: f64, view_elev_deg: f64, rel_azimuth_deg: f64| Case { camera_km: dome::CAMERA_KM, albedo: dome::ALBEDO, sun_elev_deg, view_elev_deg, rel_azimuth_deg };
+    let case = |sun_elev_deg: f64, view_elev_deg: f64, rel_azimuth_deg: f64| Case {
+        camera_km: dome::CAMERA_KM,
+        albedo: dome::ALBEDO,
+        sun_elev_deg,
+        view_elev_deg,
+        rel_azimuth_deg,
+        distance_km: None,
+    };
     let mut rows = Vec::new();
     for p in points.iter().filter(|p| p.auto && matches!(p.method, Method::Precomputed(_))) {
         // Accuracy through the map.

@@ -277,7 +277,7 @@ pub fn random_cases(count: usize, per_atmosphere: usize, seed: u64) -> Vec<Sweep
         };
         let sun_elev_deg = if rng.next() < 0.5 { rng.range(-18.0, 90.0) } else { rng.range(-3.0, 3.0) };
         let view_elev_deg = if rng.next() < 0.5 { rng.range(-90.0, 90.0) } else { rng.range(-5.0, 5.0) };
-        let case = Case { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg: rng.range(0.0, 360.0) };
+        let case = Case { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg: rng.range(0.0, 360.0), distance_km: None };
         out.push(SweepCase { atmosphere, case, turbidity: rng.range(0.5, 15.0) });
     }
     out

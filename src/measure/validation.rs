@@ -189,7 +189,14 @@ impl Scan {
             if from_sun < exclusion_deg || s.radiance.iter().any(|r| *r <= 0.0) {
                 continue;
             }
-            cases.push(Case { camera_km: 0.0, albedo, sun_elev_deg: sun_elev, view_elev_deg: s.elevation_deg, rel_azimuth_deg: (s.azimuth_deg - sun_az).rem_euclid(360.0) });
+            cases.push(Case {
+                camera_km: 0.0,
+                albedo,
+                sun_elev_deg: sun_elev,
+                view_elev_deg: s.elevation_deg,
+                rel_azimuth_deg: (s.azimuth_deg - sun_az).rem_euclid(360.0),
+                distance_km: None,
+            });
             measured.push(std::array::from_fn(|c| s.radiance[c] / sun_irradiance[c]));
         }
         (cases, measured)

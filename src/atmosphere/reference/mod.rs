@@ -121,6 +121,10 @@ pub struct Case {
     pub view_elev_deg: f64,
     /// Azimuth of the view relative to the sun's, degrees (0 = towards the sun).
     pub rel_azimuth_deg: f64,
+    /// Where the view ray stops, km from the camera: at a surface that emits and reflects
+    /// nothing, so the answer is the light scattered into the ray on the way (aerial
+    /// perspective). `None`: at the edge of the atmosphere or the ground, the sky's radiance.
+    pub distance_km: Option<f64>,
 }
 
 /// The reference's answer for one case, sr^-1 per unit of solar irradiance.
@@ -134,6 +138,9 @@ pub struct Estimate {
     pub std_err: Rgb,
     /// Monte Carlo paths drawn (0 when only single scattering is asked for).
     pub paths: u32,
+    /// Transmittance of the view ray from the camera to where it stops (the case's distance,
+    /// the ground or the edge of the atmosphere), per channel.
+    pub transmittance: Rgb,
 }
 
 /// Running sums of the paths' contributions, added in path order (the same bytes however the
@@ -348,7 +355,14 @@ impl Reference {
 
     /// The ray from `p` along `d` to the ground or the top, cut into accurate panels.
     fn segment(&self, p: DVec3, d: DVec3) -> Segment {
-        let (length, ground) = self.extent(p, d);
+        self.segment_within(p, d, f64::INFINITY)
+    }
+
+    /// [`Self::segment`] stopped after `limit_km` if it is still in the air there (then it ends
+    /// on neither the ground nor the top: `ground` is false and nothing lies beyond).
+    fn segment_within(&self, p: DVec3, d: DVec3, limit_km: f64) -> Segment {
+        let (extent, reaches_ground) = self.extent(p, d);
+        let (length, ground) = if limit_km < extent { (limit_km.max(0.0), false) } else { (extent, reaches_ground) };
         let mut panels = Vec::new();
         if length > 0.0 {
             // Simpson's error estimate misses kinks: cut the ray where it crosses the ozone tent's corners.
@@ -720,10 +734,10 @@ impl Reference {
         let towards_sun = DVec3::new(se.cos(), se.sin(), 0.0);
         let (ve, az) = (case.view_elev_deg.to_radians(), case.rel_azimuth_deg.to_radians());
         let d = DVec3::new(ve.cos() * az.cos(), ve.sin(), ve.cos() * az.sin()).normalize();
-        let seg = self.segment(p, d);
+        let seg = self.segment_within(p, d, case.distance_km.unwrap_or(f64::INFINITY));
         let single = self.single(&seg, towards_sun);
         let (multiple, std_err, paths) = self.multiple(&seg, towards_sun, case.albedo.clamp(0.0, 1.0), single, threads);
-        Estimate { single, all: add(single, multiple), std_err, paths }
+        Estimate { single, all: add(single, multiple), std_err, paths, transmittance: seg.total().map(|t| (-t).exp()) }
     }
 
     /// Sky radiance for a case (all orders up to `max_order`), sr^-1 per unit of solar irradiance.

@@ -76,6 +76,7 @@ impl CpuWorker {
                                 sun_elev_deg: sun.y.clamp(-1.0, 1.0).asin().to_degrees(),
                                 view_elev_deg: dir.y.clamp(-1.0, 1.0).asin().to_degrees(),
                                 rel_azimuth_deg: (az(dir) - az(sun)).to_degrees(),
+                                distance_km: None,
                             };
                             reference.radiance(&case)
                         });
