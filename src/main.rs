@@ -193,11 +193,11 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
         }
     }
     let finite = cases::has_finite_rays(&all);
-    // The runtime models answer finite rays through the renderer's aerial-perspective volume
-    // (issue 67); until it exists only the reference stops a ray short.
+    // Finite rays: the reference, and `lut`'s exact integration on the GPU; the other runtime
+    // models wait for the renderer's aerial-perspective volume (issue 67).
     anyhow::ensure!(
-        !finite || args.model == SkyModelKind::Reference,
-        "{}: distance_km: --model {} answers rays to the edge of the atmosphere only; finite rays are answered by --model reference",
+        !finite || matches!(args.model, SkyModelKind::Reference | SkyModelKind::Lut),
+        "{}: distance_km: --model {} answers rays to the edge of the atmosphere only; finite rays are answered by --model reference and --model lut",
         args.cases.display(),
         args.model.name()
     );
@@ -221,8 +221,10 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             format!("sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); {}; sun disc and ground surface excluded", atmosphere_line)
         }
             .into();
-    // The reference's standard errors and paths, written beside its radiance.
+    // The reference's standard errors and paths, written beside its radiance, or a model's
+    // transmittance along finite rays.
     let mut estimates = None;
+    let mut transmittance = None;
     let (out, units, comment) = match args.model {
         SkyModelKind::Reference => {
             let (e, comment) = reference_radiance(args, atm, &list)?;
@@ -257,8 +259,9 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             settings.validate().map_err(|e| anyhow!("--{}: {}", e.field.replace('_', "-"), e.message))?;
             let ctx = GpuContext::headless(adapter(args.cpu))?;
             let probe = skytune::render::atmosphere::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
-            let out = probe.lut(&ctx, &atm, &settings, &list)?;
-            let out = out.into_iter().map(|c| c.map(f64::from)).collect();
+            let answers = probe.lut_rays(&ctx, &atm, &settings, &list)?;
+            transmittance = Some(answers.transmittance.into_iter().map(|c| c.map(f64::from)).collect::<Vec<_>>());
+            let out = answers.radiance.into_iter().map(|c| c.map(f64::from)).collect();
             (out, units, format!("model lut on {}: {settings:?}", ctx.adapter_line()))
         }
         SkyModelKind::Precomputed => {
@@ -335,9 +338,10 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     if !shard.is_whole() {
         comment = format!("{}\n{comment}", shard.table_line(all.len(), 1, inputs).trim_start_matches("# "));
     }
-    match &estimates {
-        Some(e) => cases::write_reference(&args.out, &comment, &list, e)?,
-        None => cases::write_radiance(&args.out, &comment, &list, &out)?,
+    match (&estimates, &transmittance) {
+        (Some(e), _) => cases::write_reference(&args.out, &comment, &list, e)?,
+        (None, Some(t)) => cases::write_rays(&args.out, &comment, &list, &out, t)?,
+        (None, None) => cases::write_radiance(&args.out, &comment, &list, &out)?,
     }
     println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());
     Ok(())

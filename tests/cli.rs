@@ -278,6 +278,21 @@ fn radiance_stops_rays_at_a_distance_and_reports_their_transmittance() {
     // Blue light is scattered, and lost, fastest.
     assert!(far[2] > far[0] && far[5] < far[3], "{far:?}");
 
+    // The lut model's exact integration on the GPU answers the same rays, with the same columns
+    // but the reference's noise.
+    std::fs::write(&cases, format!("{header}0,0.3,30,2,90,\n0,0.3,30,2,90,1\n0,0.3,30,2,90,20\n")).unwrap();
+    let o = skytune().args(["radiance", "--model", "lut", "--cpu", "--cases"]).arg(&cases).arg("--out").arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.lines().any(|l| l == "camera_km,albedo,sun_elev_deg,view_elev_deg,rel_azimuth_deg,distance_km,r,g,b,t_r,t_g,t_b"), "{text}");
+    let lut: Vec<Vec<f64>> = text.lines().filter(|l| !l.starts_with('#')).skip(1).map(|l| l.split(',').skip(6).map(|x| x.parse().unwrap()).collect()).collect();
+    for (row, reference) in lut.iter().zip([&sky, &near, &far]) {
+        // Transmittance alike; in-scatter above the reference's single scattering (lut has every order).
+        for c in 0..3 {
+            assert!((row[c + 3] - reference[c + 3]).abs() < 1e-3 && row[c] > reference[c], "{row:?} against {reference:?}");
+        }
+    }
+
     // A bad distance names its line; a model that cannot stop a ray short says so.
     std::fs::write(&cases, format!("{header}0,0.3,30,2,90,1\n0,0.3,30,2,90,-4\n")).unwrap();
     let o = skytune().args(["radiance", "--model", "reference", "--cases"]).arg(&cases).arg("--out").arg(&out).output().unwrap();

@@ -158,11 +158,30 @@ fn ms_for_samples(atm: Atmosphere, ray: ViewRay, view: vec3<f32>, sun: vec3<f32>
     return sample_multiscattering(0u, atm, r_q, dot(q, sun) / max(length(q), 1e-3));
 }
 
+// What a view ray gathers before it stops (aerial perspective): the light scattered into it and
+// its transmittance, per channel.
+struct Aerial {
+    in_scatter: vec3<f32>,
+    transmittance: vec3<f32>,
+};
+
 // Sky radiance by the LUT method: single scattering with LUT transmittance to the sun plus what
 // the multiple-scattering table's orders scatter towards the camera (Hillaire 2020's
 // sigma_s x Psi_ms, made anisotropic).
 fn lut_radiance(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
-    let ray = view_ray(atm, camera_km, view, sun);
+    return lut_aerial(atm, camera_km, view, sun, FAR_KM).in_scatter;
+}
+
+// No distance: a ray stopped here leaves the atmosphere or meets the ground first.
+const FAR_KM: f32 = 1e30;
+
+// `lut_radiance` along a ray that stops at `max_km` (a surface there adds nothing; the ground
+// or the edge of the atmosphere, if nearer, stop it first), and the ray's transmittance: the
+// exact per-pixel integration of aerial perspective, with the sky's own samples spread over the
+// shorter ray.
+fn lut_aerial(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>, max_km: f32) -> Aerial {
+    var ray = view_ray(atm, camera_km, view, sun);
+    ray.distance_km = min(ray.distance_km, max_km);
     let r = ray.r;
     let mu = ray.mu;
     let steps = max(lut_params.steps.z, 1u);
@@ -185,5 +204,5 @@ fn lut_radiance(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>
         let multiple = multiple_scattering_of(c, p, view, sun, sigma_r, sigma_m);
         sum += (single + multiple) * exp(-step.tau_mid) * step.dt;
     }
-    return sum;
+    return Aerial(sum, exp(-tau));
 }

@@ -57,10 +57,29 @@ struct RadianceErrorRow {
     paths: u32,
 }
 
-/// One row of a reference's file where the cases have distances: the in-scattering along each
-/// finite ray, its standard errors, and the ray's transmittance.
+/// One row of a model's file where the cases have distances: the in-scattering along each
+/// finite ray and the ray's transmittance.
 #[derive(Serialize)]
 struct FiniteRayRow {
+    camera_km: f64,
+    albedo: f64,
+    sun_elev_deg: f64,
+    view_elev_deg: f64,
+    rel_azimuth_deg: f64,
+    /// Empty: to the edge of the atmosphere.
+    distance_km: Option<f64>,
+    r: f64,
+    g: f64,
+    b: f64,
+    t_r: f64,
+    t_g: f64,
+    t_b: f64,
+}
+
+/// One row of a reference's file where the cases have distances: a [`FiniteRayRow`] and the
+/// standard errors of its in-scattering.
+#[derive(Serialize)]
+struct FiniteRayErrorRow {
     camera_km: f64,
     albedo: f64,
     sun_elev_deg: f64,
@@ -101,11 +120,17 @@ impl RadianceRow {
         RadianceErrorRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b, se_r: se[0], se_g: se[1], se_b: se[2], paths }
     }
 
+    /// The same row as a finite ray of `distance_km` with transmittance `t`.
+    fn finite(self, distance_km: Option<f64>, [t_r, t_g, t_b]: Rgb) -> FiniteRayRow {
+        let Self { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b } = self;
+        FiniteRayRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, distance_km, r, g, b, t_r, t_g, t_b }
+    }
+
     /// The same row as a finite ray of `distance_km` with the reference's estimate `e`.
-    fn finite(self, distance_km: Option<f64>, e: &crate::atmosphere::reference::Estimate) -> FiniteRayRow {
+    fn finite_with_errors(self, distance_km: Option<f64>, e: &crate::atmosphere::reference::Estimate) -> FiniteRayErrorRow {
         let Self { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b } = self;
         let ([t_r, t_g, t_b], [se_r, se_g, se_b]) = (e.transmittance, e.std_err);
-        FiniteRayRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, distance_km, r, g, b, t_r, t_g, t_b, se_r, se_g, se_b, paths: e.paths }
+        FiniteRayErrorRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, distance_km, r, g, b, t_r, t_g, t_b, se_r, se_g, se_b, paths: e.paths }
     }
 }
 
@@ -199,7 +224,24 @@ fn csv_error(file: &str, e: csv::Error) -> CasesError {
 
 /// Writes radiance per case as CSV (the cases' columns, then r, g, b), `comment` as `#` lines first.
 pub fn write_radiance(path: &Path, comment: &str, cases: &[Case], radiance: &[Rgb]) -> Result<(), CasesError> {
-    write_radiance_rows(path, comment, cases, radiance, None)
+    write_radiance_rows(path, comment, cases, radiance, Beside::Nothing)
+}
+
+/// As [`write_radiance`] for a model that answers finite rays: where any case has a distance,
+/// every row also gives `distance_km` (after the case's columns) and the ray's transmittance
+/// `t_r, t_g, t_b` (after `r, g, b`).
+pub fn write_rays(path: &Path, comment: &str, cases: &[Case], radiance: &[Rgb], transmittance: &[Rgb]) -> Result<(), CasesError> {
+    write_radiance_rows(path, comment, cases, radiance, Beside::Transmittance(transmittance))
+}
+
+/// What a file's rows carry beside radiance.
+#[derive(Clone, Copy)]
+enum Beside<'a> {
+    Nothing,
+    /// Transmittance (written where the cases have distances).
+    Transmittance(&'a [Rgb]),
+    /// The reference's estimates: standard errors, paths and transmittance.
+    Estimates(&'a [crate::atmosphere::reference::Estimate]),
 }
 
 /// As [`write_radiance`], with the standard error of each value in `se_r, se_g, se_b` columns
@@ -208,10 +250,10 @@ pub fn write_radiance(path: &Path, comment: &str, cases: &[Case], radiance: &[Rg
 /// transmittance `t_r, t_g, t_b` (after `r, g, b`).
 pub fn write_reference(path: &Path, comment: &str, cases: &[Case], estimates: &[crate::atmosphere::reference::Estimate]) -> Result<(), CasesError> {
     let radiance: Vec<Rgb> = estimates.iter().map(|e| e.all).collect();
-    write_radiance_rows(path, comment, cases, &radiance, Some(estimates))
+    write_radiance_rows(path, comment, cases, &radiance, Beside::Estimates(estimates))
 }
 
-fn write_radiance_rows(path: &Path, comment: &str, cases: &[Case], radiance: &[Rgb], estimates: Option<&[crate::atmosphere::reference::Estimate]>) -> Result<(), CasesError> {
+fn write_radiance_rows(path: &Path, comment: &str, cases: &[Case], radiance: &[Rgb], beside: Beside<'_>) -> Result<(), CasesError> {
     let file = path.display().to_string();
     let io = |source| CasesError::Io { file: file.clone(), source };
     let mut text = String::new();
@@ -222,10 +264,11 @@ fn write_radiance_rows(path: &Path, comment: &str, cases: &[Case], radiance: &[R
     let finite = has_finite_rays(cases);
     for (k, (c, l)) in cases.iter().zip(radiance).enumerate() {
         let row = RadianceRow::new(c, *l);
-        let written = match estimates.and_then(|e| e.get(k)) {
-            Some(e) if finite => writer.serialize(row.finite(c.distance_km, e)),
-            Some(e) => writer.serialize(row.with_errors(e.std_err, e.paths)),
-            None => writer.serialize(row),
+        let written = match beside {
+            Beside::Estimates(e) if finite => writer.serialize(row.finite_with_errors(c.distance_km, &e[k])),
+            Beside::Estimates(e) => writer.serialize(row.with_errors(e[k].std_err, e[k].paths)),
+            Beside::Transmittance(t) if finite => writer.serialize(row.finite(c.distance_km, t[k])),
+            Beside::Transmittance(_) | Beside::Nothing => writer.serialize(row),
         };
         written.map_err(|e| io(std::io::Error::other(e.to_string())))?;
     }

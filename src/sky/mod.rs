@@ -12,7 +12,7 @@ pub mod particle_sim;
 pub mod particles;
 pub mod procedural;
 pub mod resolved;
-mod sky_model;
+pub mod sky_model;
 pub mod starfield;
 
 pub use bitmap::{ColorBitmap, Rgba};

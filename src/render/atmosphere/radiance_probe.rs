@@ -157,7 +157,7 @@ impl RadianceProbe {
             };
             let tables = &cache.last().expect("just filled").1;
             let build = if fresh { Build::Precomputed(settings, tables) } else { Build::Nothing };
-            let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Precomputed, build, &[], Some(tables));
+            let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Precomputed, build, &[], Some(tables)).map(|r| r.radiance);
             // Tables whose build did not finish must not be looked up as built next time.
             if result.is_err() && fresh {
                 cache.pop();
@@ -172,13 +172,20 @@ impl RadianceProbe {
 
     /// Radiance of the `lut` model for every case (tables built per distinct ground albedo).
     pub fn lut(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &LutSettings, cases: &[Case]) -> RenderResult<Vec<[f32; 3]>> {
-        let mut out = vec![[0.0; 3]; cases.len()];
+        Ok(self.lut_rays(ctx, atmosphere, settings, cases)?.radiance)
+    }
+
+    /// The `lut` model along each case's ray, stopped at its `distance_km` if it has one: the
+    /// exact per-pixel integration of aerial perspective (`lut_aerial`), in-scatter and
+    /// transmittance.
+    pub fn lut_rays(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &LutSettings, cases: &[Case]) -> RenderResult<ProbeAnswers> {
+        let mut out = ProbeAnswers { radiance: vec![[0.0; 3]; cases.len()], transmittance: vec![[1.0; 3]; cases.len()] };
         for (index, subset) in by_albedo(cases) {
             let params = LutUniform::new(settings, subset[0].albedo as f32, atmosphere.mie_g);
             ctx.queue.write_buffer(&self.tables.params, 0, bytemuck::bytes_of(&params));
             let result = self.run(ctx, atmosphere, &SingleSettings::default(), &subset, Model::Lut, Build::Lut(settings), &[], None)?;
-            for (i, r) in index.into_iter().zip(result) {
-                out[i] = r;
+            for (k, i) in index.into_iter().enumerate() {
+                (out.radiance[i], out.transmittance[i]) = (result.radiance[k], result.transmittance[k]);
             }
         }
         Ok(out)
@@ -187,7 +194,7 @@ impl RadianceProbe {
     /// Radiance of the `single` model for every case, sr^-1 per unit of solar irradiance
     /// (blocks until the GPU is done).
     pub fn single(&self, ctx: &GpuContext, atmosphere: &Atmosphere, settings: &SingleSettings, cases: &[Case]) -> RenderResult<Vec<[f32; 3]>> {
-        self.run(ctx, atmosphere, settings, cases, Model::Single, Build::Nothing, &[], None)
+        Ok(self.run(ctx, atmosphere, settings, cases, Model::Single, Build::Nothing, &[], None)?.radiance)
     }
 
     /// Radiance of an analytic model for every case (the model's units, [`AnalyticModel::units`]):
@@ -208,7 +215,7 @@ impl RadianceProbe {
                 model.coefficients(sun, analytic::equinox_morning_hour(c.sun_elev_deg)).vectors
             })
             .collect();
-        self.run(ctx, &Atmosphere::default(), &SingleSettings::default(), cases, Model::Analytic, Build::Nothing, &coefficients, None)
+        Ok(self.run(ctx, &Atmosphere::default(), &SingleSettings::default(), cases, Model::Analytic, Build::Nothing, &coefficients, None)?.radiance)
     }
 
     /// Evaluates `model` for `cases` after building the tables of `build`; `analytic`: the analytic
@@ -224,25 +231,26 @@ impl RadianceProbe {
         build: Build<'_>,
         analytic: &[[f32; 4]],
         precomputed: Option<&PrecomputedTables>,
-    ) -> RenderResult<Vec<[f32; 3]>> {
+    ) -> RenderResult<ProbeAnswers> {
         if cases.is_empty() {
-            return Ok(Vec::new());
+            return Ok(ProbeAnswers::default());
         }
         let device = &ctx.device;
         let init = |label: &str, contents: &[u8], usage| device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage });
         let atm = init("RadianceProbe::atmosphere", bytemuck::bytes_of(&AtmosphereUniform::from(atmosphere)), wgpu::BufferUsages::UNIFORM);
         let set = init("RadianceProbe::settings", bytemuck::bytes_of(&SingleUniform::from(settings)), wgpu::BufferUsages::UNIFORM);
-        let data: Vec<[f32; 4]> = cases.iter().map(|c| [c.camera_km as f32, c.sun_elev_deg as f32, c.view_elev_deg as f32, c.rel_azimuth_deg as f32]).collect();
+        // Keep in sync with `cases` and `radiance` in shaders/radiance_probe.wgsl: two vectors per case.
+        let data: Vec<[f32; 4]> = cases
+            .iter()
+            .flat_map(|c| [[c.camera_km as f32, c.sun_elev_deg as f32, c.view_elev_deg as f32, c.rel_azimuth_deg as f32], [c.distance_km.map_or(0.0, |d| d as f32), 0.0, 0.0, 0.0]])
+            .collect();
         let input = init("RadianceProbe::cases", bytemuck::cast_slice(&data), wgpu::BufferUsages::STORAGE);
+        // The transmittance of models that write none: ones.
+        let answers = vec![[1.0f32; 4]; 2 * cases.len()];
         // A binding may not be empty: one zero vector stands in when no model reads it.
         let coefficients = init("RadianceProbe::analytic", if analytic.is_empty() { &[0u8; 16] } else { bytemuck::cast_slice(analytic) }, wgpu::BufferUsages::STORAGE);
-        let size = (cases.len() * 16) as u64;
-        let output = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("RadianceProbe::radiance"),
-            size,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
+        let size = (answers.len() * 16) as u64;
+        let output = init("RadianceProbe::radiance", bytemuck::cast_slice(&answers), wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("RadianceProbe::bind_group"),
             layout: &self.layout,
@@ -288,9 +296,20 @@ impl RadianceProbe {
         }
         ctx.queue.submit([encoder.finish()]);
         let bytes = crate::render::gpu::readback::read_buffer(ctx, &output, size)?;
-        let out = bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes).iter().map(|v| [v[0], v[1], v[2]]).collect();
-        Ok(out)
+        let vectors = bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes);
+        let rgb = |v: &[f32; 4]| [v[0], v[1], v[2]];
+        Ok(ProbeAnswers { radiance: vectors.iter().step_by(2).map(rgb).collect(), transmittance: vectors.iter().skip(1).step_by(2).map(rgb).collect() })
     }
+}
+
+/// What the probe answers for each case, in the cases' order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ProbeAnswers {
+    /// Radiance, sr^-1 per unit of solar irradiance: the sky's, or the light scattered into a
+    /// ray that stops at its case's distance.
+    pub radiance: Vec<[f32; 3]>,
+    /// Transmittance of each case's ray, per channel (ones from models that give none).
+    pub transmittance: Vec<[f32; 3]>,
 }
 
 /// The cases grouped by ground albedo (tables are built per albedo): each group's indices into
