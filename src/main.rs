@@ -214,13 +214,12 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     let started = std::time::Instant::now();
-    let units: std::borrow::Cow<str> =
-        if finite {
-            format!("radiance scattered into each view ray before distance_km (empty: the edge of the atmosphere), in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere), and the ray's transmittance t_r,t_g,t_b; the surface at the distance emits and reflects nothing; {}; sun disc and ground surface excluded", atmosphere_line)
-        } else {
-            format!("sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere); {}; sun disc and ground surface excluded", atmosphere_line)
-        }
-            .into();
+    let what = if finite {
+        "radiance scattered into each view ray before distance_km (empty: the edge of the atmosphere), in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere), and the ray's transmittance t_r,t_g,t_b; the surface at the distance emits and reflects nothing"
+    } else {
+        "sky radiance in sr^-1 per unit of solar irradiance (1 per channel at the top of the atmosphere)"
+    };
+    let units: std::borrow::Cow<str> = format!("{what}; {atmosphere_line}; sun disc and ground surface excluded").into();
     // The reference's standard errors and paths, written beside its radiance, or a model's
     // transmittance along finite rays.
     let mut estimates = None;

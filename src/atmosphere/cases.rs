@@ -25,113 +25,47 @@ struct CaseRow {
     distance_km: Option<f64>,
 }
 
-/// One row of an output file.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-struct RadianceRow {
-    camera_km: f64,
-    albedo: f64,
-    sun_elev_deg: f64,
-    view_elev_deg: f64,
-    rel_azimuth_deg: f64,
-    r: f64,
-    g: f64,
-    b: f64,
-}
-
-/// One row of a reference's radiance file: a radiance row and its standard errors (the Monte
-/// Carlo noise of orders >= 2), sr^-1.
+/// One cell of an output row, written as csv writes a struct's field of its type.
 #[derive(Serialize)]
-struct RadianceErrorRow {
-    camera_km: f64,
-    albedo: f64,
-    sun_elev_deg: f64,
-    view_elev_deg: f64,
-    rel_azimuth_deg: f64,
-    r: f64,
-    g: f64,
-    b: f64,
-    se_r: f64,
-    se_g: f64,
-    se_b: f64,
-    /// Monte Carlo paths the case drew (fewer than the cap where a target was met).
-    paths: u32,
+#[serde(untagged)]
+enum Cell {
+    Number(f64),
+    /// Empty when `None`.
+    Optional(Option<f64>),
+    Count(u32),
 }
 
-/// One row of a model's file where the cases have distances: the in-scattering along each
-/// finite ray and the ray's transmittance.
-#[derive(Serialize)]
-struct FiniteRayRow {
-    camera_km: f64,
-    albedo: f64,
-    sun_elev_deg: f64,
-    view_elev_deg: f64,
-    rel_azimuth_deg: f64,
-    /// Empty: to the edge of the atmosphere.
-    distance_km: Option<f64>,
-    r: f64,
-    g: f64,
-    b: f64,
-    t_r: f64,
-    t_g: f64,
-    t_b: f64,
-}
-
-/// One row of a reference's file where the cases have distances: a [`FiniteRayRow`] and the
-/// standard errors of its in-scattering.
-#[derive(Serialize)]
-struct FiniteRayErrorRow {
-    camera_km: f64,
-    albedo: f64,
-    sun_elev_deg: f64,
-    view_elev_deg: f64,
-    rel_azimuth_deg: f64,
-    /// Empty: to the edge of the atmosphere.
-    distance_km: Option<f64>,
-    r: f64,
-    g: f64,
-    b: f64,
-    t_r: f64,
-    t_g: f64,
-    t_b: f64,
-    se_r: f64,
-    se_g: f64,
-    se_b: f64,
-    paths: u32,
-}
-
-impl RadianceRow {
-    /// Case `c`'s row with radiance `l`.
-    fn new(c: &Case, l: Rgb) -> Self {
-        Self {
-            camera_km: c.camera_km,
-            albedo: c.albedo,
-            sun_elev_deg: c.sun_elev_deg,
-            view_elev_deg: c.view_elev_deg,
-            rel_azimuth_deg: c.rel_azimuth_deg,
-            r: l[0],
-            g: l[1],
-            b: l[2],
-        }
+/// Case `c`'s output row as (column, cell): the case's columns, `distance_km` in a file with
+/// finite rays, `r,g,b` (radiance `l`), then what `beside` holds for it: in a file with finite
+/// rays its transmittance `t_r,t_g,t_b`; for the reference the standard errors `se_r,se_g,se_b`
+/// of its radiance (the Monte Carlo noise of orders >= 2, sr^-1) and the `paths` it drew (fewer
+/// than the cap where a target was met).
+fn output_row(c: &Case, l: Rgb, finite: bool, beside: Beside<'_>, k: usize) -> Vec<(&'static str, Cell)> {
+    use Cell::{Count, Number, Optional};
+    let mut row = vec![
+        ("camera_km", Number(c.camera_km)),
+        ("albedo", Number(c.albedo)),
+        ("sun_elev_deg", Number(c.sun_elev_deg)),
+        ("view_elev_deg", Number(c.view_elev_deg)),
+        ("rel_azimuth_deg", Number(c.rel_azimuth_deg)),
+    ];
+    if finite {
+        row.push(("distance_km", Optional(c.distance_km)));
     }
-
-    /// The same row with the standard errors `se` of its radiance.
-    fn with_errors(self, se: Rgb, paths: u32) -> RadianceErrorRow {
-        let Self { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b } = self;
-        RadianceErrorRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b, se_r: se[0], se_g: se[1], se_b: se[2], paths }
+    row.extend([("r", Number(l[0])), ("g", Number(l[1])), ("b", Number(l[2]))]);
+    let transmittance = match beside {
+        Beside::Nothing => None,
+        Beside::Transmittance(t) => Some(t[k]),
+        Beside::Estimates(e) => Some(e[k].transmittance),
+    };
+    if let Some(t) = transmittance.filter(|_| finite) {
+        row.extend([("t_r", Number(t[0])), ("t_g", Number(t[1])), ("t_b", Number(t[2]))]);
     }
-
-    /// The same row as a finite ray of `distance_km` with transmittance `t`.
-    fn finite(self, distance_km: Option<f64>, [t_r, t_g, t_b]: Rgb) -> FiniteRayRow {
-        let Self { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b } = self;
-        FiniteRayRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, distance_km, r, g, b, t_r, t_g, t_b }
+    if let Beside::Estimates(e) = beside {
+        let se = e[k].std_err;
+        row.extend([("se_r", Number(se[0])), ("se_g", Number(se[1])), ("se_b", Number(se[2])), ("paths", Count(e[k].paths))]);
     }
-
-    /// The same row as a finite ray of `distance_km` with the reference's estimate `e`.
-    fn finite_with_errors(self, distance_km: Option<f64>, e: &crate::atmosphere::reference::Estimate) -> FiniteRayErrorRow {
-        let Self { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, r, g, b } = self;
-        let ([t_r, t_g, t_b], [se_r, se_g, se_b]) = (e.transmittance, e.std_err);
-        FiniteRayErrorRow { camera_km, albedo, sun_elev_deg, view_elev_deg, rel_azimuth_deg, distance_km, r, g, b, t_r, t_g, t_b, se_r, se_g, se_b, paths: e.paths }
-    }
+    row
 }
 
 /// Whether any case stops its ray short of the edge of the atmosphere.
@@ -263,14 +197,9 @@ fn write_radiance_rows(path: &Path, comment: &str, cases: &[Case], radiance: &[R
     let mut writer = csv::Writer::from_writer(Vec::new());
     let finite = has_finite_rays(cases);
     for (k, (c, l)) in cases.iter().zip(radiance).enumerate() {
-        let row = RadianceRow::new(c, *l);
-        let written = match beside {
-            Beside::Estimates(e) if finite => writer.serialize(row.finite_with_errors(c.distance_km, &e[k])),
-            Beside::Estimates(e) => writer.serialize(row.with_errors(e[k].std_err, e[k].paths)),
-            Beside::Transmittance(t) if finite => writer.serialize(row.finite(c.distance_km, t[k])),
-            Beside::Transmittance(_) | Beside::Nothing => writer.serialize(row),
-        };
-        written.map_err(|e| io(std::io::Error::other(e.to_string())))?;
+        let (names, cells): (Vec<&str>, Vec<Cell>) = output_row(c, *l, finite, beside, k).into_iter().unzip();
+        let written = if k == 0 { writer.write_record(&names).map_err(|e| e.to_string()) } else { Ok(()) };
+        written.and_then(|()| writer.serialize(cells).map_err(|e| e.to_string())).map_err(|e| io(std::io::Error::other(e)))?;
     }
     let body = writer.into_inner().map_err(|e| io(std::io::Error::other(e.to_string())))?;
     text.push_str(&String::from_utf8_lossy(&body));
