@@ -193,14 +193,20 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
         }
     }
     let finite = cases::has_finite_rays(&all);
-    // Finite rays: the reference, and `lut`'s exact integration on the GPU; the other runtime
-    // models wait for the renderer's aerial-perspective volume (issue 67).
+    // Finite rays: the reference; `lut`'s exact integration on the GPU; every runtime model
+    // through the renderer's aerial-perspective volume but Braun and Cohen's, whose colour is not
+    // a radiance.
     anyhow::ensure!(
-        !finite || matches!(args.model, SkyModelKind::Reference | SkyModelKind::Lut),
-        "{}: distance_km: --model {} answers rays to the edge of the atmosphere only; finite rays are answered by --model reference and --model lut",
-        args.cases.display(),
+        !finite || args.model != SkyModelKind::Linear,
+        "{}: distance_km: --model linear gives one display colour, not a radiance along a ray; finite rays are answered by every other model",
+        args.cases.display()
+    );
+    anyhow::ensure!(
+        args.aerial != Some(cli::AerialArg::Exact) || matches!(args.model, SkyModelKind::Lut | SkyModelKind::Reference),
+        "--aerial exact: only --model lut marches a finite ray itself (and the reference); --model {} answers through the volume",
         args.model.name()
     );
+    let through_volume = finite && args.model != SkyModelKind::Reference && (args.model != SkyModelKind::Lut || args.aerial == Some(cli::AerialArg::Volume));
     let shard = args.shard.unwrap_or(Shard::WHOLE);
     let list = shard.take(&all);
     // Everything a shard's rows depend on: its arguments but where it writes, and its cases.
@@ -225,6 +231,11 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     let mut estimates = None;
     let mut transmittance = None;
     let (out, units, comment) = match args.model {
+        _ if through_volume => {
+            let (answers, comment) = volume_radiance(args, &atm, &list)?;
+            transmittance = Some(answers.transmittance.into_iter().map(|c| c.map(f64::from)).collect::<Vec<_>>());
+            (answers.radiance.into_iter().map(|c| c.map(f64::from)).collect(), units, comment)
+        }
         SkyModelKind::Reference => {
             let (e, comment) = reference_radiance(args, atm, &list)?;
             let out = e.iter().map(|e| e.all).collect();
@@ -247,15 +258,7 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             (out, units, format!("model single on {}: {settings:?}", ctx.adapter_line()))
         }
         SkyModelKind::Lut => {
-            let (tw, th) = cli::parse_size(&args.transmittance_size)?;
-            let settings = skytune::atmosphere::LutSettings {
-                transmittance_size: [tw, th],
-                multiscattering_size: args.multiscattering_size,
-                multiscattering_grid: args.multiscattering_grid,
-                view_steps: args.view_steps,
-                ..Default::default()
-            };
-            settings.validate().map_err(|e| anyhow!("--{}: {}", e.field.replace('_', "-"), e.message))?;
+            let settings = lut_settings(args)?;
             let ctx = GpuContext::headless(adapter(args.cpu))?;
             let probe = skytune::render::atmosphere::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
             let answers = probe.lut_rays(&ctx, &atm, &settings, &list)?;
@@ -344,6 +347,43 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     }
     println!("wrote {} ({} cases in {:.1} s)", args.out.display(), list.len(), started.elapsed().as_secs_f64());
     Ok(())
+}
+
+/// `--model lut`'s tables, from the arguments.
+fn lut_settings(args: &cli::RadianceArgs) -> anyhow::Result<skytune::atmosphere::LutSettings> {
+    let (tw, th) = cli::parse_size(&args.transmittance_size)?;
+    let settings = skytune::atmosphere::LutSettings {
+        transmittance_size: [tw, th],
+        multiscattering_size: args.multiscattering_size,
+        multiscattering_grid: args.multiscattering_grid,
+        view_steps: args.view_steps,
+        ..Default::default()
+    };
+    settings.validate().map_err(|e| anyhow!("--{}: {}", e.field.replace('_', "-"), e.message))?;
+    Ok(settings)
+}
+
+/// Finite rays through the renderer's aerial-perspective volume, as a frame of `args.model`
+/// builds it (the shared LUT tables at the `lut` arguments; the multiple-scattering orders
+/// unless the model is `single`), and the comment naming it.
+fn volume_radiance(
+    args: &cli::RadianceArgs,
+    atm: &skytune::atmosphere::Atmosphere,
+    list: &[skytune::atmosphere::reference::Case],
+) -> anyhow::Result<(skytune::render::atmosphere::radiance_probe::ProbeAnswers, String)> {
+    let d = skytune::atmosphere::aerial::AerialSettings::default();
+    let aerial =
+        skytune::atmosphere::aerial::AerialSettings { volume_size: args.volume_size.unwrap_or(d.volume_size), distance_km: args.volume_distance_km.unwrap_or(d.distance_km), ..d };
+    aerial.validate().map_err(|e| anyhow!("--volume-{}: {}", e.field.replace('_', "-").trim_start_matches("volume-"), e.message))?;
+    let lut = lut_settings(args)?;
+    let multiple = args.model != SkyModelKind::Single;
+    let ctx = GpuContext::headless(adapter(args.cpu))?;
+    let probe = skytune::render::atmosphere::aerial_probe::AerialProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
+    let answers = probe.volume_rays(&ctx, atm, &lut, &aerial, multiple, list)?;
+    Ok((
+        answers,
+        format!("model {} through the aerial-perspective volume on {}: {aerial:?}, multiple scattering {multiple}; tables {lut:?}", args.model.name(), ctx.adapter_line()),
+    ))
 }
 
 /// The reference's estimate for every case, on every core; with a line saying how it was

@@ -287,6 +287,9 @@ fn bad_sky_model_and_atmosphere_values_are_located() {
             "sky_model.precomputed.scattering_size",
             "more than the 1048576 a table may hold",
         ),
+        ("[aerial_perspective]\nvolume_size = [32, 32, 200]\n", "volume_size = [32, 32, 200]", "aerial_perspective.volume_size", "expected 2..=128 cells in depth, found 200"),
+        ("[aerial_perspective]\ndistance_km = 20000\n", "distance_km = 20000", "aerial_perspective.distance_km", "expected 0.1..=10000 km, found 20000"),
+        ("[aerial_perspective]\nmethod = \"froxels\"\n", "method = \"froxels\"", "aerial_perspective.method", "unknown variant `froxels`"),
     ] {
         let (result, file, text) = with_sections(extra);
         let errors = result.expect_err(extra);
@@ -377,6 +380,16 @@ fn conflicting_or_impossible_aerosol_is_a_located_error() {
         let errors = result.expect_err(extra);
         assert_error(&errors, &file, line_of(&text, needle), field, message);
     }
+}
+
+#[test]
+fn a_sky_states_its_aerial_perspective() {
+    use skytune::atmosphere::aerial::{AerialMethod, AerialSettings, SliceSpread};
+    let (sky, _, _) = with_sections("[aerial_perspective]\nmethod = \"exact\"\nvolume_size = [16, 8, 64]\nslices = \"linear\"\n");
+    let aerial = sky.unwrap().model.aerial;
+    assert_eq!((aerial.method, aerial.volume_size, aerial.slices), (AerialMethod::Exact, [16, 8, 64], SliceSpread::Linear));
+    // Keys left out keep their defaults.
+    assert_eq!((aerial.distance_km, aerial.steps_per_slice), (AerialSettings::default().distance_km, AerialSettings::default().steps_per_slice));
 }
 
 #[test]

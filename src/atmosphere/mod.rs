@@ -5,6 +5,7 @@
 //! Units: lengths in km, coefficients in km^-1, angles in radians unless a name says `_deg`.
 //! Radiance is in sr^-1 relative to a solar irradiance of 1 per channel at the top of the atmosphere.
 
+pub mod aerial;
 pub mod aerosol;
 pub mod analytic;
 pub mod cases;

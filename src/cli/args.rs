@@ -167,6 +167,24 @@ pub struct CompareArgs {
     pub max_differing: Option<f64>,
 }
 
+/// How `skytune radiance` answers finite rays.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum AerialArg {
+    /// The renderer's aerial-perspective volume, read as the scene reads it.
+    Volume,
+    /// The model's own march stopped at the distance.
+    Exact,
+}
+
+/// A `--volume-size` value: AxBxC cells.
+fn parse_volume_size(s: &str) -> Result<[u32; 3], String> {
+    let parts: Vec<Result<u32, _>> = s.split('x').map(|p| p.trim().parse::<u32>()).collect();
+    match parts.as_slice() {
+        [Ok(a), Ok(b), Ok(c)] => Ok([*a, *b, *c]),
+        _ => Err(format!("expected ACROSSxDOWNxDEPTH cells, found \"{s}\"")),
+    }
+}
+
 /// Optical depth towards the sun of the `single` model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum OpticalDepthArg {
@@ -340,6 +358,17 @@ pub struct RadianceArgs {
     /// Kubernetes indexed Job: docs/batch.md); `skytune merge` combines the shards' files.
     #[arg(long)]
     pub shard: Option<Shard>,
+    /// Finite rays (a `distance_km` column): `exact` marches each ray (`lut` only), `volume`
+    /// reads the renderer's aerial-perspective volume (every physical model but `linear`;
+    /// `lut`'s default is `exact`, the others' `volume`).
+    #[arg(long, value_enum)]
+    pub aerial: Option<AerialArg>,
+    /// With the volume: cells across, down and in depth, AxBxC (default: `[aerial_perspective]`'s).
+    #[arg(long, value_parser = parse_volume_size)]
+    pub volume_size: Option<[u32; 3]>,
+    /// With the volume: where its last slice ends, km (default: `[aerial_perspective]`'s).
+    #[arg(long)]
+    pub volume_distance_km: Option<f64>,
     /// `single` and `lut`: samples along the view ray.
     #[arg(long, default_value_t = 32)]
     pub view_steps: u32,

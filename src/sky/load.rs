@@ -390,8 +390,15 @@ impl Validator<'_> {
                     tone_mapper: m.tone_mapper,
                 },
                 world: World { camera_km: m.camera_km.get(), ground_albedo: m.ground_albedo.get() },
+                aerial: Default::default(),
             }
         });
+        if let Some(a) = &f.aerial_perspective {
+            model.aerial = a.settings();
+            if let Err(e) = model.aerial.validate() {
+                self.err_in("[aerial_perspective]", e.field, &format!("aerial_perspective.{}", e.field), e.message);
+            }
+        }
         let auto_model = match f.sky_model.as_ref() {
             Some(m) if m.kind == ModelChoice::Auto => Some(super::resolved::Budget { de2000: m.budget.as_ref().map_or(DEFAULT_DE2000_BUDGET, |b| b.de2000.get() as f64) }),
             Some(m) => {

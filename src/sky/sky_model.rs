@@ -19,6 +19,9 @@ pub struct SkyModel {
     pub camera: CameraResponse,
     /// Where the sky is seen from.
     pub world: World,
+    /// How the scene is given the atmosphere in front of it when the model lights it
+    /// (`[aerial_perspective]`).
+    pub aerial: crate::atmosphere::aerial::AerialSettings,
 }
 
 /// The knobs of each model, read only by that model.

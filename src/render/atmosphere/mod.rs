@@ -2,10 +2,13 @@
 //! atmosphere uniform (written once a frame, bound by every pass that marches it), the tables of
 //! the physical models, the sky-view map and the light the map's model gives the scene. The
 //! passes here build and fill them in the compute phase: [`sky_luts`] (transmittance and
-//! multiple scattering), [`precomputed_tables`] (the `precomputed` model's tables) and
-//! [`sky_view`] (the map and its exposure). [`radiance_probe`] evaluates the same models outside
+//! multiple scattering), [`precomputed_tables`] (the `precomputed` model's tables),
+//! [`sky_view`] (the map and its exposure) and [`aerial_perspective`] (the volume of the
+//! atmosphere between the viewer and the scene). [`radiance_probe`] evaluates the same models outside
 //! the frame. The atmosphere itself (`crate::atmosphere`) knows nothing of wgpu.
 
+pub mod aerial_perspective;
+pub mod aerial_probe;
 mod cpu_maps;
 pub mod precomputed_tables;
 pub mod radiance_probe;
@@ -16,7 +19,7 @@ pub mod uniforms;
 
 use crate::atmosphere::Atmosphere;
 use crate::render::plan::resolution::SKY_VIEW_SIZE;
-use tables::{LutTables, PrecomputedState, PrecomputedTables};
+use tables::{AerialVolume, LutTables, PrecomputedState, PrecomputedTables};
 use uniforms::AtmosphereUniform;
 
 /// Format of the sky-view map: linear radiance above 1 near the sun must survive.
@@ -46,6 +49,9 @@ pub struct AtmosphereGpu {
     /// the last map (2^EV, or the automatic one); [1], [2], [3] the scene's fog colour, ambient
     /// and diffuse light from the model (`cs_exposure` in shaders/sky_view.wgsl writes them).
     pub sky_light: wgpu::Buffer,
+    /// The aerial-perspective volume: `aerial_perspective` builds it from the LUT tables, the
+    /// scene reads it.
+    pub aerial: AerialVolume,
 }
 
 impl AtmosphereGpu {
@@ -93,6 +99,7 @@ impl AtmosphereGpu {
             sky_view_view,
             sky_view_sampler,
             sky_light,
+            aerial: AerialVolume::new(device),
         }
     }
 

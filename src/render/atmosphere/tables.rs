@@ -138,3 +138,96 @@ pub struct PrecomputedState {
     /// Finished builds so far: a reader's results depend on it.
     pub generation: std::sync::atomic::AtomicU64,
 }
+
+/// Format of the aerial-perspective volume's textures.
+pub const AERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The aerial-perspective volume: `aerial_perspective` builds it in the compute phase, the scene
+/// reads it. Sized for the largest settings; a smaller volume fills a corner (the readers scale
+/// their coordinates by the size in [`Self::params`]).
+pub struct AerialVolume {
+    /// [`crate::render::atmosphere::uniforms::AerialUniform`] of the volume the textures hold.
+    pub params: wgpu::Buffer,
+    /// Light scattered in up to each slice (rgb, sr^-1 per unit of solar irradiance).
+    pub in_scatter: wgpu::Texture,
+    /// Transmittance up to each slice (rgb).
+    pub transmittance: wgpu::Texture,
+    /// Their views.
+    pub in_scatter_view: wgpu::TextureView,
+    /// Its view.
+    pub transmittance_view: wgpu::TextureView,
+    /// Trilinear, clamped.
+    pub sampler: wgpu::Sampler,
+}
+
+impl AerialVolume {
+    /// Allocates the volume at [`crate::atmosphere::aerial::AerialSettings::MAX_SIZE`].
+    pub fn new(device: &wgpu::Device) -> Self {
+        let [w, h, d] = crate::atmosphere::aerial::AerialSettings::MAX_SIZE;
+        let texture = |label: &str| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: d },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D3,
+                format: AERIAL_FORMAT,
+                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        };
+        let in_scatter = texture("AerialVolume::in_scatter");
+        let transmittance = texture("AerialVolume::transmittance");
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("AerialVolume::params"),
+            size: std::mem::size_of::<crate::render::atmosphere::uniforms::AerialUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("AerialVolume::sampler"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        Self {
+            params,
+            in_scatter_view: in_scatter.create_view(&Default::default()),
+            transmittance_view: transmittance.create_view(&Default::default()),
+            in_scatter,
+            transmittance,
+            sampler,
+        }
+    }
+
+    /// Layout entries of the readers' bindings from `first`: params, the two textures, the
+    /// sampler, visible to `stages`.
+    pub fn layout_entries(first: u32, stages: wgpu::ShaderStages) -> [wgpu::BindGroupLayoutEntry; 4] {
+        let texture = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: stages,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::D3,
+                multisampled: false,
+            },
+            count: None,
+        };
+        [
+            crate::render::gpu::parts::uniform_entry(first, stages),
+            texture(first + 1),
+            texture(first + 2),
+            wgpu::BindGroupLayoutEntry { binding: first + 3, visibility: stages, ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering), count: None },
+        ]
+    }
+
+    /// The readers' bind group entries from `first` (as [`Self::layout_entries`]).
+    pub fn entries(&self, first: u32) -> [wgpu::BindGroupEntry<'_>; 4] {
+        [
+            wgpu::BindGroupEntry { binding: first, resource: self.params.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: first + 1, resource: wgpu::BindingResource::TextureView(&self.in_scatter_view) },
+            wgpu::BindGroupEntry { binding: first + 2, resource: wgpu::BindingResource::TextureView(&self.transmittance_view) },
+            wgpu::BindGroupEntry { binding: first + 3, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+        ]
+    }
+}

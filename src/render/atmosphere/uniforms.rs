@@ -85,3 +85,60 @@ impl LutUniform {
         }
     }
 }
+
+/// The aerial-perspective volume's settings and camera. Keep in sync with `AerialParams` in
+/// shaders/sky_model/aerial_volume.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct AerialUniform {
+    /// The camera the volume follows, clip to world (m), column-major.
+    pub world_from_clip: [[f32; 4]; 4],
+    /// Its position (m), and its altitude in the atmosphere (km).
+    pub camera: [f32; 4],
+    /// Unit vector towards the sun; w the method (0 none: the scene keeps its fog, 1 volume,
+    /// 2 exact).
+    pub towards_sun: [f32; 4],
+    /// Cells across, down and in depth; view-ray samples per slice.
+    pub size: [u32; 4],
+    /// The last slice's end (km); the spread (0 quadratic, 1 linear); 1 with the
+    /// multiple-scattering orders; unused.
+    pub shape: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<AerialUniform>() == 128);
+
+/// What the scene is given of the atmosphere in front of it: none (its fog), or a method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AerialUse {
+    /// The scene keeps its fog.
+    None,
+    /// The frame's aerial perspective, with or without the multiple-scattering orders.
+    Method { method: crate::atmosphere::aerial::AerialMethod, multiple: bool },
+}
+
+impl AerialUniform {
+    /// The GPU form of `settings` for a camera (`world_from_clip`, at `position` m and
+    /// `altitude_km` in the atmosphere) under the sun `towards_sun`.
+    pub fn new(
+        settings: &crate::atmosphere::aerial::AerialSettings,
+        using: AerialUse,
+        world_from_clip: glam::Mat4,
+        position: glam::Vec3,
+        altitude_km: f32,
+        towards_sun: glam::Vec3,
+    ) -> Self {
+        use crate::atmosphere::aerial::{AerialMethod, SliceSpread};
+        let (method, multiple) = match using {
+            AerialUse::None => (0.0, false),
+            AerialUse::Method { method: AerialMethod::Volume, multiple } => (1.0, multiple),
+            AerialUse::Method { method: AerialMethod::Exact, multiple } => (2.0, multiple),
+        };
+        let [x, y, z] = settings.volume_size;
+        Self {
+            world_from_clip: world_from_clip.to_cols_array_2d(),
+            camera: position.extend(altitude_km).to_array(),
+            towards_sun: towards_sun.extend(method).to_array(),
+            size: [x, y, z, settings.steps_per_slice],
+            shape: [settings.distance_km as f32, if settings.slices == SliceSpread::Linear { 1.0 } else { 0.0 }, if multiple { 1.0 } else { 0.0 }, 0.0],
+        }
+    }
+}

@@ -20,6 +20,7 @@ pub const PASSES: &[(&str, PassConstructor)] = &[
     ("sky_luts", |b| boxed(crate::render::atmosphere::sky_luts::SkyLutsPass::new, b)),
     ("precomputed_tables", |b| boxed(crate::render::atmosphere::precomputed_tables::PrecomputedTablesPass::new, b)),
     ("sky_view", |b| boxed(crate::render::atmosphere::sky_view::SkyViewPass::new, b)),
+    ("aerial_perspective", |b| boxed(crate::render::atmosphere::aerial_perspective::AerialPerspectivePass::new, b)),
     ("scene", |b| boxed(scene::ScenePass::new, b)),
     ("sky_objects", |b| boxed(crate::render::sky_objects::SkyObjectsPass::new, b)),
     ("stars", |b| boxed(stars::StarsPass::new, b)),

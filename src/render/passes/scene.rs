@@ -5,6 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
+use crate::render::atmosphere::tables::AerialVolume;
 use crate::render::frame::pass::{DrawItem, FrameContext, Pass, PassBuild, Phase, Pipelines, Placement, Target};
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::shaders;
@@ -137,15 +138,32 @@ pub struct ScenePass {
     /// This frame's index ranges: the chunks in view, neighbours merged.
     ranges: Vec<std::ops::Range<u32>>,
     occluder: wgpu::Buffer,
+    /// Group 1: the aerial-perspective volume, and the atmosphere and LUT tables of the exact march.
+    aerial: wgpu::BindGroup,
 }
 
 impl ScenePass {
     /// Builds pipelines and uploads the geometry.
     pub fn new(b: &PassBuild<'_>) -> RenderResult<Self> {
         let device = b.device;
+        let atmosphere = &b.atmosphere;
+        let vertex = wgpu::ShaderStages::VERTEX;
+        let storage = |binding| wgpu::BindGroupLayoutEntry { visibility: vertex, ..crate::render::gpu::parts::storage_entry(binding, true) };
+        let [a0, a1, a2, a3] = AerialVolume::layout_entries(0, vertex | wgpu::ShaderStages::FRAGMENT);
+        let aerial_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("Scene::aerial_layout"),
+            entries: &[a0, a1, a2, a3, crate::render::gpu::parts::uniform_entry(4, vertex), storage(5), storage(6), storage(7)],
+        });
+        let [v0, v1, v2, v3] = atmosphere.aerial.entries(0);
+        let [l0, l1, l2] = atmosphere.luts.entries(5);
+        let aerial = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("Scene::aerial"),
+            layout: &aerial_layout,
+            entries: &[v0, v1, v2, v3, wgpu::BindGroupEntry { binding: 4, resource: atmosphere.uniform.as_entire_binding() }, l0, l1, l2],
+        });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("Scene::pipeline_layout"),
-            bind_group_layouts: &[Some(b.globals_layout)],
+            bind_group_layouts: &[Some(b.globals_layout), Some(&aerial_layout)],
             immediate_size: 0,
         });
         let pipelines = Pipelines::new_render(b, pipeline_layout, Self::build)?;
@@ -160,7 +178,7 @@ impl ScenePass {
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Self { pipelines, vertices, indices, chunks, ranges: Vec::new(), occluder })
+        Ok(Self { pipelines, vertices, indices, chunks, ranges: Vec::new(), occluder, aerial })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<ScenePipelines> {
@@ -256,6 +274,7 @@ impl Pass for ScenePass {
 
     fn draw(&self, rpass: &mut wgpu::RenderPass<'_>, key: usize, target: Target, _placement: Placement, _run: Option<&wgpu::BindGroup>) -> u32 {
         let p = self.pipelines.for_target(target);
+        rpass.set_bind_group(1, &self.aerial, &[]);
         if key == TERRAIN {
             rpass.set_pipeline(&p.scene);
             rpass.set_vertex_buffer(0, self.vertices.slice(..));

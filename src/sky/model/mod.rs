@@ -10,6 +10,7 @@ use toml::Spanned;
 /// A path to a file, relative to the sky file, with its location in the sky file for errors.
 pub type FileRef = Spanned<String>;
 
+mod aerial;
 mod atmosphere;
 mod emitters;
 mod glare;
@@ -18,6 +19,7 @@ mod sky_model;
 mod stars;
 mod values;
 
+pub use aerial::*;
 pub use atmosphere::*;
 pub use emitters::*;
 pub use glare::*;
@@ -64,6 +66,9 @@ pub struct SkyFile {
     /// Overrides of the physical models' atmosphere (default: Earth as in Hillaire 2020).
     #[serde(default)]
     pub atmosphere: Option<AtmosphereDef>,
+    /// How the scene is given the atmosphere in front of it when the model lights it.
+    #[serde(default)]
+    pub aerial_perspective: Option<AerialDef>,
     /// Particle emitters (`[[emitter]]`), attached to a sky object or to the camera.
     #[serde(default, rename = "emitter")]
     pub emitters: Vec<EmitterDef>,
