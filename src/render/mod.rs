@@ -12,7 +12,7 @@ pub mod sky_objects;
 
 pub use frame::camera::Camera;
 pub use frame::headless::{self, Headless, Offscreen};
-pub use frame::options::{Occluder, RenderOptions, Skips};
+pub use frame::options::{Occluder, RenderOptions, Skips, TestWall};
 pub use frame::pass::{Pass, Phase};
 pub use frame::renderer::{release_freed_memory, RenderTarget, SkyRenderer, SCENE_DEPTH, SKY_DEPTH};
 pub use frame::stats::{FrameStats, UploadStats};

@@ -33,8 +33,9 @@ pub const PRESETS: [(&str, f32, f32); 5] = [("south", 180.0, 12.0), ("east", 90.
 impl Camera {
     /// Distance of the near plane, m (depth 0 before the viewport's range).
     pub const NEAR_M: f32 = 0.05;
-    /// Distance of the far plane, m (depth 1): the stand-in scene ends well inside it.
-    pub const FAR_M: f32 = 5000.0;
+    /// Distance of the far plane, m (depth 1): the stand-in scene (40 km across, its corners 28
+    /// km from the viewer) ends inside it.
+    pub const FAR_M: f32 = 40000.0;
 
     /// A preset view by name (`south`, `east`, `west`, `north`, `zenith`).
     pub fn preset(name: &str) -> Option<Camera> {

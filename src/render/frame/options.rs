@@ -15,6 +15,9 @@ pub struct RenderOptions {
     pub glare: bool,
     /// Draw a test occluder into the scene's depth.
     pub occluder: Option<Occluder>,
+    /// Draw a flat wall of the scene's own shading at a known place (what aerial perspective is
+    /// measured on).
+    pub wall: Option<TestWall>,
     /// Work skipped because it would contribute nothing (all on by default; off to measure
     /// what each saves).
     pub skips: Skips,
@@ -25,7 +28,7 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { scene: true, depth_split: true, glare: true, occluder: None, skips: Skips::default(), strategy: FillStrategy::default() }
+        Self { scene: true, depth_split: true, glare: true, occluder: None, wall: None, skips: Skips::default(), strategy: FillStrategy::default() }
     }
 }
 
@@ -78,6 +81,18 @@ impl Default for Skips {
     fn default() -> Self {
         Self { dark_stages: true, invisible_stars: true, unchanged_tables: true, below_horizon: true, off_screen: true, unneeded_mips: true, covered_clears: true }
     }
+}
+
+/// A square in the world facing the viewer, lit and given the atmosphere in front of it as the
+/// scene's terrain is (shaders/scene.wgsl's `vs_main`): a scene point at a known distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TestWall {
+    /// Its centre in the world, m.
+    pub centre_m: [f32; 3],
+    /// Half its side, m.
+    pub half_size_m: f32,
+    /// Its albedo (display values, as the terrain's).
+    pub albedo: [f32; 3],
 }
 
 /// A rectangle in clip space (NDC x, y) drawn into the scene's depth: a known occluder.

@@ -23,27 +23,67 @@ fn terrain_height(x: f32, z: f32) -> f32 {
     let r = (x * x + z * z).sqrt();
     // Flat where the viewer stands, rolling hills further out.
     let flat = ((r - 40.0) / 300.0).clamp(0.0, 1.0);
-    (30.0 * (x / 190.0).sin() * (z / 240.0).cos() + 9.0 * (x / 55.0 + z / 80.0).sin()) * flat * flat - 0.5
+    let hills = (30.0 * (x / 190.0).sin() * (z / 240.0).cos() + 9.0 * (x / 55.0 + z / 80.0).sin()) * flat * flat - 0.5;
+    hills + far_ridges(x, z, r)
+}
+
+/// Ridges beyond the hills: none within 3 km (the hills near the viewer are what they were),
+/// rising to about a kilometre from 9 km out, so that aerial perspective shows on them.
+fn far_ridges(x: f32, z: f32, r: f32) -> f32 {
+    let t = ((r - 3000.0) / 6000.0).clamp(0.0, 1.0);
+    let rise = t * t * (3.0 - 2.0 * t);
+    if rise <= 0.0 {
+        return 0.0;
+    }
+    let crest = 1.0 - (x / 2300.0 + 1.3 * (z / 5100.0).sin()).sin().abs();
+    let ridge = 650.0 * crest * crest.sqrt() * (0.6 + 0.4 * (z / 3700.0 + x / 6100.0).sin());
+    let swell = 260.0 * (0.5 + 0.5 * (x / 1700.0).sin() * (z / 1900.0).cos());
+    rise * (ridge + swell)
 }
 
 /// Terrain cells along each side, and cells along each side of a chunk (the unit of culling).
-const TERRAIN_CELLS: u32 = 96;
+const TERRAIN_CELLS: u32 = 144;
 const CHUNK_CELLS: u32 = 12;
+/// Cells across the fine middle of the terrain (52 m each over +-2.5 km); the rest widen towards
+/// the edge at +-20 km.
+const FINE_CELLS: u32 = 96;
+const FINE_EXTENT_M: f32 = 2500.0;
+/// Half the stand-in's width, m: 40 km across.
+pub const TERRAIN_EXTENT_M: f32 = 20000.0;
+
+/// Coordinate of grid line `i` of `TERRAIN_CELLS + 1` along either axis, m: uniform over the
+/// fine middle, then widening as a power of the distance from it so that the first coarse cell is
+/// about as wide as a fine one.
+fn grid_line_m(i: u32) -> f32 {
+    let coarse = (TERRAIN_CELLS - FINE_CELLS) / 2;
+    let fine_cell = 2.0 * FINE_EXTENT_M / FINE_CELLS as f32;
+    let k = i as i64 - coarse as i64;
+    if (0..=FINE_CELLS as i64).contains(&k) {
+        return -FINE_EXTENT_M + fine_cell * k as f32;
+    }
+    let (outward, sign) = if k < 0 { ((-k) as f32, -1.0) } else { ((k - FINE_CELLS as i64) as f32, 1.0) };
+    let span = TERRAIN_EXTENT_M - FINE_EXTENT_M;
+    // span (1 / coarse)^p = one fine cell.
+    let p = (span / fine_cell).ln() / (coarse as f32).ln();
+    sign * (FINE_EXTENT_M + span * (outward / coarse as f32).powf(p))
+}
 
 /// The stand-in's geometry: vertices, indices, and the chunks the indices are grouped in (index
 /// range and world-space bounds), the buildings last.
 fn scene_geometry() -> (Vec<SceneVertex>, Vec<u32>, Vec<Chunk>) {
     let (mut v, mut idx, mut chunks) = (Vec::new(), Vec::new(), Vec::new());
     const N: u32 = TERRAIN_CELLS;
-    const EXTENT: f32 = 2500.0;
     for j in 0..=N {
         for i in 0..=N {
-            let x = -EXTENT + 2.0 * EXTENT * i as f32 / N as f32;
-            let z = -EXTENT + 2.0 * EXTENT * j as f32 / N as f32;
+            let (x, z) = (grid_line_m(i), grid_line_m(j));
             let e = 1.0;
             let n = glam::Vec3::new(terrain_height(x - e, z) - terrain_height(x + e, z), 2.0 * e, terrain_height(x, z - e) - terrain_height(x, z + e)).normalize();
             let shade = 0.8 + 0.2 * ((x * 0.013).sin() * (z * 0.011).cos());
-            v.push(SceneVertex { position: [x, terrain_height(x, z), z], normal: n.to_array(), albedo: [0.25 * shade, 0.32 * shade, 0.16 * shade] });
+            let y = terrain_height(x, z);
+            // Grass gives way to bare rock up the ridges.
+            let rock = ((y - 250.0) / 400.0).clamp(0.0, 1.0);
+            let albedo = glam::Vec3::new(0.25, 0.32, 0.16).lerp(glam::Vec3::new(0.36, 0.33, 0.3), rock) * shade;
+            v.push(SceneVertex { position: [x, y, z], normal: n.to_array(), albedo: albedo.to_array() });
         }
     }
     // Indices chunk by chunk, so a chunk is one index range; within a chunk the cells keep
@@ -128,6 +168,7 @@ struct ScenePipelines {
 /// Draw keys of the scene pass.
 const TERRAIN: usize = 0;
 const OCCLUDER: usize = 1;
+const WALL: usize = 2;
 
 /// Pipelines and geometry of the stand-in scene.
 pub struct ScenePass {
@@ -138,6 +179,8 @@ pub struct ScenePass {
     /// This frame's index ranges: the chunks in view, neighbours merged.
     ranges: Vec<std::ops::Range<u32>>,
     occluder: wgpu::Buffer,
+    /// The test wall's two triangles ([`crate::render::frame::options::TestWall`]).
+    wall: wgpu::Buffer,
     /// Group 1: the aerial-perspective volume, and the atmosphere and LUT tables of the exact march.
     aerial: wgpu::BindGroup,
 }
@@ -178,7 +221,13 @@ impl ScenePass {
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(Self { pipelines, vertices, indices, chunks, ranges: Vec::new(), occluder, aerial })
+        let wall = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("Scene::wall"),
+            size: 6 * std::mem::size_of::<SceneVertex>() as u64,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(Self { pipelines, vertices, indices, chunks, ranges: Vec::new(), occluder, wall, aerial })
     }
 
     fn build(b: &PassBuild<'_>, layout: &wgpu::PipelineLayout) -> RenderResult<ScenePipelines> {
@@ -261,6 +310,15 @@ impl Pass for ScenePass {
             let quad: [[f32; 2]; 6] = [[x0, y0], [x1, y0], [x1, y1], [x0, y0], [x1, y1], [x0, y1]];
             cx.queue.write_buffer(&self.occluder, 0, bytemuck::cast_slice(&quad));
         }
+        if let Some(w) = &cx.options.wall {
+            let centre = glam::Vec3::from(w.centre_m);
+            let normal = (cx.camera.position() - centre).normalize_or(glam::Vec3::Z);
+            let right = normal.cross(glam::Vec3::Y).normalize_or(glam::Vec3::X) * w.half_size_m;
+            let up = right.cross(normal).normalize() * w.half_size_m;
+            let corner = |a: f32, b: f32| SceneVertex { position: (centre + right * a + up * b).to_array(), normal: normal.to_array(), albedo: w.albedo };
+            let quad = [corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)];
+            cx.queue.write_buffer(&self.wall, 0, bytemuck::cast_slice(&quad));
+        }
     }
 
     fn items(&self, cx: &FrameContext<'_>, out: &mut Vec<DrawItem>) {
@@ -269,6 +327,9 @@ impl Pass for ScenePass {
         }
         if cx.options.occluder.is_some() {
             out.push(DrawItem::new(0, OCCLUDER));
+        }
+        if cx.options.wall.is_some() {
+            out.push(DrawItem::new(0, WALL));
         }
     }
 
@@ -283,6 +344,10 @@ impl Pass for ScenePass {
                 rpass.draw_indexed(r.clone(), 0, 0..1);
             }
             return self.ranges.len() as u32;
+        } else if key == WALL {
+            rpass.set_pipeline(&p.scene);
+            rpass.set_vertex_buffer(0, self.wall.slice(..));
+            rpass.draw(0..6, 0..1);
         } else {
             rpass.set_pipeline(&p.occluder);
             rpass.set_vertex_buffer(0, self.occluder.slice(..));
@@ -295,6 +360,29 @@ impl Pass for ScenePass {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_grid_is_fine_in_the_middle_and_widens_to_the_edge() {
+        let lines: Vec<f32> = (0..=TERRAIN_CELLS).map(grid_line_m).collect();
+        assert_eq!((lines[0], lines[TERRAIN_CELLS as usize]), (-TERRAIN_EXTENT_M, TERRAIN_EXTENT_M));
+        let widths: Vec<f32> = lines.windows(2).map(|w| w[1] - w[0]).collect();
+        let fine = 2.0 * FINE_EXTENT_M / FINE_CELLS as f32;
+        let coarse = ((TERRAIN_CELLS - FINE_CELLS) / 2) as usize;
+        for (k, w) in widths.iter().enumerate() {
+            if (coarse..coarse + FINE_CELLS as usize).contains(&k) {
+                assert!((w - fine).abs() < 1e-2, "fine cell {k}: {w} m");
+            } else {
+                // Widening away from the middle, the first coarse cell about a fine one.
+                let outward = if k < coarse { coarse - 1 - k } else { k - coarse - FINE_CELLS as usize };
+                assert!(*w >= fine * 0.99 && (outward == 0 || *w > widths[if k < coarse { k + 1 } else { k - 1 }]), "cell {k}: {w} m");
+                assert!(outward > 0 || (w - fine).abs() < 0.01 * fine, "first coarse cell {k}: {w} m");
+            }
+        }
+        // Ridges far out, none near the viewer.
+        assert_eq!(far_ridges(1000.0, 1500.0, 1802.8), 0.0);
+        let peak = (0..200).map(|k| terrain_height(15000.0 * (k as f32 * 0.1).cos(), 15000.0 * (k as f32 * 0.1).sin())).fold(0.0, f32::max);
+        assert!(peak > 500.0, "ridges at 15 km reach {peak} m");
+    }
 
     #[test]
     fn chunks_cover_the_stand_in_and_bound_their_triangles() {
