@@ -60,6 +60,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Radiance(args)) => radiance(&args),
         Some(Command::ExportEnv(args)) => cli::export_env::run(&args),
         Some(Command::Validate(args)) => cli::validate::run(&args, adapter(args.cpu)),
+        Some(Command::ValidateAerial(args)) => cli::validate_aerial::run(&args, adapter(args.cpu)),
         Some(Command::Compare(args)) => compare(&args),
         Some(Command::Soak(args)) => soak(&args),
         Some(Command::Sweep(args)) => stability_report::run(&args),

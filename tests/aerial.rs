@@ -6,6 +6,7 @@
 use skytune::atmosphere::aerial::AerialSettings;
 use skytune::atmosphere::reference::{Case, Estimate, Reference, ReferenceSettings};
 use skytune::atmosphere::{Atmosphere, LutSettings};
+use skytune::measure::aerial;
 use skytune::render::atmosphere::aerial_probe::AerialProbe;
 use skytune::render::atmosphere::radiance_probe::{ProbeAnswers, RadianceProbe};
 use skytune::render::{AdapterChoice, GpuContext, ShaderLibrary};
@@ -28,24 +29,6 @@ fn cases() -> Vec<Case> {
     out
 }
 
-/// Sun band of a case: day (>= 10 degrees), low (0 to 10), twilight (below 0).
-fn band(c: &Case) -> usize {
-    if c.sun_elev_deg >= 10.0 {
-        0
-    } else if c.sun_elev_deg >= 0.0 {
-        1
-    } else {
-        2
-    }
-}
-
-/// Median, 95th percentile and largest.
-fn spread(mut v: Vec<f64>) -> [f64; 3] {
-    v.sort_by(f64::total_cmp);
-    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
-    [at(0.5), at(0.95), at(1.0)]
-}
-
 /// The reference's rays for `cases` and its sky in the same directions (what an in-scatter error
 /// is relative to, so that short rays with little in-scatter do not dominate), at `paths`.
 fn reference_rays(atm: &Atmosphere, cases: &[Case], paths: u32) -> (Vec<Estimate>, Vec<Estimate>) {
@@ -60,25 +43,15 @@ fn reference_rays(atm: &Atmosphere, cases: &[Case], paths: u32) -> (Vec<Estimate
 /// [median, p95, worst] per sun band (day, low, twilight) of the in-scatter error as a fraction
 /// of the sky in the same direction, and of the transmittance's absolute error.
 fn errors(cases: &[Case], gpu: &ProbeAnswers, rays: &[Estimate], sky: &[Estimate]) -> ([[f64; 3]; 3], [[f64; 3]; 3]) {
-    let mut in_scatter: [Vec<f64>; 3] = Default::default();
-    let mut transmittance: [Vec<f64>; 3] = Default::default();
     for (k, c) in cases.iter().enumerate() {
-        let peak = sky.iter().zip(cases).filter(|(_, d)| band(d) == band(c)).flat_map(|(s, _)| s.all).fold(0.0, f64::max);
         for ch in 0..3 {
-            let (l, t) = (gpu.radiance[k][ch] as f64, gpu.transmittance[k][ch] as f64);
+            let (l, t) = (gpu.radiance[k][ch], gpu.transmittance[k][ch]);
             assert!(l.is_finite() && l >= 0.0 && (0.0..=1.0).contains(&t), "case {c:?}: in-scatter {l}, transmittance {t}");
-            // Relative to the sky there, or to 1% of the brightest sky of that sun band where it
-            // is darker; beyond twice the reference's standard error (at twilight, where multiple
-            // scattering is most of the light, 1024 paths leave 5 to 8% of noise on a 50 km ray).
-            let off = ((l - rays[k].all[ch]).abs() - 2.0 * rays[k].std_err[ch]).max(0.0);
-            in_scatter[band(c)].push(off / sky[k].all[ch].max(0.01 * peak).max(1e-30));
-            transmittance[band(c)].push((t - rays[k].transmittance[ch]).abs());
-            if std::env::var("SKYTUNE_DEBUG").is_ok() && ((t - rays[k].transmittance[ch]).abs() > 0.005 || off / sky[k].all[ch].max(0.01 * peak) > 0.02) {
-                eprintln!("{c:?} ch {ch}: l {l:.4e} ref {:.4e} sky {:.4e} t {t:.4} ref {:.4}", rays[k].all[ch], sky[k].all[ch], rays[k].transmittance[ch]);
-            }
         }
     }
-    (in_scatter.map(spread), transmittance.map(spread))
+    let e = aerial::ray_errors(cases, &gpu.radiance, &gpu.transmittance, rays, sky);
+    let bands = aerial::by_group(cases, &e, 3, aerial::sun_band);
+    (std::array::from_fn(|b| bands[b].0), std::array::from_fn(|b| bands[b].1))
 }
 
 #[test]
@@ -104,39 +77,6 @@ fn lut_aerial_perspective_matches_the_reference() {
     }
 }
 
-/// The accuracy set, drawn afresh (seeded): viewers 0 to 5 km up, views -10 to +30
-/// degrees at any azimuth from the sun, distances 0.1 to 100 km spread in log distance, a third
-/// of the suns in each band (day 10 to 60 degrees, low 0 to 10, twilight -6 to 0). A scene point
-/// is in the air: a draw whose point lies beyond the planet's ground is drawn again.
-fn drawn_cases(seed: u64, n: usize) -> Vec<Case> {
-    let mut rng = fastrand::Rng::with_seed(seed);
-    let mut between = |lo: f64, hi: f64| lo + (hi - lo) * rng.f64();
-    let ground = Atmosphere::default().ground_radius_km;
-    let mut out = Vec::new();
-    while out.len() < n {
-        let sun_elev_deg = match out.len() % 3 {
-            0 => between(10.0, 60.0),
-            1 => between(0.0, 10.0),
-            _ => between(-6.0, 0.0),
-        };
-        let c = Case {
-            camera_km: between(0.0, 5.0),
-            albedo: 0.3,
-            sun_elev_deg,
-            view_elev_deg: between(-10.0, 30.0),
-            rel_azimuth_deg: between(0.0, 180.0),
-            distance_km: Some(10f64.powf(between(-1.0, 2.0))),
-        };
-        let (r, mu) = (ground + c.camera_km, c.view_elev_deg.to_radians().sin());
-        let disc = r * r * mu * mu - (r * r - ground * ground);
-        let to_ground = if mu < 0.0 && disc >= 0.0 { -r * mu - disc.sqrt() } else { f64::INFINITY };
-        if c.distance_km.is_some_and(|d| d < to_ground) {
-            out.push(c);
-        }
-    }
-    out
-}
-
 /// The default volume, read as the scene reads it, against the reference on two drawn sets: seed
 /// 67, on which the volume's march through the ground was found and fixed (in sample), and seed
 /// 68, drawn afterwards and changed nothing (held out).
@@ -146,7 +86,7 @@ fn the_default_volume_matches_the_reference() {
     let ctx = GpuContext::headless(AdapterChoice::Cpu).unwrap();
     let probe = AerialProbe::new(&ctx, &ShaderLibrary::embedded()).unwrap();
     for seed in [67, 68] {
-        let cases = drawn_cases(seed, 96);
+        let cases = aerial::draw_cases(seed, 96, &atm);
         let (rays, sky) = reference_rays(&atm, &cases, 1024);
         let gpu = probe.volume_rays(&ctx, &atm, &LutSettings::default(), &AerialSettings::default(), true, &cases).unwrap();
         let (in_scatter, transmittance) = errors(&cases, &gpu, &rays, &sky);

@@ -519,3 +519,29 @@ fn each_command_names_the_sky_file_models_it_takes() {
         assert!(err.contains(&format!("invalid value '{refused}'")) && err.contains(taken), "{args:?} {refused}: {err}");
     }
 }
+
+/// `validate-aerial` writes a row per method and band, and its table between markers, keeping
+/// the rest of the report file.
+#[test]
+fn validate_aerial_tabulates_every_method_by_band() {
+    let dir = tempfile::tempdir().unwrap();
+    let (out, report) = (dir.path().join("aerial.csv"), dir.path().join("validation.md"));
+    std::fs::write(&report, "# Validation\n\nkept text\n").unwrap();
+    let o = skytune()
+        .args(["validate-aerial", "--cpu", "--cases", "6", "--paths", "16", "--sizes", "8x8x8,16x16x16", "--out"])
+        .arg(&out)
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(&out).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    // Three methods (exact, two sizes) x (three sun bands + three distance bands).
+    assert_eq!(rows.len(), 18, "{csv}");
+    assert!(rows.iter().any(|r| r.starts_with("volume 16x16x16,twilight,2,")), "{csv}");
+    let md = std::fs::read_to_string(&report).unwrap();
+    assert!(md.starts_with("# Validation\n\nkept text\n") && md.contains("| volume 8x8x8, 10-100 km |") && md.contains("<!-- skytune validate-aerial: end -->"), "{md}");
+    let o = skytune().args(["validate-aerial", "--cpu", "--sizes", "8x8x300", "--out"]).arg(&out).output().unwrap();
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--sizes: expected 2..=128 cells in depth, found 300"), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -70,6 +70,9 @@ pub enum Command {
     /// Compare the sky models with measured skies (data/measured/): fit each one's aerosol or
     /// turbidity per scan, report its luminance-shape and colour errors (docs/validation.md).
     Validate(ValidateArgs),
+    /// Aerial perspective against the reference: the exact march and the volume at each size,
+    /// per sun band and distance band, on a freshly drawn set of finite rays.
+    ValidateAerial(ValidateAerialArgs),
     /// Render the same view twice (two skies, models, tiers or times), print the difference
     /// (FLIP and channel figures) and write A, B and the heat map; exit status 1 above a threshold.
     Compare(CompareArgs),
@@ -233,6 +236,33 @@ pub struct ExportEnvArgs {
     /// Output folder.
     #[arg(long, short)]
     pub out: PathBuf,
+}
+
+/// `validate-aerial` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct ValidateAerialArgs {
+    /// Seed of the drawn rays (the tests use 67 and 68; docs/validation.md 69).
+    #[arg(long, default_value_t = 69)]
+    pub seed: u64,
+    /// Rays drawn.
+    #[arg(long, default_value_t = 192)]
+    pub cases: usize,
+    /// Reference paths per ray.
+    #[arg(long, default_value_t = 1024)]
+    pub paths: u32,
+    /// Volume sizes, comma-separated ACROSSxDOWNxDEPTH.
+    #[arg(long, value_delimiter = ',', default_value = "16x16x16,32x32x32,64x64x64", value_parser = parse_volume_size)]
+    pub sizes: Vec<[u32; 3]>,
+    /// Results CSV (a row per method and band).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Write the Markdown table into this file, between its validate-aerial markers (the rest of
+    /// the file is kept).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Use the CPU (software) adapter.
+    #[arg(long)]
+    pub cpu: bool,
 }
 
 /// `validate` arguments.

@@ -12,5 +12,6 @@ pub mod export_env;
 pub mod lookup_paths;
 pub mod stability_report;
 pub mod validate;
+pub mod validate_aerial;
 
 pub use args::*;

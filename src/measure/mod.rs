@@ -2,6 +2,7 @@
 //! chart, `kind = "auto"`'s pick, the stability sweep, soak runs, bakes of a model into bitmaps
 //! and differences between two renders.
 
+pub mod aerial;
 pub mod auto_model;
 pub mod bake;
 pub mod image_diff;
