@@ -28,9 +28,16 @@ fn cs_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     ray.distance_km = distance_to_top(atmosphere, ray.r, ray.mu);
     var state = AerialMarch(vec3<f32>(0.0), vec3<f32>(0.0));
     var start = 0.0;
+    let multiple = p.shape.z > 0.5;
+    var c: array<vec3<f32>, 6>;
     for (var k = 0u; k < p.size.z; k++) {
         let end = aerial_slice_distance_km(p, k);
-        aerial_advance(atmosphere, ray, view, sun, start, end, p.size.w, p.shape.z > 0.5, &state);
+        if (multiple && k % AERIAL_SLICES_PER_MS_READ == 0u) {
+            // At the middle of the slices this read serves.
+            let last = min(k + AERIAL_SLICES_PER_MS_READ, p.size.z) - 1u;
+            c = aerial_ms_at(atmosphere, ray, view, sun, min(0.5 * (start + aerial_slice_distance_km(p, last)), ray.distance_km));
+        }
+        aerial_advance(atmosphere, ray, view, sun, start, end, p.size.w, multiple, c, &state);
         start = end;
         // Finite in half precision whatever the atmosphere.
         textureStore(in_scatter_volume, vec3<u32>(gid.xy, k), vec4<f32>(min(state.sum, vec3<f32>(60000.0)), 1.0));

@@ -56,6 +56,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Frame(args)), .. })) => bench_frame::run(&args),
         Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Models(args)), .. })) => bench_models::run(&args),
         Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Reference(args)), .. })) => cli::bench_reference::run(&args),
+        Some(Command::Bench(cli::BenchCommand { what: Some(cli::BenchWhat::Aerial(args)), .. })) => cli::bench_aerial::run(&args),
         Some(Command::Bench(cmd)) => bench_passes::run(&cmd.args),
         Some(Command::Radiance(args)) => radiance(&args),
         Some(Command::ExportEnv(args)) => cli::export_env::run(&args),

@@ -153,3 +153,21 @@ fn a_bitmap_sky_keeps_its_fog() {
         assert!((walls[0][c] - decode(fog[c])).abs() < 2.0 / 255.0, "channel {c}: wall {:?}, fog {fog:?}", walls[0]);
     }
 }
+
+/// `[aerial_perspective] method = "fog"` keeps the scene's fixed fog under a model lighting it:
+/// walls at 20 and 30 km are both wholly the fog colour (exp(-20000 x 0.0018) leaves nothing of
+/// either), where the volume tells them apart.
+#[test]
+fn the_fog_method_keeps_the_fixed_fog() {
+    use skytune::atmosphere::aerial::{AerialMethod, AerialSettings};
+    let mut h = common::headless(SIZE.0, SIZE.1);
+    for (method, same) in [(AerialMethod::Fog, true), (AerialMethod::Volume, false)] {
+        let mut sky = lut_sky(Atmosphere::default());
+        sky.model.aerial = AerialSettings { method, ..Default::default() };
+        h.set_sky(&sky).unwrap();
+        let (_, walls) = wall_pixels(&mut h, &sky, 12.0, &[20.0, 30.0]);
+        let apart = (walls[0] - walls[1]).abs().max_element();
+        // Measured: 0 under the fog, 0.0136 apart with the volume.
+        assert_eq!(apart < 1e-5, same, "{method:?}: walls {walls:?}");
+    }
+}

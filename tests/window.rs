@@ -106,7 +106,17 @@ fn the_sky_is_most_of_the_window_and_shows_what_a_still_renders() {
         let line = window.lines.lock().unwrap().iter().rev().find(|l| l.contains("sky view:")).cloned().unwrap_or(line);
         let v = numbers(&line, &["x", "y", "width", "height"]).into_iter().map(|n| n as u32).collect::<Vec<_>>();
         let (x, y, w, h) = (v[0], v[1], v[2], v[3]);
-        let screen = common::x_screenshot(&window.display).expect("a screenshot of the X server");
+        // A loaded machine may not have presented the laid-out view yet: until it has (the sky
+        // view's pixels not all black), look again, for at most a minute.
+        let started = std::time::Instant::now();
+        let screen = loop {
+            let screen = common::x_screenshot(&window.display).expect("a screenshot of the X server");
+            let drawn = image::imageops::crop_imm(&screen, x, y, w, h).to_image().pixels().any(|p| p[0] > 0 || p[1] > 0 || p[2] > 0);
+            if drawn || started.elapsed() > Duration::from_secs(60) {
+                break screen;
+            }
+            std::thread::sleep(Duration::from_secs(2));
+        };
         drop(window);
         let name = format!("window_{}x{}", size.0, size.1);
         screen.save(common::output_dir().join(format!("{name}.screen.png"))).unwrap();

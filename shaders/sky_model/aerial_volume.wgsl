@@ -48,11 +48,25 @@ struct AerialMarch {
     sum: vec3<f32>,
 };
 
+// The multiple-scattering table's harmonics at distance t along `ray` (view direction `view`):
+// the light arriving there from the second order on. The light arriving at a point changes
+// slowly along a ray (as `MS_SAMPLES_PER_READ` in lut_sampling.wgsl), and this 24-value read is
+// most of a slice's cost on a software rasteriser, so the builder reads it once for several
+// slices (`AERIAL_SLICES_PER_MS_READ`).
+fn aerial_ms_at(atm: Atmosphere, ray: ViewRay, view: vec3<f32>, sun: vec3<f32>, t: f32) -> array<vec3<f32>, 6> {
+    let q = vec3<f32>(0.0, ray.r, 0.0) + view * t;
+    let r_q = atm.shape.x + max(altitude_along(atm, ray.r, ray.mu, t), 0.0);
+    return sample_multiscattering(0u, atm, r_q, dot(q, sun) / max(length(q), 1e-3));
+}
+
+// Slices per read of the multiple-scattering table in the volume's march.
+const AERIAL_SLICES_PER_MS_READ: u32 = 4u;
+
 // Marches `ray` (view direction `view`) from t0 to t1 km in `steps` midpoint samples, adding to
 // `state`: single scattering with the table's transmittance to the sun (the Earth's shadow in
-// it) and, with `multiple`, what the multiple-scattering table's orders scatter towards the
-// viewer. Nothing beyond the ray's end (the ground, the top of the atmosphere).
-fn aerial_advance(atm: Atmosphere, ray: ViewRay, view: vec3<f32>, sun: vec3<f32>, t0: f32, t1: f32, steps: u32, multiple: bool, state: ptr<function, AerialMarch>) {
+// it) and, with `multiple`, what the multiple-scattering harmonics `c` (read near the segment:
+// `aerial_ms_at`) scatter towards the viewer. Nothing beyond the ray's end.
+fn aerial_advance(atm: Atmosphere, ray: ViewRay, view: vec3<f32>, sun: vec3<f32>, t0: f32, t1: f32, steps: u32, multiple: bool, c: array<vec3<f32>, 6>, state: ptr<function, AerialMarch>) {
     let a = min(t0, ray.distance_km);
     let b = min(t1, ray.distance_km);
     if (b <= a) {
@@ -70,7 +84,7 @@ fn aerial_advance(atm: Atmosphere, ray: ViewRay, view: vec3<f32>, sun: vec3<f32>
         let scattering = scattering_at(atm, h);
         var light = (scattering.rayleigh * ray.phase_r + scattering.mie * ray.phase_m) * sun_transmittance(atm, r_q, mu_s);
         if (multiple) {
-            light += multiple_scattering_from(0u, atm, q, r_q, mu_s, view, sun, scattering.rayleigh, scattering.mie);
+            light += multiple_scattering_of(c, q, view, sun, scattering.rayleigh, scattering.mie);
         }
         sum += light * exp(-step.tau_mid) * step.dt;
     }

@@ -70,7 +70,17 @@ fn distance_to_top(atm: Atmosphere, r: f32, mu: f32) -> f32 {
 // (`skytune sweep`). Keep in sync with SUN_SET_FADE_RAD in src/atmosphere/mod.rs.
 const SUN_SET_FADE_RAD: f32 = 0.0017453;
 fn sun_visible_fraction(atm: Atmosphere, r: f32, mu_s: f32) -> f32 {
-    let above = asin(clamp(mu_s, -1.0, 1.0)) - asin(horizon_mu(atm, r));
+    let horizon = horizon_mu(atm, r);
+    // asin's slope is at least 1, so cosines 0.01 apart are angles at least 0.01 rad apart, far
+    // beyond the fade: the same 1 or 0 without the two asin (a software rasteriser evaluates them
+    // in code), for nearly every sample of a march.
+    if (mu_s > horizon + 0.01) {
+        return 1.0;
+    }
+    if (mu_s < horizon - 0.01) {
+        return 0.0;
+    }
+    let above = asin(clamp(mu_s, -1.0, 1.0)) - asin(horizon);
     return smoothstep(-SUN_SET_FADE_RAD, 0.0, above);
 }
 

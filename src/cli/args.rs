@@ -251,8 +251,11 @@ pub struct ValidateAerialArgs {
     #[arg(long, default_value_t = 1024)]
     pub paths: u32,
     /// Volume sizes, comma-separated ACROSSxDOWNxDEPTH.
-    #[arg(long, value_delimiter = ',', default_value = "16x16x16,32x32x32,64x64x64", value_parser = parse_volume_size)]
+    #[arg(long, value_delimiter = ',', default_value = "16x16x16,16x32x32,32x32x32,64x64x64", value_parser = parse_volume_size)]
     pub sizes: Vec<[u32; 3]>,
+    /// View-ray samples per slice of every volume (default: `[aerial_perspective]`'s).
+    #[arg(long)]
+    pub steps_per_slice: Option<u32>,
     /// Results CSV (a row per method and band).
     #[arg(long)]
     pub out: PathBuf,
@@ -634,6 +637,32 @@ pub enum BenchWhat {
     /// How the reference converges: relative error against paths per regime, reported and
     /// measured against a longer run (docs/reference-convergence.md and its chart).
     Reference(ReferenceBenchArgs),
+    /// What aerial perspective costs: frames with the scene's fog, the default volume and the
+    /// exact march side by side with the fill-rate floor, and the volume's build per size.
+    Aerial(AerialBenchArgs),
+}
+
+/// `bench aerial` arguments.
+#[derive(Debug, Args, Clone)]
+pub struct AerialBenchArgs {
+    /// Measured frames per case (after 2 warm-up frames).
+    #[arg(long, default_value_t = 15)]
+    pub frames: u32,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Markdown report to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Volume sizes whose build is timed, comma-separated ACROSSxDOWNxDEPTH.
+    #[arg(long, value_delimiter = ',', default_value = "16x16x16,16x32x32,32x32x32,64x64x64", value_parser = parse_volume_size)]
+    pub sizes: Vec<[u32; 3]>,
+    /// View-ray samples per slice of every volume (default: `[aerial_perspective]`'s).
+    #[arg(long)]
+    pub steps_per_slice: Option<u32>,
+    /// Force the software adapter (lavapipe).
+    #[arg(long)]
+    pub cpu: bool,
 }
 
 /// `bench reference` arguments.

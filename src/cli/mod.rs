@@ -3,6 +3,7 @@
 //! measurements do the work; these modules drive them and write docs/.
 
 pub mod args;
+pub mod bench_aerial;
 pub mod bench_frame;
 pub mod bench_models;
 pub mod bench_passes;

@@ -29,7 +29,9 @@ struct Row {
 
 /// Runs the validation.
 pub fn run(args: &ValidateAerialArgs, adapter: AdapterChoice) -> anyhow::Result<()> {
-    let volumes: Vec<AerialSettings> = args.sizes.iter().map(|&volume_size| AerialSettings { volume_size, ..Default::default() }).collect();
+    let d = AerialSettings::default();
+    let volumes: Vec<AerialSettings> =
+        args.sizes.iter().map(|&volume_size| AerialSettings { volume_size, steps_per_slice: args.steps_per_slice.unwrap_or(d.steps_per_slice), ..d }).collect();
     for v in &volumes {
         v.validate().map_err(|e| anyhow::anyhow!("--sizes: {}", e.message))?;
     }
@@ -53,7 +55,8 @@ pub fn run(args: &ValidateAerialArgs, adapter: AdapterChoice) -> anyhow::Result<
     for settings in &volumes {
         let [x, y, z] = settings.volume_size;
         let default = if *settings == AerialSettings::default() { " (default)" } else { "" };
-        methods.push((format!("volume {x}x{y}x{z}{default}"), probe.volume_rays(&ctx, &atm, &lut, settings, true, &cases)?));
+        let steps = if settings.steps_per_slice == d.steps_per_slice { String::new() } else { format!(", {} samples a slice", settings.steps_per_slice) };
+        methods.push((format!("volume {x}x{y}x{z}{steps}{default}"), probe.volume_rays(&ctx, &atm, &lut, settings, true, &cases)?));
     }
 
     let mut rows = Vec::new();

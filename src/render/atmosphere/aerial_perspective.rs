@@ -15,10 +15,10 @@ use crate::sky::resolved::{SkyModel, SkyModelKind};
 
 /// What a frame under `model` gives the scene of the atmosphere in front of it: the model's
 /// aerial perspective when the model lights the scene, with the multiple-scattering orders
-/// unless the model leaves them out (`single`); none for the bitmaps and for Braun and Cohen,
-/// whose one colour is not a radiance.
+/// unless the model leaves them out (`single`); none for the bitmaps, for Braun and Cohen, whose
+/// one colour is not a radiance, and where the sky file asks for fog.
 pub fn aerial_use(model: &SkyModel) -> AerialUse {
-    if !model.kind.is_physical() || !model.drive_scene || model.kind == SkyModelKind::Linear {
+    if !model.kind.is_physical() || !model.drive_scene || model.kind == SkyModelKind::Linear || model.aerial.method == AerialMethod::Fog {
         return AerialUse::None;
     }
     AerialUse::Method { method: model.aerial.method, multiple: model.kind != SkyModelKind::Single }

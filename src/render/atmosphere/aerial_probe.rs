@@ -150,4 +150,53 @@ impl AerialProbe {
             transmittance: vectors.iter().skip(1).step_by(2).take(cases.len()).map(rgb).collect(),
         })
     }
+
+    /// Wall times of `runs` builds of a volume of `aerial` for a camera looking along +x, level
+    /// (the LUT tables built first, untimed), each submitted and waited for, ms: the build's cost
+    /// as the frame pays it whenever the camera, the sun or the atmosphere moves.
+    pub fn time_builds(&self, ctx: &GpuContext, atmosphere: &Atmosphere, lut: &LutSettings, aerial: &AerialSettings, runs: u32) -> RenderResult<Vec<f64>> {
+        let device = &ctx.device;
+        let atm = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("AerialProbe::atmosphere"),
+            contents: bytemuck::bytes_of(&AtmosphereUniform::from(atmosphere)),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let empty = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("AerialProbe::empty"), layout: &self.empty_layout, entries: &[] });
+        let lut_group = self.lut_builder.bind_group(device, &atm, &self.tables);
+        let build_group = self.builder.bind_group(device, &atm, &self.tables, &self.volume);
+        ctx.queue.write_buffer(&self.tables.params, 0, bytemuck::bytes_of(&LutUniform::new(lut, 0.3, atmosphere.mie_g)));
+        let clip_from_world = glam::Mat4::perspective_rh(FOV_Y_DEG.to_radians(), ASPECT, crate::render::frame::camera::Camera::NEAR_M, crate::render::frame::camera::Camera::FAR_M)
+            * glam::Mat4::look_to_rh(glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y);
+        let params = AerialUniform::new(
+            aerial,
+            AerialUse::Method { method: aerial.method, multiple: true },
+            clip_from_world.inverse(),
+            glam::Vec3::ZERO,
+            0.0,
+            glam::Vec3::new(0.5, 0.5, 0.0).normalize(),
+        );
+        ctx.queue.write_buffer(&self.volume.params, 0, bytemuck::bytes_of(&params));
+        let record = |tables: bool| {
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("AerialProbe::timing") });
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("AerialProbe::timing_pass"), timestamp_writes: None });
+                pass.set_bind_group(0, &empty, &[]);
+                if tables {
+                    self.lut_builder.dispatch(&mut pass, &lut_group, lut);
+                }
+                self.builder.dispatch(&mut pass, &build_group, aerial.volume_size);
+            }
+            encoder.finish()
+        };
+        ctx.queue.submit([record(true)]);
+        ctx.wait_idle()?;
+        let mut out = Vec::new();
+        for _ in 0..runs {
+            let t = std::time::Instant::now();
+            ctx.queue.submit([record(false)]);
+            ctx.wait_idle()?;
+            out.push(t.elapsed().as_secs_f64() * 1000.0);
+        }
+        Ok(out)
+    }
 }

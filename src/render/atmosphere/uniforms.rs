@@ -131,6 +131,7 @@ impl AerialUniform {
             AerialUse::None => (0.0, false),
             AerialUse::Method { method: AerialMethod::Volume, multiple } => (1.0, multiple),
             AerialUse::Method { method: AerialMethod::Exact, multiple } => (2.0, multiple),
+            AerialUse::Method { method: AerialMethod::Fog, .. } => (0.0, false),
         };
         let [x, y, z] = settings.volume_size;
         Self {

@@ -13,6 +13,8 @@ pub enum AerialMethodDef {
     Volume,
     /// The sky's own march per scene vertex.
     Exact,
+    /// The model's fog colour at the NeL scene's fixed density.
+    Fog,
 }
 
 /// `[aerial_perspective] slices`.
@@ -29,15 +31,15 @@ pub enum SliceSpreadDef {
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AerialDef {
-    /// `volume` (default) or `exact`.
+    /// `volume` (default), `exact` or `fog`.
     pub method: Option<AerialMethodDef>,
-    /// Cells across, down and in depth (default [32, 32, 32]; at most [64, 64, 128]).
+    /// Cells across, down and in depth (default [16, 32, 32]; at most [64, 64, 128]).
     pub volume_size: Option<[StepCount; 3]>,
     /// Distance the last slice ends at, km (default 128).
     pub distance_km: Option<Positive>,
     /// `quadratic` (default) or `linear`.
     pub slices: Option<SliceSpreadDef>,
-    /// View-ray samples per slice (default 2).
+    /// View-ray samples per slice (default 1).
     pub steps_per_slice: Option<StepCount>,
 }
 
@@ -50,6 +52,7 @@ impl AerialDef {
             method: self.method.map_or(d.method, |m| match m {
                 AerialMethodDef::Volume => AerialMethod::Volume,
                 AerialMethodDef::Exact => AerialMethod::Exact,
+                AerialMethodDef::Fog => AerialMethod::Fog,
             }),
             volume_size: self.volume_size.map_or(d.volume_size, |s| s.map(|x| x.0)),
             distance_km: self.distance_km.map_or(d.distance_km, |x| x.get() as f64),
