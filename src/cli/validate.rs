@@ -353,9 +353,16 @@ fn write_report(path: &Path, rows: &[Row], args: &ValidateArgs, adapter: &str) -
         );
     }
     let _ = writeln!(md, "\n{END}");
+    replace_between_markers(path, (BEGIN, END), &md)
+}
+
+/// Writes `md` (which starts with `begin` and ends with `end`) into the file at `path` in place
+/// of what lies between those markers there, keeping the rest of the file; appends it when the
+/// file has no such markers (or does not exist).
+pub(crate) fn replace_between_markers(path: &Path, (begin, end): (&str, &str), md: &str) -> anyhow::Result<()> {
     let old = std::fs::read_to_string(path).unwrap_or_default();
-    let text = match (old.find(BEGIN), old.find(END)) {
-        (Some(b), Some(e)) if e > b => format!("{}{}{}", &old[..b], md.trim_end(), &old[e + END.len()..]),
+    let text = match (old.find(begin), old.find(end)) {
+        (Some(b), Some(e)) if e > b => format!("{}{}{}", &old[..b], md.trim_end(), &old[e + end.len()..]),
         _ => format!("{old}{}{md}", if old.is_empty() { "" } else { "\n" }),
     };
     skytune::support::safe_write::write_atomic(path, text.as_bytes())?;

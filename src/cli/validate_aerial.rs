@@ -109,11 +109,5 @@ fn write_report(path: &Path, rows: &[Row], args: &ValidateAerialArgs, adapter: &
         let _ = writeln!(md, "| {}, {} | {} | {:.2}% / {:.2}% / {:.2}% | {d:.4} / {e:.4} / {f:.4} |", r.method, r.group, r.cases, 100.0 * a, 100.0 * b, 100.0 * c);
     }
     let _ = writeln!(md, "\n{END}");
-    let old = std::fs::read_to_string(path).unwrap_or_default();
-    let text = match (old.find(BEGIN), old.find(END)) {
-        (Some(b), Some(e)) if e > b => format!("{}{}{}", &old[..b], md.trim_end(), &old[e + END.len()..]),
-        _ => format!("{old}{}{md}", if old.is_empty() { "" } else { "\n" }),
-    };
-    skytune::support::safe_write::write_atomic(path, text.as_bytes())?;
-    Ok(())
+    super::validate::replace_between_markers(path, (BEGIN, END), &md)
 }
