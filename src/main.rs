@@ -235,8 +235,9 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
     let (out, units, comment) = match args.model {
         _ if through_volume => {
             let (answers, comment) = volume_radiance(args, &atm, &list)?;
-            transmittance = Some(answers.transmittance.into_iter().map(|c| c.map(f64::from)).collect::<Vec<_>>());
-            (answers.radiance.into_iter().map(|c| c.map(f64::from)).collect(), units, comment)
+            let (out, t) = answers.to_f64();
+            transmittance = Some(t);
+            (out, units, comment)
         }
         SkyModelKind::Reference => {
             let (e, comment) = reference_radiance(args, atm, &list)?;
@@ -263,9 +264,8 @@ fn radiance(args: &cli::RadianceArgs) -> anyhow::Result<()> {
             let settings = lut_settings(args)?;
             let ctx = GpuContext::headless(adapter(args.cpu))?;
             let probe = skytune::render::atmosphere::radiance_probe::RadianceProbe::new(&ctx, &skytune::render::ShaderLibrary::embedded())?;
-            let answers = probe.lut_rays(&ctx, &atm, &settings, &list)?;
-            transmittance = Some(answers.transmittance.into_iter().map(|c| c.map(f64::from)).collect::<Vec<_>>());
-            let out = answers.radiance.into_iter().map(|c| c.map(f64::from)).collect();
+            let (out, t) = probe.lut_rays(&ctx, &atm, &settings, &list)?.to_f64();
+            transmittance = Some(t);
             (out, units, format!("model lut on {}: {settings:?}", ctx.adapter_line()))
         }
         SkyModelKind::Precomputed => {

@@ -51,7 +51,7 @@ fn errors(cases: &[Case], gpu: &ProbeAnswers, rays: &[Estimate], sky: &[Estimate
     }
     let e = aerial::ray_errors(cases, &gpu.radiance, &gpu.transmittance, rays, sky);
     let bands = aerial::by_group(cases, &e, 3, aerial::sun_band);
-    (std::array::from_fn(|b| bands[b].0), std::array::from_fn(|b| bands[b].1))
+    (std::array::from_fn(|b| bands[b].in_scatter), std::array::from_fn(|b| bands[b].transmittance))
 }
 
 #[test]

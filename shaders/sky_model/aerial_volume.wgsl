@@ -63,9 +63,8 @@ fn aerial_ms_at(atm: Atmosphere, ray: ViewRay, view: vec3<f32>, sun: vec3<f32>, 
 const AERIAL_SLICES_PER_MS_READ: u32 = 4u;
 
 // Marches `ray` (view direction `view`) from t0 to t1 km in `steps` midpoint samples, adding to
-// `state`: single scattering with the table's transmittance to the sun (the Earth's shadow in
-// it) and, with `multiple`, what the multiple-scattering harmonics `c` (read near the segment:
-// `aerial_ms_at`) scatter towards the viewer. Nothing beyond the ray's end.
+// `state` what each scatters towards the viewer (`scattered_at`, with the multiple-scattering
+// harmonics `c` read near the segment: `aerial_ms_at`). Nothing beyond the ray's end.
 fn aerial_advance(atm: Atmosphere, ray: ViewRay, view: vec3<f32>, sun: vec3<f32>, t0: f32, t1: f32, steps: u32, multiple: bool, c: array<vec3<f32>, 6>, state: ptr<function, AerialMarch>) {
     let a = min(t0, ray.distance_km);
     let b = min(t1, ray.distance_km);
@@ -77,16 +76,7 @@ fn aerial_advance(atm: Atmosphere, ray: ViewRay, view: vec3<f32>, sun: vec3<f32>
     var sum = (*state).sum;
     for (var i = 0u; i < steps; i++) {
         let step = march_step(atm, ray.r, ray.mu, vec2<f32>(a + (f32(i) + 0.5) * dt, dt), &tau);
-        let h = max(step.altitude_km, 0.0);
-        let q = vec3<f32>(0.0, ray.r, 0.0) + view * step.t;
-        let r_q = atm.shape.x + h;
-        let mu_s = dot(q, sun) / max(length(q), 1e-3);
-        let scattering = scattering_at(atm, h);
-        var light = (scattering.rayleigh * ray.phase_r + scattering.mie * ray.phase_m) * sun_transmittance(atm, r_q, mu_s);
-        if (multiple) {
-            light += multiple_scattering_of(c, q, view, sun, scattering.rayleigh, scattering.mie);
-        }
-        sum += light * exp(-step.tau_mid) * step.dt;
+        sum += scattered_at(atm, ray, view, sun, step, c, multiple) * exp(-step.tau_mid) * step.dt;
     }
     (*state).tau = tau;
     (*state).sum = sum;

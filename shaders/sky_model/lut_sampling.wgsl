@@ -193,16 +193,24 @@ fn lut_aerial(atm: Atmosphere, camera_km: f32, view: vec3<f32>, sun: vec3<f32>, 
             c = ms_for_samples(atm, ray, view, sun, i, steps);
         }
         let step = march_step(atm, r, mu, crowded_sample(ray.distance_km, i, steps), &tau);
-        let h = max(step.altitude_km, 0.0);
-        let p = vec3<f32>(0.0, r, 0.0) + view * step.t;
-        let r_p = atm.shape.x + h;
-        let mu_s = dot(p, sun) / max(length(p), 1e-3);
-        let scattering = scattering_at(atm, h);
-        let sigma_r = scattering.rayleigh;
-        let sigma_m = scattering.mie;
-        let single = (sigma_r * ray.phase_r + sigma_m * ray.phase_m) * sun_transmittance(atm, r_p, mu_s);
-        let multiple = multiple_scattering_of(c, p, view, sun, sigma_r, sigma_m);
-        sum += (single + multiple) * exp(-step.tau_mid) * step.dt;
+        sum += scattered_at(atm, ray, view, sun, step, c, true) * exp(-step.tau_mid) * step.dt;
     }
     return Aerial(sum, exp(-tau));
+}
+
+// The light a march step of `ray` (view direction `view`) scatters towards the viewer, per km
+// before the way back: single scattering with the table's transmittance to the sun (the Earth's
+// shadow in it) and, with `multiple`, what the multiple-scattering harmonics `c` (read near the
+// step) scatter. The one sample of `lut_aerial` and of the aerial-perspective volume's march.
+fn scattered_at(atm: Atmosphere, ray: ViewRay, view: vec3<f32>, sun: vec3<f32>, step: MarchStep, c: array<vec3<f32>, 6>, multiple: bool) -> vec3<f32> {
+    let h = max(step.altitude_km, 0.0);
+    let p = vec3<f32>(0.0, ray.r, 0.0) + view * step.t;
+    let r_p = atm.shape.x + h;
+    let mu_s = dot(p, sun) / max(length(p), 1e-3);
+    let scattering = scattering_at(atm, h);
+    let single = (scattering.rayleigh * ray.phase_r + scattering.mie * ray.phase_m) * sun_transmittance(atm, r_p, mu_s);
+    if (!multiple) {
+        return single;
+    }
+    return single + multiple_scattering_of(c, p, view, sun, scattering.rayleigh, scattering.mie);
 }

@@ -17,14 +17,9 @@ use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::{SkyModel, SkyModelKind};
 use skytune::sky::{FrameInput, Sky};
 
-use super::bench_frame::timed;
+use super::bench_frame::{median, timed};
 
 const METHODS: [AerialMethod; 3] = [AerialMethod::Fog, AerialMethod::Volume, AerialMethod::Exact];
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 fn sky_with(method: AerialMethod) -> Sky {
     let mut sky = default_sky();
@@ -78,8 +73,8 @@ pub fn run(args: &AerialBenchArgs) -> anyhow::Result<()> {
                         }
                     }
                 }
-                let pair = |k: usize| median(samples[k].iter().zip(&samples[1]).map(|(a, b)| a / b).collect());
-                let m: Vec<f64> = samples.iter().map(|s| median(s.clone())).collect();
+                let pair = |k: usize| median(&samples[k].iter().zip(&samples[1]).map(|(a, b)| a / b).collect::<Vec<_>>());
+                let m: Vec<f64> = samples.iter().map(|s| median(s)).collect();
                 let (volume, exact) = (pair(2), pair(3));
                 ratios.push((name, volume, exact));
                 let _ = writeln!(md, "| {name} | {hour} | {view} | {:.2} | {:.2} | {:.2} | {:.2} | {volume:.3} | {exact:.3} |", m[0], m[1], m[2], m[3]);
@@ -96,8 +91,8 @@ pub fn run(args: &AerialBenchArgs) -> anyhow::Result<()> {
         let _ = writeln!(
             md,
             "- `{name}`: volume / fog worst {worst:.3}, median {:.3}; exact / fog median {:.3}",
-            median(r.iter().map(|r| r.1).collect()),
-            median(r.iter().map(|r| r.2).collect())
+            median(&r.iter().map(|r| r.1).collect::<Vec<_>>()),
+            median(&r.iter().map(|r| r.2).collect::<Vec<_>>())
         );
     }
 
@@ -111,7 +106,7 @@ pub fn run(args: &AerialBenchArgs) -> anyhow::Result<()> {
         settings.validate().map_err(|e| anyhow::anyhow!("--sizes: {}", e.message))?;
         let builds = probe.time_builds(&ctx, &Atmosphere::default(), &LutSettings::default(), &settings, args.frames + 2)?;
         let floors: Vec<f64> = (0..args.frames + 2).map(|_| timed(&ctx, |e| floor.record(e, target.target.target().color))).collect::<Result<_, _>>()?;
-        let (b, f) = (median(builds[2..].to_vec()), median(floors[2..].to_vec()));
+        let (b, f) = (median(&builds[2..]), median(&floors[2..]));
         let default = if settings == AerialSettings::default() { " (default)" } else { "" };
         let _ = writeln!(md, "| {}x{}x{}, {} samples a slice{default} | {b:.2} | {f:.2} | {:.3} |", size[0], size[1], size[2], settings.steps_per_slice, b / f);
     }

@@ -21,7 +21,8 @@ use skytune::sky::builtin::default_sky;
 use skytune::sky::resolved::SkyModelKind;
 use skytune::sky::{FrameInput, Sky};
 
-fn median(v: &[f64]) -> f64 {
+/// The middle value (the upper of the two for an even count; NaN for none).
+pub(crate) fn median(v: &[f64]) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }

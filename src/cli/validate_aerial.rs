@@ -10,7 +10,7 @@ use super::ValidateAerialArgs;
 use skytune::atmosphere::aerial::AerialSettings;
 use skytune::atmosphere::reference::{estimate_many, Case, Estimate, Reference, ReferenceSettings};
 use skytune::atmosphere::{Atmosphere, LutSettings};
-use skytune::measure::aerial::{self, DISTANCE_BANDS, SUN_BANDS};
+use skytune::measure::aerial::{self, GroupErrors, DISTANCE_BANDS, SUN_BANDS};
 use skytune::render::atmosphere::aerial_probe::AerialProbe;
 use skytune::render::atmosphere::radiance_probe::{ProbeAnswers, RadianceProbe};
 use skytune::render::{AdapterChoice, GpuContext, ShaderLibrary};
@@ -21,10 +21,8 @@ const END: &str = "<!-- skytune validate-aerial: end -->";
 /// One method's errors over one group of cases.
 struct Row {
     method: String,
-    group: String,
-    cases: usize,
-    in_scatter: [f64; 3],
-    transmittance: [f64; 3],
+    group: &'static str,
+    errors: GroupErrors,
 }
 
 /// Runs the validation.
@@ -62,21 +60,17 @@ pub fn run(args: &ValidateAerialArgs, adapter: AdapterChoice) -> anyhow::Result<
     let mut rows = Vec::new();
     for (method, answers) in &methods {
         let errors = aerial::ray_errors(&cases, &answers.radiance, &answers.transmittance, rays, sky);
-        let groups = [
-            (&SUN_BANDS, aerial::by_group(&cases, &errors, 3, aerial::sun_band), aerial::sun_band as fn(&Case) -> usize),
-            (&DISTANCE_BANDS, aerial::by_group(&cases, &errors, 3, aerial::distance_band), aerial::distance_band),
-        ];
-        for (names, spreads, group) in groups {
-            for (g, (name, (in_scatter, transmittance))) in names.iter().zip(spreads).enumerate() {
-                rows.push(Row { method: method.clone(), group: name.to_string(), cases: cases.iter().filter(|c| group(c) == g).count(), in_scatter, transmittance });
-            }
+        let sun = aerial::by_group(&cases, &errors, SUN_BANDS.len(), aerial::sun_band);
+        let distance = aerial::by_group(&cases, &errors, DISTANCE_BANDS.len(), aerial::distance_band);
+        for (group, errors) in SUN_BANDS.iter().zip(sun).chain(DISTANCE_BANDS.iter().zip(distance)) {
+            rows.push(Row { method: method.clone(), group, errors });
         }
     }
     let mut csv = String::from("method,group,cases,in_scatter_median,in_scatter_p95,in_scatter_worst,transmittance_median,transmittance_p95,transmittance_worst\n");
     for r in &rows {
-        let [a, b, c] = r.in_scatter;
-        let [d, e, f] = r.transmittance;
-        let _ = writeln!(csv, "{},{},{},{a:.5},{b:.5},{c:.5},{d:.5},{e:.5},{f:.5}", r.method, r.group, r.cases);
+        let [a, b, c] = r.errors.in_scatter;
+        let [d, e, f] = r.errors.transmittance;
+        let _ = writeln!(csv, "{},{},{},{a:.5},{b:.5},{c:.5},{d:.5},{e:.5},{f:.5}", r.method, r.group, r.errors.cases);
     }
     skytune::support::safe_write::write_atomic(&args.out, csv.as_bytes())?;
     println!("wrote {} ({} methods, {} cases, seed {})", args.out.display(), methods.len(), cases.len(), args.seed);
@@ -104,9 +98,9 @@ fn write_report(path: &Path, rows: &[Row], args: &ValidateAerialArgs, adapter: &
     let _ = writeln!(md, "| method | cases | in-scatter / sky | transmittance |");
     let _ = writeln!(md, "|---|---|---|---|");
     for r in rows {
-        let [a, b, c] = r.in_scatter;
-        let [d, e, f] = r.transmittance;
-        let _ = writeln!(md, "| {}, {} | {} | {:.2}% / {:.2}% / {:.2}% | {d:.4} / {e:.4} / {f:.4} |", r.method, r.group, r.cases, 100.0 * a, 100.0 * b, 100.0 * c);
+        let [a, b, c] = r.errors.in_scatter;
+        let [d, e, f] = r.errors.transmittance;
+        let _ = writeln!(md, "| {}, {} | {} | {:.2}% / {:.2}% / {:.2}% | {d:.4} / {e:.4} / {f:.4} |", r.method, r.group, r.errors.cases, 100.0 * a, 100.0 * b, 100.0 * c);
     }
     let _ = writeln!(md, "\n{END}");
     super::validate::replace_between_markers(path, (BEGIN, END), &md)

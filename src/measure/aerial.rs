@@ -109,13 +109,28 @@ pub fn ray_errors(cases: &[Case], radiance: &[[f32; 3]], transmittance: &[[f32; 
         .collect()
 }
 
-/// [median, p95, worst] of the in-scatter and transmittance errors of the cases in each group
-/// that `group` sorts them into (`groups` of them), every channel a sample.
-pub fn by_group(cases: &[Case], errors: &[RayError], groups: usize, group: impl Fn(&Case) -> usize) -> Vec<([f64; 3], [f64; 3])> {
+/// The errors of one group of cases: how many, and [median, p95, worst] of the in-scatter and
+/// transmittance errors, every channel a sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroupErrors {
+    /// Cases in the group.
+    pub cases: usize,
+    /// In-scatter error / sky.
+    pub in_scatter: [f64; 3],
+    /// Transmittance error.
+    pub transmittance: [f64; 3],
+}
+
+/// The [`GroupErrors`] of each group that `group` sorts the cases into (`groups` of them).
+pub fn by_group(cases: &[Case], errors: &[RayError], groups: usize, group: impl Fn(&Case) -> usize) -> Vec<GroupErrors> {
     (0..groups)
         .map(|g| {
             let picked: Vec<&RayError> = cases.iter().zip(errors).filter(|(c, _)| group(c) == g).map(|(_, e)| e).collect();
-            (spread(picked.iter().flat_map(|e| e.in_scatter).collect()), spread(picked.iter().flat_map(|e| e.transmittance).collect()))
+            GroupErrors {
+                cases: picked.len(),
+                in_scatter: spread(picked.iter().flat_map(|e| e.in_scatter).collect()),
+                transmittance: spread(picked.iter().flat_map(|e| e.transmittance).collect()),
+            }
         })
         .collect()
 }

@@ -21,7 +21,7 @@ pub fn aerial_use(model: &SkyModel) -> AerialUse {
     if !model.kind.is_physical() || !model.drive_scene || model.kind == SkyModelKind::Linear || model.aerial.method == AerialMethod::Fog {
         return AerialUse::None;
     }
-    AerialUse::Method { method: model.aerial.method, multiple: model.kind != SkyModelKind::Single }
+    AerialUse::Model { multiple: model.kind != SkyModelKind::Single }
 }
 
 /// The volume's builder (shaders/aerial_perspective.wgsl), for the pass and the radiance probe.
@@ -145,7 +145,7 @@ impl Pass for AerialPerspectivePass {
             cx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
             self.written = Some(params);
         }
-        if !matches!(using, AerialUse::Method { method: AerialMethod::Volume, .. }) {
+        if using == AerialUse::None || model.aerial.method != AerialMethod::Volume {
             return;
         }
         let key = (params, AtmosphereUniform::from(&cx.frame.atmosphere), LutUniform::new(&model.settings.lut, model.world.ground_albedo, cx.frame.atmosphere.mie_g));

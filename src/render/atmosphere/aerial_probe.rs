@@ -14,6 +14,7 @@ use crate::render::atmosphere::radiance_probe::ProbeAnswers;
 use crate::render::atmosphere::sky_luts::LutBuilder;
 use crate::render::atmosphere::tables::{AerialVolume, LutTables};
 use crate::render::atmosphere::uniforms::{AerialUniform, AerialUse, AtmosphereUniform, LutUniform};
+use crate::render::frame::camera::Camera;
 use crate::render::gpu::context::GpuContext;
 use crate::render::gpu::error::RenderResult;
 use crate::render::gpu::parts::storage_entry;
@@ -22,6 +23,21 @@ use crate::render::gpu::shaders::{self, ShaderLibrary};
 /// The probe camera's vertical field of view, degrees, and aspect: the window's default view.
 const FOV_Y_DEG: f32 = 70.0;
 const ASPECT: f32 = 16.0 / 9.0;
+
+/// Clip from world of the probe's camera at the origin looking along `view` (unit).
+fn camera_along(view: glam::Vec3) -> glam::Mat4 {
+    let up = if view.y.abs() > 0.99 { glam::Vec3::X } else { glam::Vec3::Y };
+    glam::Mat4::perspective_rh(FOV_Y_DEG.to_radians(), ASPECT, Camera::NEAR_M, Camera::FAR_M) * glam::Mat4::look_to_rh(glam::Vec3::ZERO, view, up)
+}
+
+/// A uniform buffer holding `atmosphere`.
+fn atmosphere_buffer(device: &wgpu::Device, atmosphere: &Atmosphere) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("AerialProbe::atmosphere"),
+        contents: bytemuck::bytes_of(&AtmosphereUniform::from(atmosphere)),
+        usage: wgpu::BufferUsages::UNIFORM,
+    })
+}
 
 /// The volume's builder, its tables and the reader.
 pub struct AerialProbe {
@@ -79,8 +95,7 @@ impl AerialProbe {
     /// read at the volume's far end.
     pub fn volume_rays(&self, ctx: &GpuContext, atmosphere: &Atmosphere, lut: &LutSettings, aerial: &AerialSettings, multiple: bool, cases: &[Case]) -> RenderResult<ProbeAnswers> {
         let device = &ctx.device;
-        let init = |label: &str, contents: &[u8], usage| device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage });
-        let atm = init("AerialProbe::atmosphere", bytemuck::bytes_of(&AtmosphereUniform::from(atmosphere)), wgpu::BufferUsages::UNIFORM);
+        let atm = atmosphere_buffer(device, atmosphere);
         let query = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("AerialProbe::query"),
             size: 16,
@@ -114,7 +129,7 @@ impl AerialProbe {
         let empty = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("AerialProbe::empty"), layout: &self.empty_layout, entries: &[] });
         let lut_group = self.lut_builder.bind_group(device, &atm, &self.tables);
         let build_group = self.builder.bind_group(device, &atm, &self.tables, &self.volume);
-        let using = AerialUse::Method { method: aerial.method, multiple };
+        let using = AerialUse::Model { multiple };
         let mut albedo = None;
         for (k, c) in cases.iter().enumerate() {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("AerialProbe::encoder") });
@@ -127,11 +142,7 @@ impl AerialProbe {
             }
             let view = glam::DVec3::from(crate::atmosphere::analytic::direction(c.view_elev_deg.to_radians(), c.rel_azimuth_deg.to_radians())).as_vec3();
             let sun = glam::DVec3::from(crate::atmosphere::analytic::direction(c.sun_elev_deg.to_radians(), 0.0)).as_vec3();
-            let up = if view.y.abs() > 0.99 { glam::Vec3::X } else { glam::Vec3::Y };
-            let clip_from_world =
-                glam::Mat4::perspective_rh(FOV_Y_DEG.to_radians(), ASPECT, crate::render::frame::camera::Camera::NEAR_M, crate::render::frame::camera::Camera::FAR_M)
-                    * glam::Mat4::look_to_rh(glam::Vec3::ZERO, view, up);
-            let params = AerialUniform::new(aerial, using, clip_from_world.inverse(), glam::Vec3::ZERO, c.camera_km as f32, sun);
+            let params = AerialUniform::new(aerial, using, camera_along(view).inverse(), glam::Vec3::ZERO, c.camera_km as f32, sun);
             ctx.queue.write_buffer(&self.volume.params, 0, bytemuck::bytes_of(&params));
             let distance_km = c.distance_km.unwrap_or(aerial.distance_km);
             ctx.queue.write_buffer(&query, 0, bytemuck::bytes_of(&[0.5f32, 0.5, distance_km as f32, k as f32]));
@@ -143,12 +154,7 @@ impl AerialProbe {
             ctx.queue.submit([encoder.finish()]);
         }
         let bytes = crate::render::gpu::readback::read_buffer(ctx, &answers, size)?;
-        let vectors = bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes);
-        let rgb = |v: &[f32; 4]| [v[0], v[1], v[2]];
-        Ok(ProbeAnswers {
-            radiance: vectors.iter().step_by(2).take(cases.len()).map(rgb).collect(),
-            transmittance: vectors.iter().skip(1).step_by(2).take(cases.len()).map(rgb).collect(),
-        })
+        Ok(ProbeAnswers::read(&bytes, cases.len()))
     }
 
     /// Wall times of `runs` builds of a volume of `aerial` for a camera looking along +x, level
@@ -156,21 +162,15 @@ impl AerialProbe {
     /// as the frame pays it whenever the camera, the sun or the atmosphere moves.
     pub fn time_builds(&self, ctx: &GpuContext, atmosphere: &Atmosphere, lut: &LutSettings, aerial: &AerialSettings, runs: u32) -> RenderResult<Vec<f64>> {
         let device = &ctx.device;
-        let atm = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("AerialProbe::atmosphere"),
-            contents: bytemuck::bytes_of(&AtmosphereUniform::from(atmosphere)),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let atm = atmosphere_buffer(device, atmosphere);
         let empty = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("AerialProbe::empty"), layout: &self.empty_layout, entries: &[] });
         let lut_group = self.lut_builder.bind_group(device, &atm, &self.tables);
         let build_group = self.builder.bind_group(device, &atm, &self.tables, &self.volume);
         ctx.queue.write_buffer(&self.tables.params, 0, bytemuck::bytes_of(&LutUniform::new(lut, 0.3, atmosphere.mie_g)));
-        let clip_from_world = glam::Mat4::perspective_rh(FOV_Y_DEG.to_radians(), ASPECT, crate::render::frame::camera::Camera::NEAR_M, crate::render::frame::camera::Camera::FAR_M)
-            * glam::Mat4::look_to_rh(glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y);
         let params = AerialUniform::new(
             aerial,
-            AerialUse::Method { method: aerial.method, multiple: true },
-            clip_from_world.inverse(),
+            AerialUse::Model { multiple: true },
+            camera_along(glam::Vec3::X).inverse(),
             glam::Vec3::ZERO,
             0.0,
             glam::Vec3::new(0.5, 0.5, 0.0).normalize(),

@@ -296,9 +296,7 @@ impl RadianceProbe {
         }
         ctx.queue.submit([encoder.finish()]);
         let bytes = crate::render::gpu::readback::read_buffer(ctx, &output, size)?;
-        let vectors = bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(&bytes);
-        let rgb = |v: &[f32; 4]| [v[0], v[1], v[2]];
-        Ok(ProbeAnswers { radiance: vectors.iter().step_by(2).map(rgb).collect(), transmittance: vectors.iter().skip(1).step_by(2).map(rgb).collect() })
+        Ok(ProbeAnswers::read(&bytes, cases.len()))
     }
 }
 
@@ -310,6 +308,22 @@ pub struct ProbeAnswers {
     pub radiance: Vec<[f32; 3]>,
     /// Transmittance of each case's ray, per channel (ones from models that give none).
     pub transmittance: Vec<[f32; 3]>,
+}
+
+impl ProbeAnswers {
+    /// The answers to `cases` cases in a probe's read-back buffer: two vec4 per case, the
+    /// radiance then the transmittance.
+    pub(crate) fn read(bytes: &[u8], cases: usize) -> Self {
+        let vectors = bytemuck::pod_collect_to_vec::<u8, [f32; 4]>(bytes);
+        let rgb = |v: &[f32; 4]| [v[0], v[1], v[2]];
+        Self { radiance: vectors.iter().step_by(2).take(cases).map(rgb).collect(), transmittance: vectors.iter().skip(1).step_by(2).take(cases).map(rgb).collect() }
+    }
+
+    /// Both, in double precision (the CSV writers' type).
+    pub fn to_f64(&self) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        let wide = |v: &[[f32; 3]]| v.iter().map(|c| c.map(f64::from)).collect();
+        (wide(&self.radiance), wide(&self.transmittance))
+    }
 }
 
 /// The cases grouped by ground albedo (tables are built per albedo): each group's indices into

@@ -106,13 +106,14 @@ pub struct AerialUniform {
 }
 const _: () = assert!(std::mem::size_of::<AerialUniform>() == 128);
 
-/// What the scene is given of the atmosphere in front of it: none (its fog), or a method.
+/// What the scene is given of the atmosphere in front of it: none (its fog), or the model's
+/// aerial perspective by the settings' method.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum AerialUse {
     /// The scene keeps its fog.
     None,
-    /// The frame's aerial perspective, with or without the multiple-scattering orders.
-    Method { method: crate::atmosphere::aerial::AerialMethod, multiple: bool },
+    /// The model's aerial perspective, with or without the multiple-scattering orders.
+    Model { multiple: bool },
 }
 
 impl AerialUniform {
@@ -127,11 +128,10 @@ impl AerialUniform {
         towards_sun: glam::Vec3,
     ) -> Self {
         use crate::atmosphere::aerial::{AerialMethod, SliceSpread};
-        let (method, multiple) = match using {
-            AerialUse::None => (0.0, false),
-            AerialUse::Method { method: AerialMethod::Volume, multiple } => (1.0, multiple),
-            AerialUse::Method { method: AerialMethod::Exact, multiple } => (2.0, multiple),
-            AerialUse::Method { method: AerialMethod::Fog, .. } => (0.0, false),
+        let (method, multiple) = match (using, settings.method) {
+            (AerialUse::None, _) | (_, AerialMethod::Fog) => (0.0, false),
+            (AerialUse::Model { multiple }, AerialMethod::Volume) => (1.0, multiple),
+            (AerialUse::Model { multiple }, AerialMethod::Exact) => (2.0, multiple),
         };
         let [x, y, z] = settings.volume_size;
         Self {
